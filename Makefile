@@ -1,0 +1,56 @@
+# ponyhop: the two commands of the README's quick start, and a few for developers.
+#   make demo   installs what is missing, builds, renders the demo scenes into out/demo/
+#   make test   installs what is missing, builds, runs every test (then once more under ASan+UBSan)
+BUILD      ?= build
+ASAN_BUILD ?= build-asan
+JOBS       ?= $(shell nproc)
+PONYHOP    := $(BUILD)/ponyhop
+DEMO_SCENES ?= ponytail hopper
+
+.PHONY: all setup build demo test test-fast test-asan update-snapshots bench bench-quick clean
+
+all: build
+
+setup:
+	@bash scripts/setup.sh
+
+build: setup
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+	@cmake --build $(BUILD) -j$(JOBS)
+
+demo: build
+	@for s in $(DEMO_SCENES); do \
+	  if [ -f assets/scenes/$$s.json ]; then \
+	    $(PONYHOP) render assets/scenes/$$s.json --out out/demo/$$s --video out/demo/$$s.mp4 || exit 1; \
+	    echo "demo: frames in out/demo/$$s/, video out/demo/$$s.mp4"; \
+	  fi; \
+	done
+
+# Every test, with the normal build, then the same suite once under the sanitizers.
+test: test-fast test-asan
+
+test-fast: build
+	@cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
+
+test-asan: setup
+	@cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPONYHOP_SANITIZE=ON >/dev/null
+	@cmake --build $(ASAN_BUILD) -j$(JOBS)
+	@cd $(ASAN_BUILD) && \
+	  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
+	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  ctest --output-on-failure -j$(JOBS)
+
+# Re-render every golden image and physics fingerprint on purpose (never done by tests or CI).
+update-snapshots: build
+	@PONYHOP_UPDATE_SNAPSHOTS=1 $(BUILD)/snapshot_test
+	@echo "goldens rewritten in tests/snapshots/: review them with git diff before committing"
+
+bench: build
+	@$(PONYHOP) bench --out docs/bench
+
+bench-quick: build
+	@$(PONYHOP) bench --quick --out $(BUILD)/bench-quick
+
+clean:
+	rm -rf $(BUILD) $(ASAN_BUILD)

@@ -1,0 +1,72 @@
+// A chain of rigid links joined by spherical joints: the ponytail, and the canonical chain
+// that other engines are compared on (assets/scenes/chain.json).
+#pragma once
+
+#include <Eigen/Core>
+
+#include "physics/reflect.h"
+
+namespace ponyhop {
+
+// What the chain's first joint is attached to.
+enum class ChainAttach { Anchor, Head, Hopper };
+template <>
+struct EnumNames<ChainAttach> {
+  static constexpr std::array<std::string_view, 3> names{"anchor", "head", "hopper"};
+};
+
+// Defaults are the canonical chain: identical solid cylinders, no damping, no stiffness, no drag.
+struct ChainParams {
+  int links = 8;                 // count
+  double length = 0.05;          // m, each link
+  double mass = 0.02;            // kg, the first link; tapered links scale with their volume
+  double radius = 0.01;          // m, the first link's radius
+  double taper = 1.0;            // tip radius / root radius (1: cylinders)
+  double damping = 0.0;          // N m s/rad, per joint, on the relative angular velocity
+  double stiffness = 0.0;        // N m/rad, per joint, bending toward the rest pose
+  double drag = 0.0;             // N s/m per metre of link, linear air drag on each link
+  Eigen::Vector3d direction{1.0, 0.0, 0.0};  // initial direction from the anchor (unit)
+  ChainAttach attach = ChainAttach::Anchor;
+  Eigen::Vector3d color{0.36, 0.22, 0.12};   // rgb 0..1, hair brown
+
+  template <class V>
+  void reflect(V& v) {
+    v("links", links, {.min = 1, .max = 4096, .help = "Number of links", .log = true});
+    v("length", length, {.unit = "m", .min = 1e-4, .max = 10, .help = "Length of each link", .log = true});
+    v("mass", mass, {.unit = "kg", .min = 1e-6, .max = 1e4, .help = "Mass of the first link", .log = true});
+    v("radius", radius, {.unit = "m", .min = 1e-5, .max = 1, .help = "Radius of the first link", .log = true});
+    v("taper", taper, {.min = 0.05, .max = 1.0, .help = "Tip radius over root radius"});
+    v("damping", damping,
+      {.unit = "N m s/rad", .min = 0, .max = 10, .help = "Joint damping on relative angular velocity"});
+    v("stiffness", stiffness,
+      {.unit = "N m/rad", .min = 0, .max = 100, .help = "Bending stiffness toward the rest pose"});
+    v("drag", drag, {.unit = "N s/m^2", .min = 0, .max = 100, .help = "Air drag per metre of link"});
+    v("direction", direction, {.min = -1, .max = 1, .help = "Initial direction from the anchor"});
+    v("attach", attach, {.help = "What the first link hangs from"});
+    v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Hair colour"});
+  }
+};
+
+// The anchor of a chain scene: a point whose motion is prescribed analytically.
+enum class AnchorMotion { Fixed, Shake, ConstantVelocity };
+template <>
+struct EnumNames<AnchorMotion> {
+  static constexpr std::array<std::string_view, 3> names{"fixed", "shake", "constant_velocity"};
+};
+
+struct AnchorParams {
+  // fixed: at `position`. shake: position + (0.1 sin(2 pi 1.5 t), 0, 0.05 sin(2 pi 3 t)).
+  // constant_velocity: position + velocity t.
+  AnchorMotion motion = AnchorMotion::Fixed;
+  Eigen::Vector3d position{0.0, 0.0, 0.0};  // m
+  Eigen::Vector3d velocity{0.0, 0.0, 0.0};  // m/s, constant_velocity only
+
+  template <class V>
+  void reflect(V& v) {
+    v("motion", motion, {.help = "Prescribed motion of the anchor point"});
+    v("position", position, {.unit = "m", .min = -1e3, .max = 1e3, .help = "Anchor position at t = 0"});
+    v("velocity", velocity, {.unit = "m/s", .min = -1e3, .max = 1e3, .help = "Velocity (constant_velocity)"});
+  }
+};
+
+}  // namespace ponyhop

@@ -1,0 +1,55 @@
+// The knobs that trade speed for accuracy: time step, substeps, integrator, solver,
+// stabilization. Plain data with defaults and units; the step's state lives in World.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "physics/reflect.h"
+
+namespace ponyhop {
+
+enum class Integrator { SymplecticEuler, RK4 };
+template <>
+struct EnumNames<Integrator> {
+  static constexpr std::array<std::string_view, 2> names{"symplectic_euler", "rk4"};
+};
+
+enum class SolverKind { Dense };
+template <>
+struct EnumNames<SolverKind> {
+  static constexpr std::array<std::string_view, 1> names{"dense"};
+};
+
+enum class Stabilization { None, Baumgarte, Projection };
+template <>
+struct EnumNames<Stabilization> {
+  static constexpr std::array<std::string_view, 3> names{"none", "baumgarte", "projection"};
+};
+
+struct PhysicsParams {
+  double dt = 1.0 / 240.0;  // s, one physics step (independent of the frame rate)
+  int substeps = 1;         // steps per dt (the step actually taken is dt / substeps)
+  Integrator integrator = Integrator::RK4;
+  SolverKind solver = SolverKind::Dense;
+  Stabilization stabilization = Stabilization::Projection;
+  // Baumgarte: C'' + 2 alpha C' + beta^2 C = 0 (alpha in 1/s, beta in 1/s).
+  double baumgarte_alpha = 10.0;  // 1/s
+  double baumgarte_beta = 10.0;   // 1/s
+  Eigen::Vector3d gravity{0.0, 0.0, -9.81};  // m/s^2, world frame (z up)
+
+  template <class V>
+  void reflect(V& v) {
+    v("dt", dt, {.unit = "s", .min = 1e-6, .max = 0.1, .help = "Physics time step", .log = true});
+    v("substeps", substeps, {.min = 1, .max = 1000, .help = "Steps taken per dt", .log = true});
+    v("integrator", integrator, {.help = "Time integration method"});
+    v("solver", solver, {.help = "How constraint forces are solved"});
+    v("stabilization", stabilization, {.help = "Correction of joint drift"});
+    v("baumgarte_alpha", baumgarte_alpha,
+      {.unit = "1/s", .min = 0, .max = 1e4, .help = "Baumgarte velocity gain (C'' + 2aC' + b^2C = 0)"});
+    v("baumgarte_beta", baumgarte_beta,
+      {.unit = "1/s", .min = 0, .max = 1e4, .help = "Baumgarte position gain (C'' + 2aC' + b^2C = 0)"});
+    v("gravity", gravity, {.unit = "m/s^2", .min = -1000, .max = 1000, .help = "Gravity, world frame (z up)"});
+  }
+};
+
+}  // namespace ponyhop

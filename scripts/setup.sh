@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Installs the Debian packages ponyhop needs, and only those that are missing.
+# Idempotent: a machine that has everything runs no apt command at all.
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake pkg-config     # toolchain
+  libeigen3-dev                        # physics: dense and sparse linear algebra
+  libosmesa6-dev                       # headless OpenGL (Mesa llvmpipe)
+  python3-glad                         # generates the GL loader at build time (offline, --reproducible)
+  libassimp-dev                        # mesh and animation import
+  libimgui-dev libstb-dev              # tuning panel; PNG writing (stb_image_write)
+  libglfw3-dev                         # the window of `ponyhop run`
+  nlohmann-json3-dev                   # scene files
+  libcli11-dev                         # command line
+  libgtest-dev libbenchmark-dev        # tests and micro-benchmarks
+  ffmpeg                               # --video: H.264 encoding
+  gnuplot-nox                          # bench plots
+  xvfb xauth                           # window tests without a display
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  [[ "$p" == \#* ]] && continue
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+
+echo "setup: installing missing Debian packages: ${missing[*]}" >&2
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "setup: done" >&2
