@@ -9,7 +9,8 @@ PACKAGES=(
   libosmesa6-dev                       # headless OpenGL (Mesa llvmpipe)
   python3-glad                         # generates the GL loader at build time (offline, --reproducible)
   libassimp-dev                        # mesh and animation import
-  libimgui-dev libstb-dev              # tuning panel; PNG writing (stb_image_write)
+  libimgui-dev libstb-dev              # tuning panel; PNG reading/writing (stb_image, stb_image_write)
+  zlib1g-dev                           # fast deflate for PNG frames
   libglfw3-dev                         # the window of `ponyhop run`
   nlohmann-json3-dev                   # scene files
   libcli11-dev                         # command line

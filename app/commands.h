@@ -1,0 +1,12 @@
+// Subcommands of the `ponyhop` executable, one file each (app/cmd_*.cpp).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace ponyhop {
+
+// Each adds its subcommand to `app`; the subcommand's callback runs it and sets `exit_code`.
+void addDiffCommand(CLI::App& app, int& exit_code);
+void addSceneDocCommand(CLI::App& app, int& exit_code);
+
+}  // namespace ponyhop

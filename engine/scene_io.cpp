@@ -1,0 +1,470 @@
+#include "engine/scene_io.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <type_traits>
+
+namespace ponyhop {
+namespace {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+template <class T>
+struct IsOptional : std::false_type {};
+template <class T>
+struct IsOptional<std::optional<T>> : std::true_type {};
+template <class T>
+struct IsVector : std::false_type {};
+template <class T>
+struct IsVector<std::vector<T>> : std::true_type {};
+
+std::string formatNumber(double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.10g", x);
+  return buf;
+}
+
+std::string rangeText(const FieldMeta& m) {
+  const bool has_min = std::isfinite(m.min), has_max = std::isfinite(m.max);
+  std::string unit = (m.unit && *m.unit) ? std::string(" ") + m.unit : "";
+  if (has_min && has_max) return "in [" + formatNumber(m.min) + ", " + formatNumber(m.max) + "]" + unit;
+  if (has_min) return ">= " + formatNumber(m.min) + unit;
+  if (has_max) return "<= " + formatNumber(m.max) + unit;
+  return unit.empty() ? "finite" : "finite," + unit;
+}
+
+template <class E>
+std::string enumChoices() {
+  std::string s;
+  for (auto n : EnumNames<E>::names) {
+    if (!s.empty()) s += ", ";
+    s += '"' + std::string(n) + '"';
+  }
+  return s;
+}
+
+// Reads one JSON object into a reflectable struct, collecting every problem it finds.
+class JsonReader {
+ public:
+  JsonReader(const json& j, std::string prefix, std::vector<std::string>& errors)
+      : j_(j), prefix_(std::move(prefix)), errors_(errors) {}
+
+  template <class T>
+  void operator()(const char* name, T& field, const FieldMeta& meta) {
+    known_.insert(name);
+    auto it = j_.find(name);
+    if (it == j_.end()) return;
+    read(*it, field, meta, prefix_ + name);
+  }
+
+  // After reflect(): every key of the object must have been a field.
+  void checkUnknown() {
+    for (auto it = j_.begin(); it != j_.end(); ++it) {
+      if (known_.count(it.key())) continue;
+      std::string list;
+      for (const auto& k : known_) list += (list.empty() ? "" : ", ") + k;
+      errors_.push_back(prefix_ + it.key() + ": unknown key (allowed here: " + list + ")");
+    }
+  }
+
+  template <class T>
+  static void readStruct(const json& j, T& out, const std::string& key,
+                         std::vector<std::string>& errors) {
+    if (!j.is_object()) {
+      errors.push_back(key + ": must be an object { ... }, got " + std::string(j.type_name()));
+      return;
+    }
+    JsonReader r(j, key.empty() ? "" : key + ".", errors);
+    out.reflect(r);
+    r.checkUnknown();
+  }
+
+ private:
+  void bad(const std::string& key, const std::string& what, const json& got) {
+    errors_.push_back(key + ": must be " + what + ", got " + got.dump());
+  }
+
+  template <class T>
+  void read(const json& j, T& field, const FieldMeta& meta, const std::string& key) {
+    if constexpr (std::is_same_v<T, bool>) {
+      if (!j.is_boolean()) return bad(key, "true or false", j);
+      field = j.get<bool>();
+    } else if constexpr (std::is_same_v<T, int>) {
+      if (!j.is_number_integer()) return bad(key, "a whole number " + rangeText(meta), j);
+      const auto x = j.get<long long>();
+      if (x < meta.min || x > meta.max) return bad(key, "a whole number " + rangeText(meta), j);
+      field = static_cast<int>(x);
+    } else if constexpr (std::is_same_v<T, double>) {
+      if (!j.is_number()) return bad(key, "a number " + rangeText(meta), j);
+      const double x = j.get<double>();
+      if (!std::isfinite(x) || x < meta.min || x > meta.max) return bad(key, "a number " + rangeText(meta), j);
+      field = x;
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      if (!j.is_string()) return bad(key, "a string", j);
+      field = j.get<std::string>();
+    } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+      const std::string what = "an array of 3 numbers, each " + rangeText(meta);
+      if (!j.is_array() || j.size() != 3) return bad(key, what, j);
+      Eigen::Vector3d v;
+      for (int i = 0; i < 3; ++i) {
+        if (!j[i].is_number()) return bad(key, what, j);
+        v[i] = j[i].get<double>();
+        if (!std::isfinite(v[i]) || v[i] < meta.min || v[i] > meta.max) return bad(key, what, j);
+      }
+      field = v;
+    } else if constexpr (std::is_enum_v<T>) {
+      if (!j.is_string() || !enumFromName(j.get<std::string>(), field)) {
+        return bad(key, "one of " + enumChoices<T>(), j);
+      }
+    } else if constexpr (IsOptional<T>::value) {
+      if (j.is_null()) {
+        field.reset();
+        return;
+      }
+      if (!field) field.emplace();
+      read(j, *field, meta, key);
+    } else if constexpr (IsVector<T>::value) {
+      if (!j.is_array()) return bad(key, "an array", j);
+      T out(j.size());
+      for (size_t i = 0; i < j.size(); ++i) read(j[i], out[i], meta, key + "." + std::to_string(i));
+      field = std::move(out);
+    } else {
+      readStruct(j, field, key, errors_);
+    }
+  }
+
+  const json& j_;
+  std::string prefix_;
+  std::vector<std::string>& errors_;
+  std::set<std::string> known_;
+};
+
+// Writes a reflectable struct as JSON: every field, optional sections only when present.
+class JsonWriter {
+ public:
+  explicit JsonWriter(json& j) : j_(j) {}
+
+  template <class T>
+  void operator()(const char* name, const T& field, const FieldMeta&) {
+    if constexpr (IsOptional<T>::value) {
+      if (field) j_[name] = write(*field);
+    } else {
+      j_[name] = write(field);
+    }
+  }
+
+  template <class T>
+  static json write(const T& field) {
+    if constexpr (std::is_same_v<T, bool> || std::is_same_v<T, int> || std::is_same_v<T, double> ||
+                  std::is_same_v<T, std::string>) {
+      return field;
+    } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+      return json::array({field.x(), field.y(), field.z()});
+    } else if constexpr (std::is_enum_v<T>) {
+      return std::string(enumName(field));
+    } else if constexpr (IsVector<T>::value) {
+      json a = json::array();
+      for (const auto& e : field) a.push_back(write(e));
+      return a;
+    } else {
+      json o = json::object();
+      JsonWriter w(o);
+      const_cast<T&>(field).reflect(w);  // reflect() only reads through a writer
+      return o;
+    }
+  }
+
+ private:
+  json& j_;
+};
+
+// Range checks of a struct edited in code (the panel), through the same field list.
+class RangeChecker {
+ public:
+  RangeChecker(std::string prefix, std::vector<std::string>& errors)
+      : prefix_(std::move(prefix)), errors_(errors) {}
+
+  template <class T>
+  void operator()(const char* name, T& field, const FieldMeta& meta) {
+    check(field, meta, prefix_ + name);
+  }
+
+ private:
+  template <class T>
+  void check(T& field, const FieldMeta& meta, const std::string& key) {
+    if constexpr (std::is_same_v<T, int> || std::is_same_v<T, double>) {
+      const double x = static_cast<double>(field);
+      if (!std::isfinite(x) || x < meta.min || x > meta.max) {
+        errors_.push_back(key + ": must be " + rangeText(meta) + ", got " + formatNumber(x));
+      }
+    } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+      for (int i = 0; i < 3; ++i) {
+        if (!std::isfinite(field[i]) || field[i] < meta.min || field[i] > meta.max) {
+          errors_.push_back(key + ": each component must be " + rangeText(meta));
+          break;
+        }
+      }
+    } else if constexpr (IsOptional<T>::value) {
+      if (field) check(*field, meta, key);
+    } else if constexpr (IsVector<T>::value) {
+      for (size_t i = 0; i < field.size(); ++i) check(field[i], meta, key + "." + std::to_string(i));
+    } else if constexpr (std::is_class_v<T> && !std::is_same_v<T, std::string>) {
+      RangeChecker c(key + ".", errors_);
+      field.reflect(c);
+    }
+  }
+
+  std::string prefix_;
+  std::vector<std::string>& errors_;
+};
+
+std::string joinErrors(const std::string& source, const std::vector<std::string>& errors) {
+  std::string msg = source + ": " + std::to_string(errors.size()) +
+                    (errors.size() == 1 ? " problem" : " problems");
+  for (const auto& e : errors) msg += "\n  " + e;
+  return msg;
+}
+
+// Sets `value` at the dotted `key` inside `j`, creating objects on the way.
+void applyOverride(json& j, const Override& o) {
+  json* node = &j;
+  std::stringstream ss(o.key);
+  std::string part;
+  std::vector<std::string> parts;
+  while (std::getline(ss, part, '.')) parts.push_back(part);
+  for (size_t i = 0; i < parts.size(); ++i) {
+    const std::string& p = parts[i];
+    const bool last = i + 1 == parts.size();
+    if (node->is_array()) {
+      char* end = nullptr;
+      const long idx = std::strtol(p.c_str(), &end, 10);
+      if (*end != '\0' || idx < 0 || static_cast<size_t>(idx) >= node->size()) {
+        throw SceneError("--set " + o.key + ": '" + p + "' is not an index of that list (0.." +
+                         std::to_string(static_cast<long>(node->size()) - 1) + ")");
+      }
+      node = &(*node)[static_cast<size_t>(idx)];
+    } else {
+      if (node->is_null()) *node = json::object();
+      if (!node->is_object()) {
+        throw SceneError("--set " + o.key + ": '" + p + "' is inside a value that is not a section");
+      }
+      node = &(*node)[p];
+    }
+    if (last) {
+      json v;
+      try {
+        v = json::parse(o.value);
+      } catch (const json::exception&) {
+        v = o.value;  // unquoted text: a string
+      }
+      *node = v;
+    }
+  }
+}
+
+bool sectionPresent(const json& j, const std::string& name) { return j.contains(name) && !j[name].is_null(); }
+
+const char* kOptionalSections[] = {"head", "anchor", "chain"};
+
+}  // namespace
+
+Override parseOverride(const std::string& kv) {
+  const auto eq = kv.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    throw SceneError("--set " + kv + ": expected key=value, e.g. --set physics.dt=0.002");
+  }
+  return {kv.substr(0, eq), kv.substr(eq + 1)};
+}
+
+std::string resolveScenePath(const std::string& path, const std::string& scene_path) {
+  if (path.empty()) return "";
+  std::error_code ec;
+  const fs::path p(path);
+  if (p.is_absolute()) return fs::is_regular_file(p, ec) ? path : "";
+  if (fs::is_regular_file(p, ec)) return path;
+  if (!scene_path.empty()) {
+    const fs::path q = fs::path(scene_path).parent_path() / p;
+    if (fs::is_regular_file(q, ec)) return q.string();
+  }
+  const fs::path r = fs::path(PONYHOP_SOURCE_DIR) / p;
+  if (fs::is_regular_file(r, ec)) return r.string();
+  return "";
+}
+
+Scene parseScene(const json& j_in, const std::string& source, const std::vector<Override>& overrides) {
+  json j = j_in;
+  if (!j.is_object()) throw SceneError(source + ": a scene file must be a JSON object { ... }");
+  for (const auto& o : overrides) {
+    const std::string section = o.key.substr(0, o.key.find('.'));
+    for (const char* opt : kOptionalSections) {
+      if (section == opt && !sectionPresent(j, opt) && o.key != section) {
+        throw SceneError("--set " + o.key + ": this scene has no '" + section +
+                         "' section (a scene file names what exists)");
+      }
+    }
+    applyOverride(j, o);
+  }
+  Scene scene;
+  std::vector<std::string> errors;
+  JsonReader::readStruct(j, scene, "", errors);
+  if (!errors.empty()) {
+    // Name the override that caused a problem, so the user knows it was not the file.
+    for (auto& e : errors) {
+      for (const auto& o : overrides) {
+        if (e.rfind(o.key, 0) == 0) {
+          e = "(from --set " + o.key + "=" + o.value + ") " + e;
+          break;
+        }
+      }
+    }
+    throw SceneError(joinErrors(source, errors));
+  }
+  scene.path = source;
+  validateScene(scene, source);
+  return scene;
+}
+
+Scene loadScene(const std::string& path, const std::vector<Override>& overrides) {
+  std::ifstream in(path);
+  if (!in) throw SceneError(path + ": cannot open the scene file (does it exist?)");
+  json j;
+  try {
+    j = json::parse(in, nullptr, true, /*ignore_comments=*/true);
+  } catch (const json::parse_error& e) {
+    throw SceneError(path + ": not valid JSON: " + e.what());
+  }
+  Scene scene = parseScene(j, path, overrides);
+  scene.path = path;
+  return scene;
+}
+
+json sceneToJson(const Scene& scene) { return JsonWriter::write(scene); }
+
+void saveScene(const Scene& scene, const std::string& path) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw SceneError(path + ": cannot write the scene file");
+    out << sceneToJson(scene).dump(2) << "\n";
+    if (!out) throw SceneError(path + ": write failed");
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) throw SceneError(path + ": cannot replace the file: " + ec.message());
+}
+
+void validateScene(const Scene& scene_in, const std::string& source) {
+  Scene scene = scene_in;  // RangeChecker visits through non-const reflect()
+  std::vector<std::string> errors;
+  RangeChecker checker("", errors);
+  scene.reflect(checker);
+  if (scene.head) {
+    if (resolveScenePath(scene.head->mesh, scene.path).empty()) {
+      errors.push_back("head.mesh: file not found: \"" + scene.head->mesh +
+                       "\" (looked in the working directory, beside the scene and in the repository)");
+    }
+    const auto& a = scene.head->animation;
+    if (!a.clip.empty() && a.clip != "mesh") {
+      const std::string clip = a.clip.find('/') == std::string::npos && a.clip.find('.') == std::string::npos
+                                   ? "assets/animations/" + a.clip + ".json"
+                                   : a.clip;
+      if (resolveScenePath(clip, scene.path).empty()) {
+        errors.push_back("head.animation.clip: no clip \"" + a.clip +
+                         "\" (a name in assets/animations/, a clip file, \"mesh\", or \"\" for keys)");
+      }
+    }
+  }
+  if (scene.chain) {
+    const auto& c = *scene.chain;
+    if (c.direction.norm() < 1e-9) errors.push_back("chain.direction: must not be the zero vector");
+    if (c.attach == ChainAttach::Head && !scene.head) {
+      errors.push_back("chain.attach: \"head\" needs a head section in the scene");
+    }
+    if (c.attach == ChainAttach::Anchor && !scene.anchor) {
+      errors.push_back("chain.attach: \"anchor\" needs an anchor section in the scene");
+    }
+    if (c.attach == ChainAttach::Hopper) {
+      errors.push_back("chain.attach: \"hopper\" is not available yet");
+    }
+  }
+  if (scene.render.width % 2 || scene.render.height % 2) {
+    // H.264 in yuv420p needs even sizes; keep every output consistent with the video.
+    errors.push_back("render.width/height: must be even (got " + std::to_string(scene.render.width) +
+                     "x" + std::to_string(scene.render.height) + ")");
+  }
+  if (!errors.empty()) throw SceneError(joinErrors(source, errors));
+}
+
+namespace {
+
+class DocWriter {
+ public:
+  DocWriter(std::string prefix, std::string& out) : prefix_(std::move(prefix)), out_(out) {}
+
+  template <class T>
+  void operator()(const char* name, T& field, const FieldMeta& meta) {
+    doc(field, meta, prefix_ + name);
+  }
+
+ private:
+  template <class T>
+  static std::string typeName() {
+    if constexpr (std::is_same_v<T, bool>) return "bool";
+    else if constexpr (std::is_same_v<T, int>) return "integer";
+    else if constexpr (std::is_same_v<T, double>) return "number";
+    else if constexpr (std::is_same_v<T, std::string>) return "string";
+    else if constexpr (std::is_same_v<T, Eigen::Vector3d>) return "[x, y, z]";
+    else if constexpr (std::is_enum_v<T>) return enumChoices<T>();
+    else return "";
+  }
+
+  template <class T>
+  void doc(T& field, const FieldMeta& meta, const std::string& key) {
+    if constexpr (IsOptional<T>::value) {
+      out_ += "\n### `" + key + "` (optional section: present = built)\n\n" + meta.help +
+              "\n\n| key | type | default | allowed | meaning |\n|---|---|---|---|---|\n";
+      typename T::value_type def{};
+      DocWriter w(key + ".", out_);
+      def.reflect(w);
+    } else if constexpr (IsVector<T>::value) {
+      out_ += "| `" + key + "` | list | [] | | " + meta.help + " |\n";
+      typename T::value_type def{};
+      DocWriter w(key + ".N.", out_);
+      def.reflect(w);
+    } else if constexpr (std::is_class_v<T> && !std::is_same_v<T, std::string> &&
+                         !std::is_same_v<T, Eigen::Vector3d>) {
+      DocWriter w(key + ".", out_);
+      field.reflect(w);
+    } else {
+      std::string range;
+      if constexpr (std::is_same_v<T, int> || std::is_same_v<T, double> ||
+                    std::is_same_v<T, Eigen::Vector3d>) {
+        range = rangeText(meta);
+      }
+      out_ += "| `" + key + "` | " + typeName<T>() + " | `" + JsonWriter::write(field).dump() + "` | " +
+              range + " | " + meta.help + " |\n";
+    }
+  }
+
+  std::string prefix_;
+  std::string& out_;
+};
+
+}  // namespace
+
+std::string sceneReferenceMarkdown() {
+  std::string out =
+      "| key | type | default | allowed | meaning |\n|---|---|---|---|---|\n";
+  Scene scene;
+  DocWriter w("", out);
+  scene.reflect(w);
+  return out;
+}
+
+}  // namespace ponyhop
