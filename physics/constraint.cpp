@@ -1,0 +1,65 @@
+#include "physics/constraint.h"
+
+namespace ponyhop {
+
+const RigidBody& worldBody() {
+  static const RigidBody world = [] {
+    RigidBody b;
+    b.kind = RigidBody::Kind::Kinematic;
+    b.name = "world";
+    return b;
+  }();
+  return world;
+}
+
+void ConstraintSystem::evaluate(const std::vector<RigidBody>& bodies, const Constraints& constraints) {
+  const auto bodyOf = [&](int i) -> const RigidBody& { return i == kWorldBody ? worldBody() : bodies[i]; };
+  rows_ = 0;
+  for (const auto& c : constraints) rows_ += c->dimension();
+  blocks_.resize(constraints.size());
+  c_.resize(rows_);
+  bias_.resize(rows_);
+  max_error_ = 0.0;
+  int row = 0;
+  ConstraintRows r;
+  for (size_t j = 0; j < constraints.size(); ++j) {
+    const Constraint& c = *constraints[j];
+    const int m = c.dimension();
+    r.C.resize(m);
+    r.ja.resize(m, 6);
+    r.jb.resize(m, 6);
+    r.bias.resize(m);
+    c.evaluate(bodyOf(c.bodyA()), bodyOf(c.bodyB()), r);
+    Block& b = blocks_[j];
+    b.body_a = c.bodyA();
+    b.body_b = c.bodyB();
+    b.row = row;
+    b.rows = m;
+    b.ja = r.ja;
+    b.jb = r.jb;
+    c_.segment(row, m) = r.C;
+    bias_.segment(row, m) = r.bias;
+    max_error_ = std::max(max_error_, c.error(r));
+    row += m;
+  }
+}
+
+Eigen::VectorXd ConstraintSystem::times(const std::vector<Vector6d>& per_body) const {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(rows_);
+  for (const Block& b : blocks_) {
+    if (b.body_a != kWorldBody) out.segment(b.row, b.rows) += b.ja * per_body[b.body_a];
+    if (b.body_b != kWorldBody) out.segment(b.row, b.rows) += b.jb * per_body[b.body_b];
+  }
+  return out;
+}
+
+void ConstraintSystem::addTransposeTimes(const Eigen::VectorXd& lambda, const std::vector<RigidBody>& bodies,
+                                         std::vector<Vector6d>& out) const {
+  for (const Block& b : blocks_) {
+    const auto l = lambda.segment(b.row, b.rows);
+    if (b.body_a != kWorldBody && bodies[b.body_a].isDynamic()) out[b.body_a] += b.ja.transpose() * l;
+    if (b.body_b != kWorldBody && bodies[b.body_b].isDynamic()) out[b.body_b] += b.jb.transpose() * l;
+  }
+}
+
+}  // namespace ponyhop

@@ -1,0 +1,58 @@
+#include "physics/constraint_solver.h"
+
+namespace ponyhop {
+
+std::string ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, const ConstraintSystem& system,
+                                               const BaumgarteGains& gains) {
+  // Known accelerations: unconstrained M^-1 F_ext (with w x I w) for dynamic bodies, the
+  // prescribed ones for kinematic bodies; and every body's velocity, for C' = J q'.
+  std::vector<Vector6d> acc(bodies.size());
+  std::vector<Vector6d> vel(bodies.size());
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    const RigidBody& b = bodies[i];
+    if (b.isDynamic()) {
+      acc[i] = b.freeAcceleration();
+    } else {
+      acc[i] << b.a, b.alpha;
+    }
+    vel[i] << b.v, b.w;
+  }
+
+  lambda_.setZero(system.rows());
+  if (system.rows() > 0) {
+    // b = -J'q' - J_d M^-1 F_ext - J_k acc_k - (2 alpha C' + beta^2 C)
+    Eigen::VectorXd rhs = -system.bias() - system.times(acc);
+    if (gains.alpha != 0.0) rhs -= 2.0 * gains.alpha * system.times(vel);
+    if (gains.beta != 0.0) rhs -= gains.beta * gains.beta * system.C();
+    if (!factor(bodies, system)) return "the constraint matrix J M^-1 J^T is singular";
+    lambda_ = solve(rhs);
+    if (!lambda_.allFinite()) return "non-finite multipliers lambda";
+  }
+
+  // F_c = J^T lambda; acceleration = M^-1 (F_ext + F_c) (the free part already has M^-1 F_ext).
+  std::vector<Vector6d> fc(bodies.size(), Vector6d::Zero());
+  if (system.rows() > 0) system.addTransposeTimes(lambda_, bodies, fc);
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    RigidBody& b = bodies[i];
+    if (!b.isDynamic()) continue;
+    b.constraint_force = fc[i].head<3>();
+    b.constraint_torque = fc[i].tail<3>();
+    const Vector6d total = acc[i] + applyInverseMass(b, fc[i]);
+    b.a = total.head<3>();
+    b.alpha = total.tail<3>();
+  }
+  return "";
+}
+
+std::vector<Vector6d> ConstraintSolver::massWeightedTranspose(const std::vector<RigidBody>& bodies,
+                                                              const ConstraintSystem& system,
+                                                              const Eigen::VectorXd& y) const {
+  std::vector<Vector6d> out(bodies.size(), Vector6d::Zero());
+  system.addTransposeTimes(y, bodies, out);
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    if (bodies[i].isDynamic()) out[i] = applyInverseMass(bodies[i], out[i]);
+  }
+  return out;
+}
+
+}  // namespace ponyhop

@@ -1,0 +1,67 @@
+// What every multiplier solver does (the "joint forces" stage), whatever its factorization:
+//
+//   A lambda = b,   A = J M^-1 J^T (over the dynamic bodies),
+//   b = -J'q' - J_d M^-1 F_ext - J_k acc_k - (2 alpha C' + beta^2 C)
+//
+// (Hecker, seed 000, "Math to the Rescue"; J_d M^-1 F_ext includes the gyroscopic term, J_k
+// acc_k are the kinematic bodies' known accelerations, the last bracket is Baumgarte's
+// stabilization C'' + 2 alpha C' + beta^2 C = 0). Then F_c = J^T lambda on the dynamic bodies.
+//
+// A subclass supplies only the factorization of A and the solve: DenseSolver (Eigen LDLT);
+// a Baraff tree solver (block LDL^T in leaves-first order) fits the same two calls and must give
+// the same lambda. Position/velocity projection (stabilization.h) reuses them with the mass
+// metric. A reduced-coordinate (Featherstone) method would replace World's joint-force stage
+// as a whole, as it yields accelerations without multipliers.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "physics/constraint.h"
+#include "physics/rigid_body.h"
+
+namespace ponyhop {
+
+struct BaumgarteGains {
+  double alpha = 0.0;  // 1/s, C' gain (2 alpha)
+  double beta = 0.0;   // 1/s, C gain (beta^2)
+};
+
+class ConstraintSolver {
+ public:
+  virtual ~ConstraintSolver() = default;
+
+  // Factor A = J M^-1 J^T for the evaluated system and the bodies' current mass matrices.
+  // Returns false when A is singular (redundant rows, a joint with no dynamic body).
+  virtual bool factor(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) = 0;
+  // y with A y = rhs, after factor().
+  virtual Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const = 0;
+
+  // The joint-force stage. Needs the bodies' accumulated forces (dynamic) and prescribed
+  // accelerations (kinematic). Writes constraint_force/torque and the total accelerations a,
+  // alpha of every dynamic body. Returns "" or what went wrong.
+  std::string solveJointForces(std::vector<RigidBody>& bodies, const ConstraintSystem& system,
+                               const BaumgarteGains& gains);
+  // The multipliers of the last solveJointForces (one per constraint row; a spherical joint's
+  // three are its constraint force on body a, in newtons).
+  const Eigen::VectorXd& lambda() const { return lambda_; }
+
+  // dq = M^-1 J^T y for the dynamic bodies (zero for the others): the mass-metric correction
+  // for a multiplier-like vector y.
+  std::vector<Vector6d> massWeightedTranspose(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
+                                              const Eigen::VectorXd& y) const;
+
+ private:
+  Eigen::VectorXd lambda_;
+};
+
+// M^-1 x for one body's 6-vector (1/m on the linear part, I_world^-1 on the angular part).
+inline Vector6d applyInverseMass(const RigidBody& b, const Vector6d& x) {
+  Vector6d out;
+  out.head<3>() = x.head<3>() / b.mass;
+  out.tail<3>() = b.worldInverseInertia() * x.tail<3>();
+  return out;
+}
+
+}  // namespace ponyhop

@@ -1,0 +1,115 @@
+// A rigid body in maximal coordinates (Hecker, seed 002, Table 1): centre-of-mass position x,
+// orientation q (unit quaternion, body to world), linear velocity v, angular velocity w (world
+// frame). Dynamic bodies are moved by forces; kinematic bodies follow a prescribed
+// KinematicMotion and take no constraint force: their known accelerations enter the
+// right-hand side of the constraint equations (seed 000, "Kinematic Control").
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <string>
+
+#include "physics/kinematic.h"
+
+namespace ponyhop {
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;  // [linear; angular], world frame
+
+// The skew (cross-product) matrix: skew(a) b = a x b. Hecker writes it r~.
+inline Eigen::Matrix3d skew(const Eigen::Vector3d& a) {
+  Eigen::Matrix3d m;
+  m << 0.0, -a.z(), a.y(), a.z(), 0.0, -a.x(), -a.y(), a.x(), 0.0;
+  return m;
+}
+
+// The unit quaternion of the rotation vector phi (axis * angle), exact for any angle.
+inline Eigen::Quaterniond quaternionFromRotationVector(const Eigen::Vector3d& phi) {
+  const double angle = phi.norm();
+  if (angle < 1e-12) {  // second-order series avoids 0/0
+    Eigen::Quaterniond q(1.0, 0.5 * phi.x(), 0.5 * phi.y(), 0.5 * phi.z());
+    return q.normalized();
+  }
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, phi / angle));
+}
+
+// The rotation vector (axis * angle, angle in [0, pi]) of a unit quaternion.
+inline Eigen::Vector3d rotationVector(const Eigen::Quaterniond& q_in) {
+  Eigen::Quaterniond q = q_in.normalized();
+  if (q.w() < 0.0) q.coeffs() = -q.coeffs();  // shortest rotation
+  const double s = q.vec().norm();
+  if (s < 1e-12) return 2.0 * q.vec();  // small angle: phi ~ 2 sin(phi/2) axis
+  return 2.0 * std::atan2(s, q.w()) * q.vec() / s;
+}
+
+struct RigidBody {
+  enum class Kind { Dynamic, Kinematic };
+
+  Kind kind = Kind::Dynamic;
+  std::string name;  // for status messages ("link 3", "head")
+
+  // Mass properties (dynamic bodies).
+  double mass = 1.0;                                      // kg
+  Eigen::Vector3d inertia = Eigen::Vector3d::Ones();      // kg m^2, principal, body frame
+
+  // State.
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();            // m, centre of mass
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();  // body to world
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();            // m/s
+  Eigen::Vector3d w = Eigen::Vector3d::Zero();            // rad/s, world frame
+
+  // Accumulators, world frame, cleared at the start of each force evaluation.
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();        // N, external + controller
+  Eigen::Vector3d torque = Eigen::Vector3d::Zero();       // N m, about the centre of mass
+  Eigen::Vector3d constraint_force = Eigen::Vector3d::Zero();   // N, J^T lambda (linear)
+  Eigen::Vector3d constraint_torque = Eigen::Vector3d::Zero();  // N m, J^T lambda (angular)
+
+  // Accelerations, world frame: computed for dynamic bodies (after the joint-force stage),
+  // prescribed for kinematic bodies.
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();            // m/s^2
+  Eigen::Vector3d alpha = Eigen::Vector3d::Zero();        // rad/s^2
+
+  KinematicMotion motion;  // kinematic bodies only
+
+  bool isDynamic() const { return kind == Kind::Dynamic; }
+
+  Eigen::Matrix3d rotation() const { return q.normalized().toRotationMatrix(); }
+  // I_world = R I_body R^T.
+  Eigen::Matrix3d worldInertia() const {
+    const Eigen::Matrix3d r = rotation();
+    return r * inertia.asDiagonal() * r.transpose();
+  }
+  Eigen::Matrix3d worldInverseInertia() const {
+    const Eigen::Matrix3d r = rotation();
+    return r * inertia.cwiseInverse().asDiagonal() * r.transpose();
+  }
+  // A point fixed in the body: body-frame coordinates to world (Hecker's p = R + r).
+  Eigen::Vector3d pointToWorld(const Eigen::Vector3d& body_point) const { return x + q * body_point; }
+  // Velocity of the material point at world position p (p' = R' + w x r).
+  Eigen::Vector3d velocityAt(const Eigen::Vector3d& p) const { return v + w.cross(p - x); }
+
+  // Acceleration of a free body under the accumulated forces alone (M^-1 F_ext with the
+  // gyroscopic term of Euler's equation, t = I alpha + w x (I w)).
+  Vector6d freeAcceleration() const {
+    Vector6d acc;
+    const Eigen::Matrix3d r = rotation();
+    const Eigen::Vector3d angular_momentum = r * inertia.cwiseProduct(r.transpose() * w);
+    acc.head<3>() = force / mass;
+    acc.tail<3>() = r * inertia.cwiseInverse().cwiseProduct(r.transpose() * (torque - w.cross(angular_momentum)));
+    return acc;
+  }
+
+  double kineticEnergy() const { return 0.5 * mass * v.squaredNorm() + 0.5 * w.dot(worldInertia() * w); }
+
+  // Kinematic bodies: take the prescribed pose, velocity and acceleration.
+  void setKinematicState(const KinematicState& s) {
+    x = s.x;
+    q = s.q.normalized();
+    v = s.v;
+    w = s.w;
+    a = s.a;
+    alpha = s.alpha;
+  }
+};
+
+}  // namespace ponyhop

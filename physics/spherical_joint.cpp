@@ -1,0 +1,31 @@
+#include "physics/spherical_joint.h"
+
+namespace ponyhop {
+
+// Hecker, "How to Simulate a Ponytail" (seed 002, Eq. 1-3, 12-14) and seed 000:
+//
+//   R_a, R_b   centres of mass (world);   r_a = q_a point_a, r_b = q_b point_b (world-frame arms)
+//   p_a = R_a + r_a,  p_b = R_b + r_b     the joint point as seen from each body
+//
+//   C   = p_a - p_b = R_a + r_a - R_b - r_b                                        (Eq. 13)
+//   C'  = R_a' + w_a x r_a - R_b' - w_b x r_b                                     (Eq. 2)
+//       = [ I  -r~_a ] [v_a; w_a] + [ -I  r~_b ] [v_b; w_b]      (w x r = -r x w = -r~ w)
+//   C'' = R_a'' + alpha_a x r_a + w_a x (w_a x r_a)
+//       - R_b'' - alpha_b x r_b - w_b x (w_b x r_b)                                (Eq. 3, 14)
+//
+// so J_a = [ I  -r~_a ],  J_b = [ -I  r~_b ]  (r~ the cross-product matrix, Hecker's tilde),
+// and the velocity-product term J'q' = w_a x (w_a x r_a) - w_b x (w_b x r_b).
+// J_a^T lambda = [lambda; r_a x lambda]: Hecker's f_ca = f_c, t_ca = r_a x f_c, with
+// lambda = f_c, and -f_c, -r_b x f_c on b (Newton's third law).
+void SphericalJoint::evaluate(const RigidBody& a, const RigidBody& b, ConstraintRows& out) const {
+  const Eigen::Vector3d r_a = a.q * point_a_;
+  const Eigen::Vector3d r_b = b.q * point_b_;
+  out.C = (a.x + r_a) - (b.x + r_b);
+  out.ja.leftCols<3>() = Eigen::Matrix3d::Identity();
+  out.ja.rightCols<3>() = -skew(r_a);
+  out.jb.leftCols<3>() = -Eigen::Matrix3d::Identity();
+  out.jb.rightCols<3>() = skew(r_b);
+  out.bias = a.w.cross(a.w.cross(r_a)) - b.w.cross(b.w.cross(r_b));
+}
+
+}  // namespace ponyhop

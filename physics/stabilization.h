@@ -1,0 +1,40 @@
+// Keeping joints together: the acceleration-level constraint C'' = 0 holds C only as well as
+// the integrator does, so C drifts (Hecker, seed 000, "Cons: accuracy, stability"). Two cures:
+//
+//  Baumgarte: solve C'' + 2 alpha C' + beta^2 C = 0 instead (gains in PhysicsParams; applied
+//    inside the joint-force stage, see constraint_solver.h).
+//  Projection (post-stabilization, seed 001): after each step, Newton-project the positions
+//    onto C = 0 in the mass metric, then the velocities onto J v = -J_k v_k (the kinematic
+//    bodies' motion is prescribed, so they do not move):
+//      dq = M^-1 J^T (J M^-1 J^T)^-1 (-C)   (repeat until |C| < tolerance),
+//      dv = M^-1 J^T (J M^-1 J^T)^-1 (-(J v + J_k v_k)).
+//    The velocity projection is also Kelvin's minimum-energy start: of all velocities that
+//    satisfy the joints, the one closest to the given one in the kinetic-energy metric.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "physics/constraint.h"
+#include "physics/constraint_solver.h"
+
+namespace ponyhop {
+
+struct ProjectionResult {
+  int iterations = 0;
+  double error = 0.0;  // max joint error after the projection (m for spherical joints)
+  bool converged = false;
+  std::string problem;  // "" or what failed (singular A, non-finite correction)
+};
+
+// Positions and orientations of the dynamic bodies onto C = 0. `system` is scratch.
+ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constraints& constraints,
+                                  ConstraintSystem& system, ConstraintSolver& solver, double tolerance = 1e-12,
+                                  int max_iterations = 10);
+
+// Velocities of the dynamic bodies onto J v = -J_k v_k (kinematic bodies' velocities as they
+// are). Returns "" or what failed.
+std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints,
+                              ConstraintSystem& system, ConstraintSolver& solver);
+
+}  // namespace ponyhop

@@ -1,0 +1,109 @@
+// The simulated world: bodies, joints and force elements, and the step that advances them
+// (Hecker, seed 000, "Simulation Loop - Control"). Parameters come in PhysicsParams; the state
+// (bodies, time, status) lives here. Physics never prints: when a step goes wrong, the world
+// stops and status() says when, in which stage, and the likely cause.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "physics/constraint.h"
+#include "physics/constraint_solver.h"
+#include "physics/force_elements.h"
+#include "physics/integrator.h"
+#include "physics/physics_params.h"
+#include "physics/rigid_body.h"
+
+namespace ponyhop {
+
+class World {
+ public:
+  // Adds controller forces to the bodies' accumulators. Contract (seed 000): uses only the
+  // current state and time, keeps no state, may be called at any time (RK4 calls it at each
+  // stage), smooth in the state.
+  using Controller = std::function<void(double t, std::vector<RigidBody>& bodies)>;
+  // Resolves contacts after stabilization (may change positions and velocities).
+  using ContactHandler = std::function<void(double t, std::vector<RigidBody>& bodies)>;
+
+  explicit World(const PhysicsParams& params);  // bad params: !ok(), status() says why
+
+  // Building. Each returns the new index.
+  int addDynamicBody(RigidBody body);
+  int addKinematicBody(KinematicMotion motion, std::string name);  // state set at time()
+  int addJoint(std::unique_ptr<Constraint> joint);
+  int addForceElement(std::unique_ptr<ForceElement> element);
+  void setController(Controller controller) { controller_ = std::move(controller); }
+  void setContactHandler(ContactHandler handler) { contact_ = std::move(handler); }
+  // Potential energy reported = gravity + springs - reference (builders set the zero).
+  void addPotentialReference(double joules) { potential_reference_ += joules; }
+  // Stops the world with a message (builders: invalid parameters).
+  void fail(std::string message);
+
+  // Advance by params().dt in params().substeps equal steps. Does nothing once !ok().
+  void step();
+
+  // The force stages at the current state and time, without stepping: fills every dynamic
+  // body's a, alpha and constraint force/torque, and lambda(). For tests and drawing forces.
+  void evaluate();
+  // Velocities of the dynamic bodies onto the joints' velocity constraints (J v = -J_k v_k) in
+  // the mass metric: the least-kinetic-energy consistent velocities (Kelvin).
+  void projectVelocities();
+
+  double time() const { return time_; }
+  const PhysicsParams& params() const { return params_; }
+  bool ok() const { return status_.empty(); }
+  const std::string& status() const { return status_; }
+
+  int bodyCount() const { return static_cast<int>(bodies_.size()); }
+  RigidBody& body(int i) { return bodies_[i]; }
+  const RigidBody& body(int i) const { return bodies_[i]; }
+  const std::vector<RigidBody>& bodies() const { return bodies_; }
+  std::vector<RigidBody>& bodies() { return bodies_; }
+  const Constraints& joints() const { return joints_; }
+  const ConstraintSolver& solver() const { return *solver_; }
+  const Eigen::VectorXd& lambda() const { return solver_->lambda(); }
+
+  double kineticEnergy() const;    // J, dynamic bodies
+  double potentialEnergy() const;  // J, gravity + springs - reference
+  double energy() const { return kineticEnergy() + potentialEnergy(); }
+  double maxJointError() const;    // max |C| over joints at the current state (m)
+  // Power of the constraint forces on the dynamic bodies at the last evaluation, W:
+  // sum F_c . v + t_c . w (zero for workless joints with fixed kinematic parents).
+  double constraintPower() const;
+
+ private:
+  // The stages of a step, in the method's order.
+  void updateKinematicBodies(double t);
+  void applyExternalForces();
+  void applyControllerForces();
+  void solveJointForces();
+  void integrate(double h);
+  void stabilize();
+  void resolveContacts();
+
+  void substep(double h);
+  void accelerationsAt(double t, const State& state, Accelerations& out);
+  State gatherState() const;
+  void scatterState(const State& state);
+  Accelerations gatherAccelerations() const;
+  bool checkBodies(const char* stage, bool accelerations);
+  void stop(const char* stage, const std::string& what, const char* cause);
+
+  PhysicsParams params_;
+  std::vector<RigidBody> bodies_;
+  std::vector<int> dynamic_;  // indices of the dynamic bodies, in state order
+  Constraints joints_;
+  ForceElements forces_;
+  Controller controller_;
+  ContactHandler contact_;
+  std::unique_ptr<ConstraintSolver> solver_;
+  ConstraintSystem system_;
+  double time_ = 0.0;
+  double stage_time_ = 0.0;  // time of the force evaluation in progress (RK4 stages)
+  double potential_reference_ = 0.0;
+  std::string status_;
+};
+
+}  // namespace ponyhop
