@@ -88,7 +88,8 @@ double sd_body(const Vec3& p, bool ears = true) {
   const double lips = smin(sd_ellipsoid(b, Vec3(0.0, -0.043, 0.080), Vec3(0.020, 0.0058, 0.0085)),
                            sd_ellipsoid(b, Vec3(0.0, -0.0535, 0.078), Vec3(0.0175, 0.0065, 0.0085)), 0.004);
   d = smin(d, lips, 0.006);
-  d = ssub(d, sd_ellipsoid(b, Vec3(0.0, -0.048, 0.088), Vec3(0.022, 0.0018, 0.013)), 0.004);
+  // The mouth line is a capsule (round ends stay resolvable at a 3 mm grid; a tapering slit does not).
+  d = ssub(d, sd_tapered_capsule(b, Vec3(-0.0155, -0.048, 0.0855), Vec3(0.0155, -0.048, 0.0855), 0.0021, 0.0021), 0.004);
 
   // Ears: a flat ellipsoid tilted back 15 degrees and flared 20 degrees away from the head at the
   // back, with a bowl (concha) scooped out of the outer face and a small lobe.
