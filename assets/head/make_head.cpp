@@ -486,6 +486,8 @@ int run(const std::filesystem::path& out_dir, double cell) {
               pmin[2], pmax[0], pmax[1], pmax[2], pmax[1] - pmin[1]);
   std::printf("ponytail anchor (bun surface, on the bun axis): (%.4f, %.4f, %.4f) m, axis (%.3f, %.3f, %.3f)\n",
               anchor.x(), anchor.y(), anchor.z(), kBunAxis.x(), kBunAxis.y(), kBunAxis.z());
+  const Vec3 bun = bun_base() + kBunLift * kBunAxis;
+  std::printf("bun centre: (%.4f, %.4f, %.4f) m\n", bun.x(), bun.y(), bun.z());
   for (const char* f : {"head.obj", "head.gltf", "head.bin", "head_animated.gltf"}) {
     std::printf("  %-20s %9ju bytes\n", f, static_cast<std::uintmax_t>(std::filesystem::file_size(out_dir / f)));
   }
