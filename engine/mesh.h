@@ -1,0 +1,48 @@
+// Triangle meshes from any file assimp reads (OBJ, glTF/GLB, FBX, PLY, STL, .blend, ...), and the
+// HeadParams placement of a mesh in its body frame.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/scene.h"
+
+namespace ponyhop {
+
+// One indexed triangle list; all meshes/nodes of a file are merged with their node transforms
+// baked in. normals.size() == positions.size(), unit length.
+struct MeshData {
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<Eigen::Vector3f> normals;
+  std::vector<uint32_t> indices;  // 3 per triangle
+  Eigen::AlignedBox3f bbox;       // of positions (empty when there are none)
+
+  size_t triangleCount() const { return indices.size() / 3; }
+  void computeBounds();
+};
+
+// Loads `path`. Missing normals are generated smooth; STL (whose normals are per facet by format)
+// gets smooth normals too. Returns false with "FILE: assimp's message" (or "FILE: no triangles").
+bool loadMesh(const std::string& path, MeshData& out, std::string* err);
+
+// Body-from-mesh transform of HeadParams:
+//   p_body = offset + R * s * U * p_mesh
+// U: up-axis fix (y up -> z up is +90 deg about x, so a face toward +z looks toward -y);
+// s: height / (mesh extent along its up axis) when height > 0, else scale;
+// R = Rz(rz) Ry(ry) Rx(rx), rotation in degrees. No recentering: the mesh origin stays the body
+// origin (the anchor and the keyframes are given relative to it).
+Eigen::Affine3d meshToBody(const HeadParams& head, const Eigen::AlignedBox3f& mesh_bbox);
+// A point in the mesh's own coordinates (e.g. HeadParams::anchor) in the body frame.
+Eigen::Vector3d meshPointToBody(const HeadParams& head, const Eigen::AlignedBox3f& mesh_bbox,
+                                const Eigen::Vector3d& p_mesh);
+// Applies a transform in place (normals by the inverse transpose, renormalized; bbox recomputed).
+void transformMesh(MeshData& mesh, const Eigen::Affine3d& T);
+
+// Procedural meshes (also used by tests): a UV sphere and an axis-aligned box with flat faces.
+MeshData makeUvSphere(float radius, int slices, int stacks);
+MeshData makeBoxMesh(const Eigen::Vector3f& half_extents);
+
+}  // namespace ponyhop

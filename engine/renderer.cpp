@@ -1,0 +1,654 @@
+#include "engine/renderer.h"
+
+#include <glad/gl.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "engine/primitives.h"
+#include "engine/shaders.h"
+
+namespace ponyhop {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+float srgbToLinear(float c) {
+  c = std::clamp(c, 0.0f, 1.0f);
+  return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+Eigen::Vector3f srgbToLinear(const Eigen::Vector3f& c) {
+  return {srgbToLinear(c.x()), srgbToLinear(c.y()), srgbToLinear(c.z())};
+}
+
+struct GpuMesh {
+  GLuint vao = 0, vbo = 0, ebo = 0;
+  GLsizei index_count = 0;
+  Eigen::AlignedBox3d bbox;
+};
+
+struct MeshDraw {
+  int mesh;
+  Eigen::Matrix4f model;
+  Eigen::Matrix3f normal;
+  Material material;
+};
+
+// Per-instance data of the hull (sphere/capsule) draw: matches the attributes of kCapsuleVS.
+struct HullInstance {
+  float p0r0[4];
+  float p1r1[4];
+  float color_spec[4];
+  float shin_rim[2];
+};
+
+struct LineVertex {
+  float pos[3];
+  float color[3];
+};
+
+// Orthographic light frustum fitted to a set of points, with texel snapping.
+struct LightFrustum {
+  Eigen::Matrix4d view_proj = Eigen::Matrix4d::Identity();
+  double texel_world = 0.0;  // m per shadow texel
+};
+
+Eigen::Matrix4d lookAlong(const Eigen::Vector3d& dir) {
+  // Rotation-only view matrix of a camera at the origin looking along `dir` (z up when possible).
+  Eigen::Vector3d f = dir.normalized();
+  Eigen::Vector3d up = std::abs(f.z()) > 0.99 ? Eigen::Vector3d(0, 1, 0) : Eigen::Vector3d(0, 0, 1);
+  Eigen::Vector3d s = f.cross(up).normalized();
+  Eigen::Vector3d u = s.cross(f);
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.block<1, 3>(0, 0) = s.transpose();
+  m.block<1, 3>(1, 0) = u.transpose();
+  m.block<1, 3>(2, 0) = -f.transpose();
+  return m;
+}
+
+Eigen::Matrix4d ortho(double l, double r, double b, double t, double n, double f) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m(0, 0) = 2.0 / (r - l);
+  m(1, 1) = 2.0 / (t - b);
+  m(2, 2) = -2.0 / (f - n);
+  m(0, 3) = -(r + l) / (r - l);
+  m(1, 3) = -(t + b) / (t - b);
+  m(2, 3) = -(f + n) / (f - n);
+  return m;
+}
+
+// Fits the light's orthographic box to the casters and to their shadows on the ground: the points
+// are the bounds' corners and those corners pushed along the light onto z = 0. The square extent
+// is rounded up to steps of 2^(1/4) and the centre snapped to whole texels, so that a moving scene
+// changes the shadow map's texel grid rarely and only by whole texels (no crawling edges).
+LightFrustum fitLightFrustum(const Eigen::Vector3d& dir, const Eigen::AlignedBox3d& casters, int size,
+                             double softness_texels) {
+  LightFrustum lf;
+  const Eigen::Matrix4d V = lookAlong(dir);
+  const Eigen::Matrix3d R = V.block<3, 3>(0, 0);
+  Eigen::AlignedBox3d ls;  // light space
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d c = casters.corner(Eigen::AlignedBox3d::CornerType(i));
+    ls.extend(R * c);
+    if (dir.z() < -1e-3 && c.z() > 0.0) ls.extend(R * (c + dir * (c.z() / -dir.z())));
+  }
+  double extent = std::max(ls.sizes().x(), ls.sizes().y());
+  extent = std::max(extent, 1e-3);
+  // Margin for the PCF kernel and the normal offset (a few texels).
+  extent *= 1.0 + (4.0 + 2.0 * softness_texels) / double(size);
+  extent = std::pow(2.0, std::ceil(std::log2(extent) * 4.0) / 4.0);
+  const double texel = extent / double(size);
+  Eigen::Vector2d center = 0.5 * (ls.min().head<2>() + ls.max().head<2>());
+  center = (center / texel).array().round().matrix() * texel;
+  const double depth_margin = 0.05 * std::max(ls.sizes().z(), extent) + 1e-3;
+  const double n = -ls.max().z() - depth_margin, f = -ls.min().z() + depth_margin;
+  const Eigen::Matrix4d P = ortho(center.x() - extent / 2, center.x() + extent / 2, center.y() - extent / 2,
+                                  center.y() + extent / 2, n, f);
+  lf.view_proj = P * V;
+  lf.texel_world = texel;
+  return lf;
+}
+
+}  // namespace
+
+struct Renderer::Impl {
+  // Programs.
+  GLuint prog_mesh = 0, prog_hull = 0, prog_ground = 0, prog_bg = 0, prog_lines = 0;
+  GLuint prog_mesh_depth = 0, prog_hull_depth = 0;
+  // Static geometry.
+  GLuint hull_vao = 0, hull_vbo = 0, hull_ebo = 0, hull_instances = 0;
+  GLsizei hull_index_count = 0;
+  size_t hull_triangles = 0;
+  GLuint ground_vao = 0, ground_vbo = 0;
+  GLuint empty_vao = 0;
+  GLuint lines_vao = 0, lines_vbo = 0;
+  std::vector<GpuMesh> meshes;  // index = MeshHandle::id; vao == 0: released
+  int box_mesh = -1;
+  // Targets.
+  GLuint msaa_fbo = 0, msaa_color = 0, msaa_depth = 0;
+  GLuint resolve_fbo = 0, resolve_color = 0;
+  GLuint shadow_fbo = 0, shadow_tex = 0;
+  int target_w = 0, target_h = 0, target_samples = -1, shadow_size = 0;
+  int max_samples = 1;
+  // The frame being built.
+  Camera camera;
+  LightParams light;
+  RenderParams params;
+  bool have_shadow_bounds = false;
+  Eigen::AlignedBox3d shadow_bounds;
+  Eigen::AlignedBox3d draw_bounds;
+  std::vector<MeshDraw> mesh_draws;
+  std::vector<HullInstance> hulls;
+  std::vector<LineVertex> lines;
+  bool in_frame = false;
+
+  void ensureTargets(int w, int h, int samples);
+  void ensureShadowMap(int size);
+  void setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_proj, const Eigen::Matrix4f& light_vp,
+                         float normal_offset, bool shadows_on);
+  void drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj, bool depth_only);
+};
+
+static GLint loc(GLuint prog, const char* name) { return glGetUniformLocation(prog, name); }
+static void setMat4(GLuint prog, const char* name, const Eigen::Matrix4f& m) {
+  glUniformMatrix4fv(loc(prog, name), 1, GL_FALSE, m.data());  // Eigen is column-major, as GL
+}
+static void setVec3(GLuint prog, const char* name, const Eigen::Vector3f& v) {
+  glUniform3f(loc(prog, name), v.x(), v.y(), v.z());
+}
+
+Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
+
+Renderer::~Renderer() {
+  if (!glDeleteProgram) return;  // GL never loaded: nothing was created
+  Impl& I = *impl_;
+  for (GLuint p : {I.prog_mesh, I.prog_hull, I.prog_ground, I.prog_bg, I.prog_lines, I.prog_mesh_depth,
+                   I.prog_hull_depth})
+    if (p) glDeleteProgram(p);
+  for (int i = 0; i < int(I.meshes.size()); ++i) release(MeshHandle{i});
+  GLuint vaos[] = {I.hull_vao, I.ground_vao, I.empty_vao, I.lines_vao};
+  glDeleteVertexArrays(4, vaos);
+  GLuint bufs[] = {I.hull_vbo, I.hull_ebo, I.hull_instances, I.ground_vbo, I.lines_vbo};
+  glDeleteBuffers(5, bufs);
+  GLuint fbos[] = {I.msaa_fbo, I.resolve_fbo, I.shadow_fbo};
+  glDeleteFramebuffers(3, fbos);
+  GLuint rbs[] = {I.msaa_color, I.msaa_depth, I.resolve_color};
+  glDeleteRenderbuffers(3, rbs);
+  if (I.shadow_tex) glDeleteTextures(1, &I.shadow_tex);
+}
+
+bool Renderer::init(std::string* err) {
+  if (!glCreateProgram) {
+    if (err) *err = "Renderer::init: GL is not loaded (call loadGL or create a HeadlessContext first)";
+    return false;
+  }
+  Impl& I = *impl_;
+  using namespace shaders;
+  struct P {
+    GLuint* out;
+    const char* name;
+    const char* vs;
+    const char* fs;
+  };
+  const P progs[] = {{&I.prog_mesh, "mesh", kMeshVS, kLitFS},
+                     {&I.prog_hull, "hull", kCapsuleVS, kLitFS},
+                     {&I.prog_ground, "ground", kGroundVS, kGroundFS},
+                     {&I.prog_bg, "background", kFullscreenVS, kBackgroundFS},
+                     {&I.prog_lines, "lines", kLinesVS, kLinesFS},
+                     {&I.prog_mesh_depth, "mesh depth", kMeshVS, kDepthFS},
+                     {&I.prog_hull_depth, "hull depth", kCapsuleVS, kDepthFS}};
+  for (const P& p : progs)
+    if (!(*p.out = buildProgram(p.name, p.vs, p.fs, err))) return false;
+
+  // Hull template: 32 slices x 10 rings per cap (about 1.3k triangles); instanced.
+  const HullTemplate ht = makeHullTemplate(32, 10);
+  I.hull_index_count = GLsizei(ht.indices.size());
+  I.hull_triangles = ht.indices.size() / 3;
+  glGenVertexArrays(1, &I.hull_vao);
+  glBindVertexArray(I.hull_vao);
+  glGenBuffers(1, &I.hull_vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, I.hull_vbo);
+  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(ht.vertices.size() * sizeof(ht.vertices[0])), ht.vertices.data(),
+               GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 4 * sizeof(float), nullptr);
+  glGenBuffers(1, &I.hull_ebo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, I.hull_ebo);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(ht.indices.size() * sizeof(uint32_t)), ht.indices.data(),
+               GL_STATIC_DRAW);
+  glGenBuffers(1, &I.hull_instances);
+  glBindBuffer(GL_ARRAY_BUFFER, I.hull_instances);
+  const GLsizei stride = sizeof(HullInstance);
+  const struct {
+    GLuint index;
+    GLint size;
+    size_t offset;
+  } inst[] = {{1, 4, offsetof(HullInstance, p0r0)},
+              {2, 4, offsetof(HullInstance, p1r1)},
+              {3, 4, offsetof(HullInstance, color_spec)},
+              {4, 2, offsetof(HullInstance, shin_rim)}};
+  for (const auto& a : inst) {
+    glEnableVertexAttribArray(a.index);
+    glVertexAttribPointer(a.index, a.size, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<const void*>(a.offset));
+    glVertexAttribDivisor(a.index, 1);
+  }
+
+  // Ground: one quad (-1..1), placed and sized by uniforms.
+  const float quad[] = {-1, -1, 1, -1, 1, 1, -1, -1, 1, 1, -1, 1};
+  glGenVertexArrays(1, &I.ground_vao);
+  glBindVertexArray(I.ground_vao);
+  glGenBuffers(1, &I.ground_vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, I.ground_vbo);
+  glBufferData(GL_ARRAY_BUFFER, sizeof(quad), quad, GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 2 * sizeof(float), nullptr);
+
+  glGenVertexArrays(1, &I.empty_vao);  // core profile: a draw needs a VAO even without attributes
+
+  glGenVertexArrays(1, &I.lines_vao);
+  glBindVertexArray(I.lines_vao);
+  glGenBuffers(1, &I.lines_vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, I.lines_vbo);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(LineVertex), nullptr);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(LineVertex),
+                        reinterpret_cast<const void*>(offsetof(LineVertex, color)));
+  glBindVertexArray(0);
+
+  I.box_mesh = upload(makeBoxMesh(Eigen::Vector3f(1, 1, 1))).id;
+  glGetIntegerv(GL_MAX_SAMPLES, &I.max_samples);
+  if (GLenum e = glGetError(); e != GL_NO_ERROR) {
+    if (err) *err = "Renderer::init: GL error " + std::to_string(e);
+    return false;
+  }
+  return true;
+}
+
+MeshHandle Renderer::upload(const MeshData& m) {
+  Impl& I = *impl_;
+  GpuMesh g;
+  std::vector<float> v;
+  v.reserve(m.positions.size() * 6);
+  for (size_t i = 0; i < m.positions.size(); ++i) {
+    const Eigen::Vector3f n = i < m.normals.size() ? m.normals[i] : Eigen::Vector3f(0, 0, 1);
+    v.insert(v.end(), {m.positions[i].x(), m.positions[i].y(), m.positions[i].z(), n.x(), n.y(), n.z()});
+  }
+  glGenVertexArrays(1, &g.vao);
+  glBindVertexArray(g.vao);
+  glGenBuffers(1, &g.vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, g.vbo);
+  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(v.size() * sizeof(float)), v.data(), GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<const void*>(3 * sizeof(float)));
+  glGenBuffers(1, &g.ebo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(m.indices.size() * sizeof(uint32_t)), m.indices.data(),
+               GL_STATIC_DRAW);
+  glBindVertexArray(0);
+  g.index_count = GLsizei(m.indices.size());
+  for (const auto& p : m.positions) g.bbox.extend(p.cast<double>());
+  I.meshes.push_back(g);
+  return MeshHandle{int(I.meshes.size()) - 1};
+}
+
+void Renderer::release(MeshHandle h) {
+  Impl& I = *impl_;
+  if (h.id < 0 || h.id >= int(I.meshes.size()) || I.meshes[size_t(h.id)].vao == 0) return;
+  GpuMesh& g = I.meshes[size_t(h.id)];
+  glDeleteVertexArrays(1, &g.vao);
+  glDeleteBuffers(1, &g.vbo);
+  glDeleteBuffers(1, &g.ebo);
+  g = GpuMesh{};
+}
+
+void Renderer::beginFrame(const Camera& camera, const LightParams& light, const RenderParams& params) {
+  Impl& I = *impl_;
+  I.camera = camera;
+  I.light = light;
+  I.params = params;
+  I.have_shadow_bounds = false;
+  I.draw_bounds.setEmpty();
+  I.mesh_draws.clear();
+  I.hulls.clear();
+  I.lines.clear();
+  I.in_frame = true;
+}
+
+void Renderer::setShadowBounds(const Eigen::AlignedBox3d& b) {
+  impl_->have_shadow_bounds = !b.isEmpty();
+  impl_->shadow_bounds = b;
+}
+
+void Renderer::drawMesh(MeshHandle h, const Eigen::Affine3d& model, const Material& m) {
+  Impl& I = *impl_;
+  if (h.id < 0 || h.id >= int(I.meshes.size()) || I.meshes[size_t(h.id)].vao == 0) return;
+  MeshDraw d;
+  d.mesh = h.id;
+  d.model = model.matrix().cast<float>();
+  d.normal = model.linear().inverse().transpose().cast<float>();
+  d.material = m;
+  I.mesh_draws.push_back(d);
+  I.draw_bounds.extend(transformedBounds(model, I.meshes[size_t(h.id)].bbox));
+}
+
+void Renderer::drawBox(const Eigen::Affine3d& pose, const Eigen::Vector3d& half, const Material& m) {
+  Eigen::Affine3d T = pose;
+  T.linear() = pose.linear() * half.asDiagonal();
+  drawMesh(MeshHandle{impl_->box_mesh}, T, m);
+}
+
+void Renderer::drawTaperedCapsule(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, double r0, double r1,
+                                  const Material& m) {
+  Impl& I = *impl_;
+  const Eigen::Vector3f c = srgbToLinear(m.color);
+  HullInstance h{{float(p0.x()), float(p0.y()), float(p0.z()), float(std::max(r0, 0.0))},
+                 {float(p1.x()), float(p1.y()), float(p1.z()), float(std::max(r1, 0.0))},
+                 {c.x(), c.y(), c.z(), m.specular},
+                 {m.shininess, m.rim}};
+  I.hulls.push_back(h);
+  I.draw_bounds.extend(hullBounds(p0, r0, p1, r1));
+}
+
+void Renderer::drawSphere(const Eigen::Vector3d& center, double r, const Material& m) {
+  drawTaperedCapsule(center, center, r, r, m);
+}
+
+void Renderer::drawCapsule(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, double r, const Material& m) {
+  drawTaperedCapsule(p0, p1, r, r, m);
+}
+
+void Renderer::drawLine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3f& color) {
+  impl_->lines.push_back({{float(a.x()), float(a.y()), float(a.z())}, {color.x(), color.y(), color.z()}});
+  impl_->lines.push_back({{float(b.x()), float(b.y()), float(b.z())}, {color.x(), color.y(), color.z()}});
+}
+
+void Renderer::drawLines(const std::vector<DebugLine>& lines) {
+  for (const DebugLine& l : lines) drawLine(l.a, l.b, l.color);
+}
+
+void Renderer::Impl::ensureTargets(int w, int h, int samples) {
+  if (w == target_w && h == target_h && samples == target_samples) return;
+  if (!msaa_fbo) {
+    glGenFramebuffers(1, &msaa_fbo);
+    glGenRenderbuffers(1, &msaa_color);
+    glGenRenderbuffers(1, &msaa_depth);
+    glGenFramebuffers(1, &resolve_fbo);
+    glGenRenderbuffers(1, &resolve_color);
+  }
+  glBindRenderbuffer(GL_RENDERBUFFER, msaa_color);
+  if (samples > 1)
+    glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA8, w, h);
+  else
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+  glBindRenderbuffer(GL_RENDERBUFFER, msaa_depth);
+  if (samples > 1)
+    glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, w, h);
+  else
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, w, h);
+  glBindFramebuffer(GL_FRAMEBUFFER, msaa_fbo);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, msaa_color);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, msaa_depth);
+  glBindRenderbuffer(GL_RENDERBUFFER, resolve_color);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+  glBindFramebuffer(GL_FRAMEBUFFER, resolve_fbo);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, resolve_color);
+  target_w = w;
+  target_h = h;
+  target_samples = samples;
+}
+
+void Renderer::Impl::ensureShadowMap(int size) {
+  if (size == shadow_size) return;
+  if (!shadow_fbo) {
+    glGenFramebuffers(1, &shadow_fbo);
+    glGenTextures(1, &shadow_tex);
+  }
+  glBindTexture(GL_TEXTURE_2D, shadow_tex);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, size, size, 0, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, nullptr);
+  // Linear + compare mode: each lookup is a bilinearly weighted 2x2 depth test (hardware PCF).
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+  glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, shadow_tex, 0);
+  glDrawBuffer(GL_NONE);
+  glReadBuffer(GL_NONE);
+  shadow_size = size;
+}
+
+void Renderer::Impl::setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_proj, const Eigen::Matrix4f& light_vp,
+                                       float normal_offset, bool shadows_on) {
+  glUseProgram(prog);
+  setMat4(prog, "u_viewProj", view_proj);
+  setMat4(prog, "u_lightViewProj", light_vp);
+  setVec3(prog, "u_eye", camera.eye.cast<float>());
+  Eigen::Vector3d ld = light.direction;
+  if (ld.norm() < 1e-9) ld = Eigen::Vector3d(-0.5, 0.6, -1.0);
+  ld.normalize();
+  setVec3(prog, "u_lightDir", ld.cast<float>());
+  const Eigen::Vector3f key = srgbToLinear(light.color.cast<float>()) * float(light.intensity);
+  setVec3(prog, "u_lightColor", key);
+  // Fill: from behind the camera, a little above and to the side, so faces toward the viewer
+  // that the key misses are not flat.
+  Eigen::Vector3d view = (camera.target - camera.eye);
+  if (view.norm() < 1e-9) view = Eigen::Vector3d(0, 1, 0);
+  view.normalize();
+  Eigen::Vector3d side = view.cross(Eigen::Vector3d::UnitZ());
+  if (side.norm() < 1e-6) side = Eigen::Vector3d::UnitX();
+  side.normalize();
+  const Eigen::Vector3d fill_dir = (view + 0.35 * side - 0.35 * Eigen::Vector3d::UnitZ()).normalized();
+  setVec3(prog, "u_fillDir", fill_dir.cast<float>());
+  setVec3(prog, "u_fillColor", Eigen::Vector3f(0.85f, 0.9f, 1.0f) * float(light.fill));
+  const Eigen::Vector3f sky = srgbToLinear(params.background.cast<float>());
+  setVec3(prog, "u_skyAmbient", sky * float(light.ambient));
+  setVec3(prog, "u_groundAmbient",
+          srgbToLinear(params.ground_color.cast<float>()).cwiseProduct(Eigen::Vector3f(1.0f, 0.95f, 0.9f)) *
+              float(light.ambient) * 0.45f);
+  glUniform1f(loc(prog, "u_exposure"), 0.6f);
+  glUniform1i(loc(prog, "u_shadowMap"), 0);
+  glUniform1f(loc(prog, "u_shadowTexel"), 1.0f / float(std::max(shadow_size, 1)));
+  glUniform1f(loc(prog, "u_shadowSoftness"), float(std::clamp(light.shadow_softness, 0.0, 8.0)));
+  glUniform1f(loc(prog, "u_normalOffset"), normal_offset);
+  glUniform1i(loc(prog, "u_shadowsOn"), shadows_on ? 1 : 0);
+  const Eigen::Vector3f top = params.background.cast<float>().cwiseMax(0.0f).cwiseMin(1.0f);
+  // Brighter, slightly warm towards the horizon: reads as sky haze; the ground fades into it.
+  const Eigen::Vector3f bottom = top + (Eigen::Vector3f(0.97f, 0.96f, 0.94f) - top) * 0.55f;
+  setVec3(prog, "u_bgTop", top);
+  setVec3(prog, "u_bgBottom", bottom);
+  glUniform2f(loc(prog, "u_viewport"), float(target_w), float(target_h));
+}
+
+void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj,
+                                  bool depth_only) {
+  if (!mesh_draws.empty()) {
+    glUseProgram(mesh_prog);
+    if (depth_only) setMat4(mesh_prog, "u_viewProj", view_proj);
+    const GLint l_model = loc(mesh_prog, "u_model"), l_normal = loc(mesh_prog, "u_normalMat"),
+                l_cs = loc(mesh_prog, "u_colorSpec"), l_sr = loc(mesh_prog, "u_shinRim");
+    for (const MeshDraw& d : mesh_draws) {
+      const GpuMesh& g = meshes[size_t(d.mesh)];
+      glUniformMatrix4fv(l_model, 1, GL_FALSE, d.model.data());
+      glUniformMatrix3fv(l_normal, 1, GL_FALSE, d.normal.data());
+      const Eigen::Vector3f c = srgbToLinear(d.material.color);
+      glUniform4f(l_cs, c.x(), c.y(), c.z(), d.material.specular);
+      glUniform2f(l_sr, d.material.shininess, d.material.rim);
+      glBindVertexArray(g.vao);
+      glDrawElements(GL_TRIANGLES, g.index_count, GL_UNSIGNED_INT, nullptr);
+    }
+  }
+  if (!hulls.empty()) {
+    glUseProgram(hull_prog);
+    if (depth_only) setMat4(hull_prog, "u_viewProj", view_proj);
+    glBindVertexArray(hull_vao);
+    glDrawElementsInstanced(GL_TRIANGLES, hull_index_count, GL_UNSIGNED_INT, nullptr, GLsizei(hulls.size()));
+  }
+  glBindVertexArray(0);
+}
+
+void Renderer::endFrame() {
+  Impl& I = *impl_;
+  const auto t0 = Clock::now();
+  const int w = std::clamp(I.params.width, 1, 16384), h = std::clamp(I.params.height, 1, 16384);
+  const int samples = std::clamp(I.params.samples, 1, std::max(I.max_samples, 1));
+  I.ensureTargets(w, h, samples);
+  width_ = w;
+  height_ = h;
+  stats_ = RenderStats{};
+  stats_.samples = samples;
+
+  // Upload this frame's instance data once; both passes use it.
+  if (!I.hulls.empty()) {
+    glBindBuffer(GL_ARRAY_BUFFER, I.hull_instances);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(I.hulls.size() * sizeof(HullInstance)), I.hulls.data(), GL_STREAM_DRAW);
+  }
+
+  // --- Shadow pass: depth of the casters seen from the key light. ---
+  const Eigen::AlignedBox3d casters = I.have_shadow_bounds ? I.shadow_bounds : I.draw_bounds;
+  Eigen::Vector3d ld = I.light.direction;
+  if (ld.norm() < 1e-9) ld = Eigen::Vector3d(-0.5, 0.6, -1.0);
+  ld.normalize();
+  const bool shadows_on = !casters.isEmpty() && I.light.intensity > 0.0;
+  LightFrustum lf;
+  if (shadows_on) {
+    I.ensureShadowMap(std::clamp(I.light.shadow_size, 64, 8192));
+    lf = fitLightFrustum(ld, casters, I.shadow_size, I.light.shadow_softness);
+    glBindFramebuffer(GL_FRAMEBUFFER, I.shadow_fbo);
+    glViewport(0, 0, I.shadow_size, I.shadow_size);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glClear(GL_DEPTH_BUFFER_BIT);
+    glDisable(GL_CULL_FACE);  // imported meshes may be open; no culling keeps thin parts casting
+    // Slope-scaled bias in the depth pass (steep surfaces need more), plus the small normal offset
+    // at lookup in the shader: together no acne, and the offset is too small to detach contact
+    // shadows (no peter-panning).
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1.5f, 2.0f);
+    I.drawGeometry(I.prog_mesh_depth, I.prog_hull_depth, lf.view_proj.cast<float>(), true);
+    glDisable(GL_POLYGON_OFFSET_FILL);
+  }
+
+  // --- Main pass into the MSAA target. ---
+  const Camera& cam = I.camera;
+  const double D = std::max((cam.target - cam.eye).norm(), 1e-3);
+  // Ground fade measured from the point looked at: fully visible nearby, gone into the haze far.
+  const double fade_start = 2.0 * D + 1.0, fade_end = 6.0 * D + 3.0;
+  const double ground_half = fade_end * 1.05;
+  double znear = cam.znear, zfar = cam.zfar;
+  if (znear <= 0.0) {
+    double nearest = D;
+    if (!I.draw_bounds.isEmpty()) nearest = std::sqrt(I.draw_bounds.squaredExteriorDistance(cam.eye));
+    if (I.params.ground) nearest = std::min(nearest, std::max(cam.eye.z(), 0.0));
+    znear = std::clamp(0.5 * nearest, 0.002 * D + 1e-4, 0.05 * D + 0.01);
+  }
+  if (zfar <= 0.0) {
+    zfar = (cam.eye - cam.target).norm() + ground_half * 1.5 + 1.0;
+    if (!I.draw_bounds.isEmpty())
+      for (int i = 0; i < 8; ++i)
+        zfar = std::max(zfar, 1.1 * (I.draw_bounds.corner(Eigen::AlignedBox3d::CornerType(i)) - cam.eye).norm());
+  }
+  const Eigen::Matrix4f view_proj = (cam.projection(double(w) / double(h), znear, zfar) * cam.view()).cast<float>();
+  const Eigen::Matrix4f light_vp = lf.view_proj.cast<float>();
+  const float normal_offset = float(1.5 * lf.texel_world);
+
+  glBindFramebuffer(GL_FRAMEBUFFER, I.msaa_fbo);
+  glViewport(0, 0, w, h);
+  glDepthMask(GL_TRUE);
+  glClearColor(0, 0, 0, 1);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, I.shadow_tex);
+
+  // Background: the gradient, no depth.
+  glDisable(GL_DEPTH_TEST);
+  I.setCommonUniforms(I.prog_bg, view_proj, light_vp, normal_offset, shadows_on);
+  glBindVertexArray(I.empty_vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  stats_.draw_calls = 1;
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+
+  if (I.params.ground) {
+    I.setCommonUniforms(I.prog_ground, view_proj, light_vp, normal_offset, shadows_on);
+    const GLuint p = I.prog_ground;
+    glUniform3f(loc(p, "u_groundCenter"), float(cam.target.x()), float(cam.target.y()), 0.0f);
+    glUniform1f(loc(p, "u_groundHalf"), float(ground_half));
+    setVec3(p, "u_groundAlbedo", srgbToLinear(I.params.ground_color.cast<float>()));
+    glUniform1f(loc(p, "u_gridSpacing"), float(std::max(I.params.grid_spacing, 0.0)));
+    glUniform3f(loc(p, "u_fadeCenter"), float(cam.target.x()), float(cam.target.y()), 0.0f);
+    glUniform2f(loc(p, "u_fade"), float(fade_start), float(fade_end));
+    glBindVertexArray(I.ground_vao);
+    glDrawArrays(GL_TRIANGLES, 0, 6);
+    ++stats_.draw_calls;
+  }
+
+  I.setCommonUniforms(I.prog_mesh, view_proj, light_vp, normal_offset, shadows_on);
+  I.setCommonUniforms(I.prog_hull, view_proj, light_vp, normal_offset, shadows_on);
+  I.drawGeometry(I.prog_mesh, I.prog_hull, view_proj, false);
+  stats_.draw_calls += int(I.mesh_draws.size()) + (I.hulls.empty() ? 0 : 1);
+  for (const MeshDraw& d : I.mesh_draws) stats_.triangles += size_t(I.meshes[size_t(d.mesh)].index_count / 3);
+  stats_.triangles += I.hulls.size() * I.hull_triangles;
+
+  if (!I.lines.empty()) {
+    glUseProgram(I.prog_lines);
+    setMat4(I.prog_lines, "u_viewProj", view_proj);
+    glBindVertexArray(I.lines_vao);
+    glBindBuffer(GL_ARRAY_BUFFER, I.lines_vbo);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(I.lines.size() * sizeof(LineVertex)), I.lines.data(), GL_STREAM_DRAW);
+    glDrawArrays(GL_LINES, 0, GLsizei(I.lines.size()));
+    ++stats_.draw_calls;
+  }
+  glBindVertexArray(0);
+
+  // --- Resolve the samples into the single-sample target. ---
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, I.msaa_fbo);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, I.resolve_fbo);
+  glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  I.in_frame = false;
+  stats_.submit_ms = msSince(t0);
+}
+
+void Renderer::readPixels(std::vector<uint8_t>& rgba) {
+  const auto t0 = Clock::now();
+  const size_t row = size_t(width_) * 4;
+  rgba.resize(row * size_t(height_));
+  if (rgba.empty()) return;
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, impl_->resolve_fbo);
+  glReadBuffer(GL_COLOR_ATTACHMENT0);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  // GL's rows run bottom-up; images top-down.
+  std::vector<uint8_t> tmp(row);
+  for (int y = 0; y < height_ / 2; ++y) {
+    uint8_t* a = rgba.data() + size_t(y) * row;
+    uint8_t* b = rgba.data() + size_t(height_ - 1 - y) * row;
+    std::memcpy(tmp.data(), a, row);
+    std::memcpy(a, b, row);
+    std::memcpy(b, tmp.data(), row);
+  }
+  stats_.readback_ms = msSince(t0);
+}
+
+void Renderer::blitTo(unsigned fbo, int w, int h) const {
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, impl_->resolve_fbo);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo);
+  glBlitFramebuffer(0, 0, width_, height_, 0, 0, w, h, GL_COLOR_BUFFER_BIT,
+                    (w == width_ && h == height_) ? GL_NEAREST : GL_LINEAR);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+}
+
+}  // namespace ponyhop

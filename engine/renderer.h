@@ -1,0 +1,103 @@
+// The renderer: one draw list per frame, drawn with a shadowed key light, a fill light, hemispheric
+// ambient and a rim, over a fading checker ground and a gradient background, into its own MSAA
+// framebuffer. The same class serves headless output (readPixels) and the window (blitTo).
+//
+//   auto ctx = HeadlessContext::create(w, h, &err);   // or a GLFW window + loadGL(glfwGetProcAddress)
+//   Renderer r;  r.init(&err);
+//   MeshHandle head = r.upload(mesh_data);
+//   r.beginFrame(camera, light, render_params);
+//   r.drawMesh(head, pose, skin);  r.drawTaperedCapsule(a, b, ra, rb, hair);  ...
+//   r.endFrame();                          // shadow pass + main pass + MSAA resolve
+//   r.readPixels(rgba);                    // RGBA8, top row first
+//
+// Needs a current GL 3.3 core context with GL loaded (loadGL) for every call, including the
+// destructor.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/camera.h"
+#include "engine/mesh.h"
+#include "engine/scene.h"
+
+namespace ponyhop {
+
+// Colours are display (sRGB) values 0..1, as in scene files; lighting happens in linear space.
+struct Material {
+  Eigen::Vector3f color{0.8f, 0.8f, 0.8f};
+  float specular = 0.15f;   // 0..1, strength of the Blinn-Phong highlight
+  float shininess = 40.0f;  // Blinn-Phong exponent
+  float rim = 0.3f;         // 0..1, strength of the sky-coloured edge light
+};
+
+struct MeshHandle {
+  int id = -1;
+  bool valid() const { return id >= 0; }
+};
+
+struct DebugLine {
+  Eigen::Vector3d a, b;
+  Eigen::Vector3f color{1.0f, 0.2f, 0.2f};  // sRGB, unlit
+};
+
+struct RenderStats {
+  double submit_ms = 0.0;    // CPU time of endFrame (building buffers, issuing GL calls)
+  double readback_ms = 0.0;  // readPixels, which waits for the GPU (llvmpipe) to finish
+  size_t triangles = 0;      // main pass, excluding ground and background
+  int draw_calls = 0;        // main pass
+  int samples = 0;           // MSAA samples actually used
+};
+
+class Renderer {
+ public:
+  Renderer();
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // Compiles the shaders and builds the static primitives. False + message on failure.
+  bool init(std::string* err);
+
+  // Uploads a mesh once; draw it any number of times per frame with any transform.
+  MeshHandle upload(const MeshData& mesh);
+  void release(MeshHandle h);
+
+  void beginFrame(const Camera& camera, const LightParams& light, const RenderParams& params);
+  // Optional: fit the shadow frustum to these bounds instead of the draw list's (a fixed box
+  // keeps shadow texels still while things move; the draw list's bounds are the tightest).
+  void setShadowBounds(const Eigen::AlignedBox3d& bounds);
+  void drawMesh(MeshHandle mesh, const Eigen::Affine3d& model, const Material& m);
+  void drawSphere(const Eigen::Vector3d& center, double radius, const Material& m);
+  void drawBox(const Eigen::Affine3d& pose, const Eigen::Vector3d& half_extents, const Material& m);
+  void drawCapsule(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, double radius, const Material& m);
+  // Convex hull of the spheres (p0, r0), (p1, r1): smooth rounded ends; consecutive segments that
+  // share an end point and radius join without a gap or a crease.
+  void drawTaperedCapsule(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, double r0, double r1,
+                          const Material& m);
+  void drawLines(const std::vector<DebugLine>& lines);
+  void drawLine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3f& color);
+  // Shadow pass, main pass (background, ground, objects, lines), MSAA resolve.
+  void endFrame();
+
+  // The last frame as RGBA8 rows, top row first (width() * height() * 4 bytes).
+  void readPixels(std::vector<uint8_t>& rgba);
+  // Copies the last frame into framebuffer `fbo` (0: the window's), scaled to w x h.
+  void blitTo(unsigned fbo, int w, int h) const;
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  const RenderStats& stats() const { return stats_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  int width_ = 0, height_ = 0;
+  RenderStats stats_;
+};
+
+}  // namespace ponyhop

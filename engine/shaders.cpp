@@ -1,0 +1,301 @@
+#include "engine/shaders.h"
+
+#include <glad/gl.h>
+
+#include <algorithm>
+#include <vector>
+
+namespace ponyhop::shaders {
+
+// ---------------------------------------------------------------------------------------------
+// Shared by the lit and ground fragment shaders: lights, shadow lookup, tone mapping, sRGB, the
+// background gradient (so that the ground can fade into exactly the colour behind it).
+static const char* const kCommonFS = R"GLSL(
+uniform vec3 u_eye;
+uniform vec3 u_lightDir;       // unit, the direction the key light travels
+uniform vec3 u_lightColor;     // linear rgb * intensity
+uniform vec3 u_fillDir;        // unit, direction the fill light travels (from the camera side)
+uniform vec3 u_fillColor;      // linear rgb * fill
+uniform vec3 u_skyAmbient;     // linear, hemispheric ambient from above
+uniform vec3 u_groundAmbient;  // linear, bounce from below
+uniform float u_exposure;
+uniform mat4 u_lightViewProj;
+uniform sampler2DShadow u_shadowMap;
+uniform float u_shadowTexel;     // 1 / shadow map size
+uniform float u_shadowSoftness;  // PCF radius, texels
+uniform float u_normalOffset;    // m, receiver offset along the normal (about 1.5 texels)
+uniform int u_shadowsOn;
+uniform vec3 u_bgTop;            // sRGB, display values
+uniform vec3 u_bgBottom;
+uniform vec2 u_viewport;
+
+vec3 srgbToLinear(vec3 c) {
+  return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
+}
+vec3 linearToSrgb(vec3 c) {
+  c = clamp(c, 0.0, 1.0);
+  return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+}
+// Filmic curve (Narkowicz's fit of ACES): keeps the key light's highlights from clipping.
+vec3 toneMap(vec3 x) {
+  x *= u_exposure;
+  return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
+}
+vec3 background(float y) {  // y: 0 bottom .. 1 top of the viewport; display (sRGB) values
+  float t = smoothstep(0.0, 1.0, clamp(y, 0.0, 1.0));
+  return mix(u_bgBottom, u_bgTop, t);
+}
+
+// 12-tap Poisson disk (unit radius); each tap is a hardware 2x2 bilinear depth compare, so the
+// penumbra is smooth even for small radii. Fixed pattern: deterministic, no noise.
+const vec2 kPoisson[12] = vec2[](
+  vec2(-0.326, -0.406), vec2(-0.840, -0.074), vec2(-0.696, 0.457), vec2(-0.203, 0.621),
+  vec2(0.962, -0.195), vec2(0.473, -0.480), vec2(0.519, 0.767), vec2(0.185, -0.893),
+  vec2(0.507, 0.064), vec2(0.896, 0.412), vec2(-0.322, -0.933), vec2(-0.792, -0.598));
+
+float shadowFactor(vec3 P, vec3 N) {
+  if (u_shadowsOn == 0) return 1.0;
+  // Normal offset: move the lookup off the surface by ~1.5 texels, more at grazing light, so a
+  // lit surface never compares against its own depth (acne) while contact stays tight.
+  float ndl = clamp(dot(N, -u_lightDir), 0.0, 1.0);
+  vec3 Po = P + N * u_normalOffset * (0.5 + (1.0 - ndl));
+  vec4 s = u_lightViewProj * vec4(Po, 1.0);
+  vec3 c = s.xyz / s.w * 0.5 + 0.5;
+  if (c.x <= 0.0 || c.x >= 1.0 || c.y <= 0.0 || c.y >= 1.0 || c.z >= 1.0) return 1.0;
+  float r = u_shadowSoftness * u_shadowTexel;
+  float sum = texture(u_shadowMap, c);
+  for (int i = 0; i < 12; ++i) sum += texture(u_shadowMap, vec3(c.xy + kPoisson[i] * r, c.z));
+  return sum / 13.0;
+}
+
+// Linear radiance of a surface point (before tone mapping).
+vec3 shade(vec3 P, vec3 N, vec3 albedo, float specular, float shininess, float rim) {
+  vec3 V = normalize(u_eye - P);
+  vec3 L = -u_lightDir;
+  float ndl = max(dot(N, L), 0.0);
+  float sh = ndl > 0.0 ? shadowFactor(P, N) : 0.0;
+  vec3 H = normalize(L + V);
+  // Normalized Blinn-Phong: (n + 8) / 8 keeps highlight energy steady as shininess changes.
+  float spec = specular * (shininess + 8.0) / 8.0 * pow(max(dot(N, H), 0.0), shininess) * ndl;
+  vec3 key = u_lightColor * sh * (albedo * ndl + vec3(spec));
+  float fdl = max(dot(N, -u_fillDir), 0.0);
+  vec3 fill = u_fillColor * albedo * fdl;
+  vec3 amb = albedo * mix(u_groundAmbient, u_skyAmbient, 0.5 + 0.5 * N.z);
+  // Rim: a thin sky-coloured edge that separates the object from the background.
+  float fr = pow(1.0 - max(dot(N, V), 0.0), 4.0);
+  vec3 rimc = rim * fr * (u_skyAmbient * 2.0 + 0.5 * u_lightColor * sh);
+  return key + fill + amb + rimc;
+}
+)GLSL";
+
+// ---------------------------------------------------------------------------------------------
+const char* const kMeshVS = R"GLSL(
+layout(location = 0) in vec3 a_pos;
+layout(location = 1) in vec3 a_normal;
+uniform mat4 u_viewProj;
+uniform mat4 u_model;
+uniform mat3 u_normalMat;   // inverse transpose of the model's 3x3
+uniform vec4 u_colorSpec;   // linear albedo, specular
+uniform vec2 u_shinRim;     // shininess, rim
+out vec3 v_pos;
+out vec3 v_normal;
+flat out vec4 v_colorSpec;
+flat out vec2 v_shinRim;
+void main() {
+  vec4 w = u_model * vec4(a_pos, 1.0);
+  v_pos = w.xyz;
+  v_normal = u_normalMat * a_normal;
+  v_colorSpec = u_colorSpec;
+  v_shinRim = u_shinRim;
+  gl_Position = u_viewProj * w;
+}
+)GLSL";
+
+// The convex hull of two spheres (p0, r0) and (p1, r1) from one static mesh. Each vertex holds an
+// azimuth (cos, sin), a parameter t in 0..1 along its cap and the cap it belongs to. The hull's
+// side is a cone tangent to both spheres; its normal makes the angle alpha = asin((r0 - r1) / L)
+// with the equator, so cap 0 covers elevations -90..alpha of sphere 0, cap 1 covers alpha..90 of
+// sphere 1, and the band between the two last rings is the cone (same normal at both ends: smooth).
+// Spheres (L = 0) and plain capsules (r0 = r1) are special cases. Two segments sharing an end
+// point and radius both contain that whole sphere, so chains have no gaps.
+const char* const kCapsuleVS = R"GLSL(
+layout(location = 0) in vec4 a_param;     // cos(az), sin(az), t, cap (0 or 1)
+layout(location = 1) in vec4 i_p0r0;
+layout(location = 2) in vec4 i_p1r1;
+layout(location = 3) in vec4 i_colorSpec; // linear albedo, specular
+layout(location = 4) in vec2 i_shinRim;
+uniform mat4 u_viewProj;
+out vec3 v_pos;
+out vec3 v_normal;
+flat out vec4 v_colorSpec;
+flat out vec2 v_shinRim;
+const float HALF_PI = 1.5707963;
+void main() {
+  vec3 p0 = i_p0r0.xyz, p1 = i_p1r1.xyz;
+  float r0 = i_p0r0.w, r1 = i_p1r1.w;
+  vec3 d = p1 - p0;
+  float len = length(d);
+  vec3 w = len > 1e-7 ? d / len : vec3(0.0, 0.0, 1.0);
+  vec3 helper = abs(w.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0);
+  vec3 u = normalize(cross(helper, w));
+  vec3 v = cross(w, u);
+  float alpha = len > 1e-7 ? asin(clamp((r0 - r1) / len, -1.0, 1.0)) : 0.0;
+  bool cap1 = a_param.w > 0.5;
+  float e = cap1 ? mix(alpha, HALF_PI, a_param.z) : mix(-HALF_PI, alpha, a_param.z);
+  vec3 n = cos(e) * (a_param.x * u + a_param.y * v) + sin(e) * w;
+  v_pos = (cap1 ? p1 : p0) + (cap1 ? r1 : r0) * n;
+  v_normal = n;
+  v_colorSpec = i_colorSpec;
+  v_shinRim = i_shinRim;
+  gl_Position = u_viewProj * vec4(v_pos, 1.0);
+}
+)GLSL";
+
+const char* const kLitFS = R"GLSL(
+in vec3 v_pos;
+in vec3 v_normal;
+flat in vec4 v_colorSpec;
+flat in vec2 v_shinRim;
+out vec4 o_color;
+void main() {
+  vec3 N = normalize(v_normal);
+  if (!gl_FrontFacing) N = -N;  // open or inside-out meshes still light correctly
+  vec3 c = shade(v_pos, N, v_colorSpec.rgb, v_colorSpec.a, v_shinRim.x, v_shinRim.y);
+  o_color = vec4(linearToSrgb(toneMap(c)), 1.0);
+}
+)GLSL";
+
+// ---------------------------------------------------------------------------------------------
+const char* const kGroundVS = R"GLSL(
+layout(location = 0) in vec2 a_xy;  // -1..1
+uniform mat4 u_viewProj;
+uniform vec3 u_groundCenter;  // xy centre, z = 0
+uniform float u_groundHalf;   // m
+out vec3 v_pos;
+void main() {
+  v_pos = vec3(u_groundCenter.xy + a_xy * u_groundHalf, 0.0);
+  gl_Position = u_viewProj * vec4(v_pos, 1.0);
+}
+)GLSL";
+
+const char* const kGroundFS = R"GLSL(
+in vec3 v_pos;
+out vec4 o_color;
+uniform vec3 u_groundAlbedo;   // linear
+uniform float u_gridSpacing;   // m (0: plain)
+uniform vec3 u_fadeCenter;     // point the fade distance is measured from
+uniform vec2 u_fade;           // start, end of the fade into the background (m)
+
+// Box-filtered checker (integral of the square wave over the pixel footprint): no moire and no
+// shimmering towards the horizon, without a texture.
+float filteredChecker(vec2 p) {
+  vec2 w = max(fwidth(p), vec2(1e-5));
+  vec2 i = 2.0 * (abs(fract((p - 0.5 * w) * 0.5) - 0.5) - abs(fract((p + 0.5 * w) * 0.5) - 0.5)) / w;
+  return 0.5 - 0.5 * i.x * i.y;  // 0 or 1 per square, blended at edges
+}
+
+void main() {
+  vec3 N = vec3(0.0, 0.0, 1.0);
+  vec3 albedo = u_groundAlbedo;
+  if (u_gridSpacing > 0.0) {
+    float k = filteredChecker(v_pos.xy / u_gridSpacing);
+    albedo *= mix(0.93, 1.05, k);  // subtle: about +-6 %
+  }
+  vec3 c = linearToSrgb(toneMap(shade(v_pos, N, albedo, 0.04, 16.0, 0.0)));
+  float d = length(v_pos.xy - u_fadeCenter.xy);
+  float f = smoothstep(u_fade.x, u_fade.y, d);
+  vec3 bg = background(gl_FragCoord.y / u_viewport.y);
+  o_color = vec4(mix(c, bg, f), 1.0);
+}
+)GLSL";
+
+// ---------------------------------------------------------------------------------------------
+const char* const kFullscreenVS = R"GLSL(
+void main() {
+  vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
+  gl_Position = vec4(p, 1.0, 1.0);
+}
+)GLSL";
+
+const char* const kBackgroundFS = R"GLSL(
+out vec4 o_color;
+void main() {
+  o_color = vec4(background(gl_FragCoord.y / u_viewport.y), 1.0);
+}
+)GLSL";
+
+// ---------------------------------------------------------------------------------------------
+const char* const kLinesVS = R"GLSL(
+layout(location = 0) in vec3 a_pos;
+layout(location = 1) in vec3 a_color;
+uniform mat4 u_viewProj;
+out vec3 v_color;
+void main() {
+  v_color = a_color;
+  gl_Position = u_viewProj * vec4(a_pos, 1.0);
+}
+)GLSL";
+
+const char* const kLinesFS = R"GLSL(
+in vec3 v_color;
+out vec4 o_color;
+void main() { o_color = vec4(v_color, 1.0); }
+)GLSL";
+
+const char* const kDepthFS = R"GLSL(
+void main() {}
+)GLSL";
+
+// ---------------------------------------------------------------------------------------------
+static GLuint compile(GLenum stage, const char* const* parts, int count, const char* name, std::string* err) {
+  GLuint s = glCreateShader(stage);
+  glShaderSource(s, count, parts, nullptr);
+  glCompileShader(s);
+  GLint ok = 0;
+  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    GLint n = 0;
+    glGetShaderiv(s, GL_INFO_LOG_LENGTH, &n);
+    std::vector<char> log(size_t(std::max(n, 1)));
+    glGetShaderInfoLog(s, GLsizei(log.size()), nullptr, log.data());
+    if (err)
+      *err = std::string("shader ") + name + (stage == GL_VERTEX_SHADER ? " (vertex)" : " (fragment)") +
+             ": " + log.data();
+    glDeleteShader(s);
+    return 0;
+  }
+  return s;
+}
+
+unsigned buildProgram(const char* name, const char* vs, const char* fs, std::string* err) {
+  static const char* const kHeader = "#version 330 core\n";
+  const char* vparts[] = {kHeader, vs};
+  const char* fparts[] = {kHeader, "precision highp float;\n", kCommonFS, fs};
+  GLuint v = compile(GL_VERTEX_SHADER, vparts, 2, name, err);
+  if (!v) return 0;
+  GLuint f = compile(GL_FRAGMENT_SHADER, fparts, 4, name, err);
+  if (!f) {
+    glDeleteShader(v);
+    return 0;
+  }
+  GLuint p = glCreateProgram();
+  glAttachShader(p, v);
+  glAttachShader(p, f);
+  glLinkProgram(p);
+  glDeleteShader(v);
+  glDeleteShader(f);
+  GLint ok = 0;
+  glGetProgramiv(p, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    GLint n = 0;
+    glGetProgramiv(p, GL_LINK_STATUS, &n);
+    std::vector<char> log(4096);
+    glGetProgramInfoLog(p, GLsizei(log.size()), nullptr, log.data());
+    if (err) *err = std::string("shader ") + name + " (link): " + log.data();
+    glDeleteProgram(p);
+    return 0;
+  }
+  return p;
+}
+
+}  // namespace ponyhop::shaders

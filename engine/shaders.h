@@ -1,0 +1,25 @@
+// GLSL 3.30 core sources of the renderer (raw strings in shaders.cpp) and a program builder.
+#pragma once
+
+#include <string>
+
+namespace ponyhop::shaders {
+
+// Vertex shaders.
+extern const char* const kMeshVS;       // meshes and boxes: per-draw model matrix (uniforms)
+extern const char* const kCapsuleVS;    // spheres / capsules / tapered capsules: one instanced draw
+extern const char* const kGroundVS;     // the z = 0 plane
+extern const char* const kFullscreenVS; // background (gl_VertexID triangle)
+extern const char* const kLinesVS;      // debug lines
+// Fragment shaders.
+extern const char* const kLitFS;        // Blinn-Phong + rim, shadowed key light, fill, hemi ambient
+extern const char* const kGroundFS;     // filtered checker, shadow, fade into the background
+extern const char* const kBackgroundFS; // vertical gradient
+extern const char* const kLinesFS;
+extern const char* const kDepthFS;      // shadow pass (depth only)
+
+// Compiles and links "#version 330 core" + the given sources. Returns 0 and fills `err` (with the
+// driver's log and the stage's name) on failure. Needs a current context with GL loaded.
+unsigned buildProgram(const char* name, const char* vs, const char* fs, std::string* err);
+
+}  // namespace ponyhop::shaders

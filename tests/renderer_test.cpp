@@ -1,0 +1,426 @@
+// Headless rendering: a lit, shadowed, anti-aliased, deterministic frame (OSMesa llvmpipe).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <numeric>
+
+#include "engine/camera.h"
+#include "engine/frame_writer.h"
+#include "engine/gl_context.h"
+#include "engine/mesh.h"
+#include "engine/renderer.h"
+
+using namespace ponyhop;
+
+namespace {
+
+constexpr int kW = 320, kH = 240;
+
+// One context + renderer for the whole file (creating an OSMesa context per test is slow).
+struct Gl {
+  std::unique_ptr<HeadlessContext> ctx;
+  std::unique_ptr<Renderer> renderer;
+  std::string error;
+};
+Gl& gl() {
+  static Gl g = [] {
+    Gl x;
+    x.ctx = HeadlessContext::create(kW, kH, &x.error);
+    if (x.ctx) {
+      x.renderer = std::make_unique<Renderer>();
+      if (!x.renderer->init(&x.error)) x.renderer.reset();
+    }
+    return x;
+  }();
+  return g;
+}
+
+std::string outDir() {
+  const std::string d = std::string(PONYHOP_TEST_OUT) + "/renderer";
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+Camera testCamera() {
+  Camera c;
+  c.eye = Eigen::Vector3d(0.9, -1.4, 0.55);
+  c.target = Eigen::Vector3d(0.0, 0.0, 0.15);
+  c.fov = 35.0;
+  return c;
+}
+
+RenderParams testParams(int samples = 4, bool ground = true) {
+  RenderParams p;
+  p.width = kW;
+  p.height = kH;
+  p.samples = samples;
+  p.ground = ground;
+  return p;
+}
+
+LightParams testLight() {
+  LightParams l;
+  l.shadow_size = 1024;
+  return l;
+}
+
+const Eigen::Vector3d kSphereC(0.0, 0.0, 0.2);
+constexpr double kSphereR = 0.15;
+
+Material red() {
+  Material m;
+  m.color = Eigen::Vector3f(0.85f, 0.25f, 0.2f);
+  return m;
+}
+
+// Renders; `scene` draws into the renderer between beginFrame and endFrame.
+template <class F>
+std::vector<uint8_t> render(const Camera& cam, const RenderParams& rp, F&& scene, const LightParams& l = testLight()) {
+  Renderer& r = *gl().renderer;
+  r.beginFrame(cam, l, rp);
+  scene(r);
+  r.endFrame();
+  std::vector<uint8_t> px;
+  r.readPixels(px);
+  return px;
+}
+
+double luminance(const std::vector<uint8_t>& px, int x, int y, int w = kW) {
+  const uint8_t* p = px.data() + (size_t(y) * size_t(w) + size_t(x)) * 4;
+  return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+}
+
+// Pixel (x right, y down) of a world point.
+Eigen::Vector2d project(const Camera& cam, const Eigen::Vector3d& p, int w = kW, int h = kH) {
+  const Eigen::Vector4d c = cam.projection(double(w) / h, 0.1, 10.0) * cam.view() * p.homogeneous();
+  const Eigen::Vector2d ndc = c.head<2>() / c.w();
+  return {(ndc.x() * 0.5 + 0.5) * w, (0.5 - ndc.y() * 0.5) * h};
+}
+
+void save(const std::string& name, const std::vector<uint8_t>& px, int w = kW, int h = kH) {
+  std::string err;
+  EXPECT_TRUE(writePngAtomic(outDir() + "/" + name, w, h, px.data(), &err)) << err;
+}
+
+#define REQUIRE_GL()                                         \
+  do {                                                       \
+    ASSERT_TRUE(gl().renderer) << "no GL: " << gl().error;   \
+  } while (0)
+
+}  // namespace
+
+TEST(Renderer, ContextIsCoreProfile33OrNewer) {
+  REQUIRE_GL();
+  const std::string v = gl().ctx->version();
+  EXPECT_NE(v.find("Core"), std::string::npos) << v;
+  EXPECT_GE(std::atof(v.c_str()), 3.3) << v;
+  EXPECT_FALSE(gl().ctx->rendererName().empty());
+}
+
+TEST(Renderer, LitSphereCoversItsDiscAndIsShaded) {
+  REQUIRE_GL();
+  const Camera cam = testCamera();
+  const RenderParams rp = testParams(4, /*ground=*/false);
+  const auto empty = render(cam, rp, [](Renderer&) {});
+  const auto img = render(cam, rp, [](Renderer& r) { r.drawSphere(kSphereC, kSphereR, red()); });
+  save("sphere_no_ground.png", img);
+
+  // Pixels that changed = the sphere. Its projected disc: radius ~ f * r / distance.
+  int covered = 0;
+  std::vector<double> lum;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const size_t i = (size_t(y) * kW + size_t(x)) * 4;
+      const int d = std::abs(img[i] - empty[i]) + std::abs(img[i + 1] - empty[i + 1]) + std::abs(img[i + 2] - empty[i + 2]);
+      if (d > 12) {
+        ++covered;
+        lum.push_back(luminance(img, x, y));
+      }
+    }
+  const double dist = (kSphereC - cam.eye).norm();
+  const double f_px = 0.5 * kH / std::tan(cam.fov * M_PI / 360.0);
+  const double expected = M_PI * std::pow(f_px * kSphereR / dist, 2);
+  EXPECT_GT(covered, 0.8 * expected);
+  EXPECT_LT(covered, 1.2 * expected);
+
+  // Lit, not flat: a real spread of brightness across the disc, neither black nor blown out.
+  ASSERT_FALSE(lum.empty());
+  const auto [mn, mx] = std::minmax_element(lum.begin(), lum.end());
+  const double mean = std::accumulate(lum.begin(), lum.end(), 0.0) / double(lum.size());
+  EXPECT_GT(*mx - *mn, 80.0);
+  EXPECT_GT(mean, 50.0);
+  EXPECT_LT(mean, 230.0);
+
+  // The disc is where the projection says (also checks that rows come out top-down).
+  const Eigen::Vector2d c = project(cam, kSphereC);
+  const Eigen::Vector2d top = project(cam, kSphereC + Eigen::Vector3d(0, 0, 0.8 * kSphereR));
+  for (const Eigen::Vector2d& p : {c, top}) {
+    const size_t i = (size_t(p.y()) * kW + size_t(p.x())) * 4;
+    EXPECT_GT(std::abs(img[i] - empty[i]) + std::abs(img[i + 1] - empty[i + 1]), 20) << p.transpose();
+  }
+}
+
+TEST(Renderer, ShadowDarkensTheGroundUnderTheSphere) {
+  REQUIRE_GL();
+  const Camera cam = testCamera();
+  const RenderParams rp = testParams(4, true);
+  const LightParams light = testLight();
+  const auto empty = render(cam, rp, [](Renderer&) {});
+  const auto img = render(cam, rp, [](Renderer& r) { r.drawSphere(kSphereC, kSphereR, red()); });
+  save("sphere_shadow.png", img);
+  save("empty_ground.png", empty);
+  // Where the light ray through the centre meets z = 0: the middle of the shadow.
+  const Eigen::Vector3d d = light.direction.normalized();
+  const Eigen::Vector3d hit = kSphereC + d * (kSphereC.z() / -d.z());
+  const Eigen::Vector2d p = project(cam, hit);
+  ASSERT_TRUE(p.x() > 2 && p.x() < kW - 3 && p.y() > 2 && p.y() < kH - 3) << p.transpose();
+  const double shadowed = luminance(img, int(p.x()), int(p.y()));
+  const double lit = luminance(empty, int(p.x()), int(p.y()));
+  EXPECT_LT(shadowed, 0.7 * lit) << "shadow " << shadowed << " vs lit ground " << lit;
+  EXPECT_GT(shadowed, 15.0) << "shadow should not be black (ambient + fill)";
+
+  // No acne: the lit ground away from the shadow is smooth (neighbouring pixels within a few
+  // levels, apart from the checker edges). Check a patch in front of the sphere, toward the light.
+  const Eigen::Vector2d q = project(cam, Eigen::Vector3d(0.35, 0.1, 0.0));
+  double worst = 0.0;
+  for (int y = int(q.y()) - 4; y < int(q.y()) + 4; ++y)
+    for (int x = int(q.x()) - 4; x < int(q.x()) + 4; ++x)
+      worst = std::max(worst, std::abs(luminance(img, x, y) - luminance(empty, x, y)));
+  EXPECT_LT(worst, 3.0) << "lit ground changed by a far caster: acne or a misplaced shadow";
+}
+
+TEST(Renderer, SameDrawListIsByteIdentical) {
+  REQUIRE_GL();
+  auto scene = [](Renderer& r) {
+    r.drawSphere(kSphereC, kSphereR, red());
+    r.drawTaperedCapsule({0.2, 0.1, 0.3}, {0.3, 0.2, 0.1}, 0.04, 0.02, Material{});
+    r.drawBox(Eigen::Translation3d(-0.25, 0.1, 0.05) * Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()),
+              Eigen::Vector3d(0.05, 0.08, 0.05), Material{});
+    r.drawLine({0, 0, 0}, {0, 0, 0.5}, {0.1f, 0.3f, 0.9f});
+  };
+  const auto a = render(testCamera(), testParams(), scene);
+  const auto b = render(testCamera(), testParams(), scene);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_TRUE(a == b) << "two renders of the same draw list differ";
+}
+
+TEST(Renderer, MsaaOneAndFourSamplesBothWork) {
+  REQUIRE_GL();
+  auto scene = [](Renderer& r) { r.drawSphere(kSphereC, kSphereR, red()); };
+  const auto empty = render(testCamera(), testParams(1, false), [](Renderer&) {});
+  const auto one = render(testCamera(), testParams(1, false), scene);
+  const auto four = render(testCamera(), testParams(4, false), scene);
+  EXPECT_EQ(gl().renderer->stats().samples, 4);
+  save("msaa1.png", one);
+  save("msaa4.png", four);
+  // Both show the sphere with the same area.
+  auto coverage = [&](const std::vector<uint8_t>& img) {
+    int n = 0;
+    for (size_t i = 0; i < img.size(); i += 4)
+      n += std::abs(img[i] - empty[i]) + std::abs(img[i + 1] - empty[i + 1]) > 12;
+    return n;
+  };
+  const int c1 = coverage(one), c4 = coverage(four);
+  EXPECT_GT(c1, 1000);
+  EXPECT_NEAR(double(c4), double(c1), 0.05 * c1);
+  // Silhouette pixels (changed, next to an unchanged one): with 1 sample they carry the object's
+  // colour (as strong a change as their neighbours'), with 4 they are blends (a weaker change).
+  auto blended = [&](const std::vector<uint8_t>& img) {
+    auto change = [&](int x, int y) {
+      const size_t i = (size_t(y) * kW + size_t(x)) * 4;
+      return std::abs(img[i] - empty[i]) + std::abs(img[i + 1] - empty[i + 1]) + std::abs(img[i + 2] - empty[i + 2]);
+    };
+    int n = 0;
+    for (int y = 1; y + 1 < kH; ++y)
+      for (int x = 1; x + 1 < kW; ++x) {
+        const int c = change(x, y);
+        if (c <= 6) continue;
+        int strongest = 0, weakest = 1 << 20;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            strongest = std::max(strongest, change(x + dx, y + dy));
+            weakest = std::min(weakest, change(x + dx, y + dy));
+          }
+        if (weakest <= 6 && c < 0.75 * strongest) ++n;
+      }
+    return n;
+  };
+  const int b1 = blended(one), b4 = blended(four);
+  EXPECT_GT(b4, 1.6 * b1 + 20) << "anti-aliased edge pixels: 1 sample " << b1 << ", 4 samples " << b4;
+}
+
+TEST(Renderer, TaperedCapsuleChainHasNoGaps) {
+  REQUIRE_GL();
+  Camera cam;
+  cam.eye = Eigen::Vector3d(0.0, -1.2, 0.3);
+  cam.target = Eigen::Vector3d(0.0, 0.0, 0.3);
+  const RenderParams rp = testParams(4, false);
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<double> radii;
+  for (int i = 0; i <= 12; ++i) {
+    const double s = i / 12.0;
+    pts.emplace_back(-0.3 + 0.6 * s, 0.0, 0.3 + 0.12 * std::sin(6.0 * s));
+    radii.push_back(0.035 * (1.0 - 0.7 * s));
+  }
+  Material hair;
+  hair.color = Eigen::Vector3f(0.35f, 0.2f, 0.1f);
+  const auto empty = render(cam, rp, [](Renderer&) {});
+  const auto img = render(cam, rp, [&](Renderer& r) {
+    for (size_t i = 0; i + 1 < pts.size(); ++i) r.drawTaperedCapsule(pts[i], pts[i + 1], radii[i], radii[i + 1], hair);
+  });
+  save("chain.png", img);
+  // Every pixel along the projected centre line is covered by the chain.
+  int gaps = 0, samples = 0;
+  for (size_t i = 0; i + 1 < pts.size(); ++i)
+    for (int k = 0; k < 20; ++k) {
+      const Eigen::Vector3d p = pts[i] + (pts[i + 1] - pts[i]) * (k / 20.0);
+      const Eigen::Vector2d q = project(cam, p);
+      const size_t j = (size_t(q.y()) * kW + size_t(q.x())) * 4;
+      gaps += std::abs(img[j + 1] - empty[j + 1]) < 20;
+      ++samples;
+    }
+  EXPECT_EQ(gaps, 0) << "of " << samples << " samples along the chain";
+  // The thin end really is thinner than the thick end (taper honoured): vertical extent.
+  auto thickness = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector2d q = project(cam, p);
+    int n = 0;
+    for (int y = 0; y < kH; ++y) {
+      const size_t j = (size_t(y) * kW + size_t(q.x())) * 4;
+      n += std::abs(img[j + 1] - empty[j + 1]) > 20;
+    }
+    return n;
+  };
+  EXPECT_GT(thickness(pts[1]), 1.8 * thickness(pts[11]));
+}
+
+TEST(Renderer, UploadedMeshIsDrawnWithItsTransform) {
+  REQUIRE_GL();
+  Renderer& r = *gl().renderer;
+  const MeshHandle h = r.upload(makeUvSphere(1.0f, 48, 24));
+  const Camera cam = testCamera();
+  const RenderParams rp = testParams(4, true);
+  const auto img = render(cam, rp, [&](Renderer& rr) {
+    Eigen::Affine3d T = Eigen::Translation3d(kSphereC) * Eigen::Scaling(kSphereR);
+    rr.drawMesh(h, T, red());
+  });
+  const auto hull = render(cam, rp, [](Renderer& rr) { rr.drawSphere(kSphereC, kSphereR, red()); });
+  save("mesh_sphere.png", img);
+  // Same sphere through the mesh path and through the instanced hull path: nearly the same image.
+  double diff = 0.0;
+  for (size_t i = 0; i < img.size(); ++i) diff += std::abs(int(img[i]) - int(hull[i]));
+  EXPECT_LT(diff / double(img.size()), 1.0);
+  r.release(h);
+}
+
+TEST(Camera, OrbitAndFollowPlaceTheEye) {
+  CameraParams p;
+  p.mode = CameraMode::Orbit;
+  p.target = Eigen::Vector3d(0.1, 0.2, 0.3);
+  p.orbit_distance = 2.0;
+  p.orbit_height = 0.5;
+  p.orbit_angle = 0.0;
+  p.orbit_speed = 90.0;
+  const Camera c = cameraAt(p, 1.0);  // azimuth 90 deg: +y side
+  EXPECT_NEAR(c.eye.x(), 0.1, 1e-9);
+  EXPECT_NEAR(c.eye.y(), 2.2, 1e-9);
+  EXPECT_NEAR(c.eye.z(), 0.8, 1e-9);
+  EXPECT_TRUE(c.target.isApprox(p.target));
+
+  p.mode = CameraMode::Follow;
+  const Eigen::Vector3d body(1.0, 1.0, 1.0);
+  const Camera f = cameraAt(p, 5.0, &body);
+  EXPECT_TRUE(f.target.isApprox(body));
+  EXPECT_NEAR(f.eye.x(), 3.0, 1e-9);  // azimuth stays orbit_angle in follow mode
+
+  // Smoothed follow: x/y exact, a sudden jump in height is followed gradually.
+  FollowCamera fc;
+  fc.update(p, 0.0, Eigen::Vector3d(0, 0, 0), 0.0);
+  const Camera g = fc.update(p, 1.0 / 30, Eigen::Vector3d(0.5, 0, 1.0), 1.0 / 30);
+  EXPECT_NEAR(g.target.x(), 0.5, 1e-12);
+  EXPECT_GT(g.target.z(), 0.0);
+  EXPECT_LT(g.target.z(), 0.2);
+  Camera h = g;
+  for (int i = 0; i < 90; ++i) h = fc.update(p, 0.0, Eigen::Vector3d(0.5, 0, 1.0), 1.0 / 30);
+  EXPECT_NEAR(h.target.z(), 1.0, 1e-2);
+
+  // View matrix: the target is straight ahead (-z in eye space).
+  const Eigen::Vector4d t = c.view() * c.target.homogeneous();
+  EXPECT_NEAR(t.x(), 0.0, 1e-9);
+  EXPECT_NEAR(t.y(), 0.0, 1e-9);
+  EXPECT_LT(t.z(), 0.0);
+}
+
+// A demo-like 1280x720 frame: the head mesh (or a 40k-triangle sphere when the asset is absent),
+// a tapered ponytail and a hopper. Prints the timings reported in docs/RENDERING.md; asserts only
+// that the frame is not empty.
+TEST(Renderer, DemoFrame720p) {
+  REQUIRE_GL();
+  Renderer& r = *gl().renderer;
+  MeshData head;
+  std::string err;
+  HeadParams hp;
+  if (!loadMesh("assets/head/head.obj", head, &err)) {
+    head = makeUvSphere(0.12f, 200, 100);  // ~40k triangles
+    hp.up_axis = UpAxis::Z;
+  }
+  transformMesh(head, meshToBody(hp, head.bbox));
+  const MeshHandle h = r.upload(head);
+  RenderParams rp;  // 1280 x 720, 4 samples
+  LightParams light;
+  Camera cam;
+  cam.eye = Eigen::Vector3d(0.9, -1.4, 0.55);
+  cam.target = Eigen::Vector3d(0.0, 0.0, 0.25);
+  Material skin, hair, metal, dark;
+  skin.color = Eigen::Vector3f(0.93f, 0.78f, 0.67f);
+  skin.specular = 0.08f;
+  skin.shininess = 20.0f;
+  hair.color = Eigen::Vector3f(0.45f, 0.26f, 0.12f);
+  hair.specular = 0.3f;
+  hair.shininess = 60.0f;
+  metal.color = Eigen::Vector3f(0.3f, 0.45f, 0.75f);
+  dark.color = Eigen::Vector3f(0.2f, 0.2f, 0.22f);
+  auto scene = [&](Renderer& rr) {
+    const Eigen::Affine3d pose = Eigen::Translation3d(0.0, 0.0, 0.35) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ());
+    rr.drawMesh(h, pose, skin);
+    Eigen::Vector3d prev = pose * Eigen::Vector3d(0.0, 0.1, 0.05);
+    for (int i = 1; i <= 16; ++i) {
+      const double s = i / 16.0;
+      const Eigen::Vector3d p = pose * Eigen::Vector3d(0.04 * std::sin(4 * s), 0.1 + 0.12 * s, 0.05 - 0.25 * s);
+      rr.drawTaperedCapsule(prev, p, 0.025 * (1.0 - 0.6 * (s - 1.0 / 16)), 0.025 * (1.0 - 0.6 * s), hair);
+      prev = p;
+    }
+    // Hopper: body box, leg capsule, foot sphere.
+    const Eigen::Affine3d body = Eigen::Translation3d(0.45, 0.3, 0.45) * Eigen::AngleAxisd(0.15, Eigen::Vector3d::UnitY());
+    rr.drawBox(body, Eigen::Vector3d(0.08, 0.06, 0.05), metal);
+    rr.drawTaperedCapsule(body * Eigen::Vector3d(0, 0, -0.05), body * Eigen::Vector3d(0, 0, -0.38), 0.018, 0.012, dark);
+    rr.drawSphere(body * Eigen::Vector3d(0, 0, -0.4), 0.02, dark);
+  };
+  std::vector<uint8_t> px;
+  double total = 0.0, submit = 0.0, readback = 0.0;
+  const int n = 5;
+  for (int i = 0; i < n; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    r.beginFrame(cam, light, rp);
+    scene(r);
+    r.endFrame();
+    r.readPixels(px);
+    total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    submit += r.stats().submit_ms;
+    readback += r.stats().readback_ms;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  std::string werr;
+  ASSERT_TRUE(writePngAtomic(outDir() + "/demo_720p.png", rp.width, rp.height, px.data(), &werr)) << werr;
+  const double encode = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("demo 1280x720, %zu triangles (%zu in the head), %d samples: render %.1f ms/frame (submit %.1f, "
+              "readback+finish %.1f), PNG encode %.1f ms; %s / %s\n",
+              r.stats().triangles, head.triangleCount(), r.stats().samples, total / n, submit / n, readback / n, encode,
+              gl().ctx->rendererName().c_str(), gl().ctx->version().c_str());
+  ASSERT_EQ(px.size(), size_t(1280 * 720 * 4));
+  r.release(h);
+}
