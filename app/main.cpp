@@ -11,6 +11,8 @@ int main(int argc, char** argv) {
   int exit_code = 0;
   ponyhop::addDiffCommand(app, exit_code);
   ponyhop::addSceneDocCommand(app, exit_code);
+  ponyhop::addRenderCommand(app, exit_code);
+  ponyhop::addSimCommand(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

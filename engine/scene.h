@@ -78,6 +78,7 @@ struct RenderParams {
   Eigen::Vector3d ground_color{0.72, 0.72, 0.70};  // rgb 0..1
   double grid_spacing = 0.25;  // m, ground checker size (0: plain)
   bool ground = true;          // draw the ground plane
+  double ground_height = 0.0;  // m, height of the drawn ground plane (z)
 
   template <class V>
   void reflect(V& v) {
@@ -90,6 +91,7 @@ struct RenderParams {
     v("ground_color", ground_color, {.unit = "rgb", .min = 0, .max = 1, .help = "Ground colour"});
     v("grid_spacing", grid_spacing, {.unit = "m", .min = 0, .max = 100, .help = "Ground checker size (0: plain)"});
     v("ground", ground, {.help = "Draw the ground plane"});
+    v("ground_height", ground_height, {.unit = "m", .min = -1e3, .max = 1e3, .help = "Height of the ground plane"});
   }
 };
 
@@ -104,11 +106,12 @@ struct EnumNames<UpAxis> {
 struct HeadParams {
   std::string mesh = "assets/head/head.gltf";  // path, relative to the repository or the scene file
   UpAxis up_axis = UpAxis::Y;     // the mesh's up axis (glTF: y); the world is z up
-  double height = 0.0;            // m, rescale so the mesh is this tall (0: use `scale`)
+  double height = 0.25;           // m, rescale so the mesh is this tall (0: use `scale`)
   double scale = 1.0;             // mesh units to m (when height is 0)
   Eigen::Vector3d offset{0.0, 0.0, 0.0};    // m, added after scale and rotation (body frame)
   Eigen::Vector3d rotation{0.0, 0.0, 0.0};  // deg, Euler x, y, z applied after the up-axis fix
-  Eigen::Vector3d anchor{0.0, 0.0, 0.0};    // ponytail anchor, head coordinates (mesh units)
+  // Ponytail anchor, head coordinates (mesh units): the default head's bun (assets/head/README.md).
+  Eigen::Vector3d anchor{0.0, 0.0906, -0.1140};
   Eigen::Vector3d color{0.93, 0.78, 0.67};  // rgb 0..1, skin
   AnimationParams animation;
 

@@ -344,6 +344,28 @@ Scene loadScene(const std::string& path, const std::vector<Override>& overrides)
   return scene;
 }
 
+std::string resolveClipPath(const std::string& clip, const std::string& scene_path) {
+  if (clip.empty() || clip == "mesh") return "";
+  const bool bare = clip.find('/') == std::string::npos && clip.find('.') == std::string::npos;
+  return resolveScenePath(bare ? "assets/animations/" + clip + ".json" : clip, scene_path);
+}
+
+AnimationParams loadClipFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw SceneError(path + ": cannot open the clip file");
+  json j;
+  try {
+    j = json::parse(in, nullptr, true, /*ignore_comments=*/true);
+  } catch (const json::parse_error& e) {
+    throw SceneError(path + ": not valid JSON: " + e.what());
+  }
+  AnimationParams clip;
+  std::vector<std::string> errors;
+  JsonReader::readStruct(j, clip, "", errors);
+  if (!errors.empty()) throw SceneError(joinErrors(path, errors));
+  return clip;
+}
+
 json sceneToJson(const Scene& scene) { return JsonWriter::write(scene); }
 
 void saveScene(const Scene& scene, const std::string& path) {
@@ -371,10 +393,7 @@ void validateScene(const Scene& scene_in, const std::string& source) {
     }
     const auto& a = scene.head->animation;
     if (!a.clip.empty() && a.clip != "mesh") {
-      const std::string clip = a.clip.find('/') == std::string::npos && a.clip.find('.') == std::string::npos
-                                   ? "assets/animations/" + a.clip + ".json"
-                                   : a.clip;
-      if (resolveScenePath(clip, scene.path).empty()) {
+      if (resolveClipPath(a.clip, scene.path).empty()) {
         errors.push_back("head.animation.clip: no clip \"" + a.clip +
                          "\" (a name in assets/animations/, a clip file, \"mesh\", or \"\" for keys)");
       }

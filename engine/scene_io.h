@@ -46,6 +46,14 @@ void validateScene(const Scene& scene, const std::string& source);
 // directory, then the scene file's folder, then the repository. "" when not found.
 std::string resolveScenePath(const std::string& path, const std::string& scene_path);
 
+// A clip file (assets/animations/*.json): {"mode": ..., "keys": [...]} with the fields of
+// AnimationParams. Throws SceneError naming the file and the key.
+AnimationParams loadClipFile(const std::string& path);
+
+// The file of head.animation.clip: a bare name is assets/animations/NAME.json. "" when the clip
+// is "", "mesh", or not found.
+std::string resolveClipPath(const std::string& clip, const std::string& scene_path);
+
 // The reference of every field (name, type, default, unit, range, help) as Markdown.
 std::string sceneReferenceMarkdown();
 

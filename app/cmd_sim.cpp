@@ -1,0 +1,122 @@
+// `ponyhop sim SCENE [--duration T] [--set key=value]... --csv FILE`: the physics alone (no GL),
+// one CSV row per millisecond of simulated time. When dt > 1 ms a row takes the step nearest to
+// its time; when dt < 1 ms, rows sample the step nearest to each millisecond.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "app/commands.h"
+#include "app/scene_args.h"
+#include "engine/scene_io.h"
+#include "engine/scene_runtime.h"
+
+namespace ponyhop {
+namespace {
+
+struct SimArgs {
+  SceneArgs scene;
+  double duration = -1.0;
+  std::string csv;
+};
+
+// The values written for one state; columns depend on what the scene has.
+struct SimRow {
+  std::vector<double> values;
+};
+
+std::string header(const SceneRuntime& rt) {
+  if (rt.chain()) return "t,tip_x,tip_y,tip_z,energy,max_joint_error";
+  return "t,max_joint_error";
+}
+
+SimRow sample(const SceneRuntime& rt) {
+  SimRow r;
+  if (const Chain* c = rt.chain()) {
+    const Eigen::Vector3d tip = c->tip(rt.world());
+    r.values = {tip.x(), tip.y(), tip.z(), rt.chainEnergy(), rt.maxJointError()};
+  } else {
+    r.values = {rt.maxJointError()};
+  }
+  return r;
+}
+
+void writeRow(std::FILE* f, double t, const SimRow& r) {
+  std::fprintf(f, "%.3f", t);
+  for (double v : r.values) std::fprintf(f, ",%.9g", v);
+  std::fputc('\n', f);
+}
+
+int runSim(const SimArgs& args) {
+  const Scene scene = args.scene.load();
+  const double duration = args.duration >= 0.0 ? args.duration : scene.duration;
+  if (!std::isfinite(duration) || duration > 1e6) {
+    throw SceneError("--duration: must be a number of seconds in [0, 1e6]");
+  }
+  SceneRuntime rt(scene);
+
+  // Written to a temporary name and renamed: a failed run never replaces a good CSV.
+  const std::string tmp = args.csv + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), "w");
+  if (!f) throw SceneError("--csv " + args.csv + ": cannot write the file");
+  std::fprintf(f, "%s\n", header(rt).c_str());
+
+  const long rows = static_cast<long>(std::floor(duration * 1000.0 + 1e-9)) + 1;
+  long next = 0;  // next row (millisecond) to write
+  double prev_t = rt.time();
+  SimRow prev = sample(rt);
+  writeRow(f, 0.0, prev);
+  next = 1;
+  while (next < rows) {
+    if (!rt.step()) {
+      std::fclose(f);
+      std::remove(tmp.c_str());
+      std::fprintf(stderr, "ponyhop sim: the simulation stopped: %s\n  %s was not written\n", rt.status().c_str(),
+                   args.csv.c_str());
+      return 1;
+    }
+    const double t = rt.time();
+    const SimRow cur = sample(rt);
+    // Rows in (prev_t, t]: take whichever step is nearer.
+    while (next < rows && next * 1e-3 <= t + 1e-12) {
+      const double tr = next * 1e-3;
+      writeRow(f, tr, (tr - prev_t) < (t - tr) ? prev : cur);
+      ++next;
+    }
+    prev_t = t;
+    prev = cur;
+  }
+  const bool ok = std::fflush(f) == 0 && !std::ferror(f);
+  std::fclose(f);
+  std::error_code ec;
+  if (!ok) {
+    std::remove(tmp.c_str());
+    throw SceneError("--csv " + args.csv + ": write failed");
+  }
+  std::filesystem::rename(tmp, args.csv, ec);
+  if (ec) throw SceneError("--csv " + args.csv + ": " + ec.message());
+  std::fprintf(stderr, "sim: %ld rows (%.3f s simulated, dt %.6g s) -> %s\n", rows, duration, scene.physics.dt,
+               args.csv.c_str());
+  return 0;
+}
+
+}  // namespace
+
+void addSimCommand(CLI::App& app, int& exit_code) {
+  auto args = std::make_shared<SimArgs>();
+  auto* cmd = app.add_subcommand("sim", "Run the physics alone (no GL) and write one CSV row per millisecond");
+  args->scene.add(cmd);
+  cmd->add_option("--duration", args->duration, "Simulated seconds (default: the scene's duration)")
+      ->check(CLI::Range(0.0, 1e6));
+  cmd->add_option("--csv", args->csv, "Output CSV file")->required();
+  cmd->callback([args, &exit_code] {
+    try {
+      exit_code = runSim(*args);
+    } catch (const SceneError& e) {
+      std::fprintf(stderr, "ponyhop sim: %s\n", e.what());
+      exit_code = 2;
+    }
+  });
+}
+
+}  // namespace ponyhop

@@ -1,0 +1,37 @@
+#include "engine/render_session.h"
+
+#include <stdexcept>
+
+namespace ponyhop {
+
+Camera sceneCamera(const Scene& scene, const SceneRuntime& runtime, double t, FollowCamera& follow, double dt) {
+  if (scene.camera.mode == CameraMode::Follow) return follow.update(scene.camera, t, runtime.followPoint(), dt);
+  return cameraAt(scene.camera, t);
+}
+
+RenderSession::RenderSession(const Scene& scene, bool /*reserve_panel*/) : scene_(scene), runtime_(scene) {
+  std::string err;
+  context_ = HeadlessContext::create(scene_.render.width, scene_.render.height, &err);
+  if (!context_) throw std::runtime_error("cannot create the headless GL context: " + err);
+  renderer_ = std::make_unique<Renderer>();
+  if (!renderer_->init(&err)) throw std::runtime_error("renderer: " + err);
+  runtime_.upload(*renderer_);
+}
+
+RenderSession::~RenderSession() {
+  if (context_) context_->makeCurrent();
+  renderer_.reset();  // GL objects go while the context lives
+}
+
+bool RenderSession::simulateTo(double t) { return runtime_.advanceTo(t); }
+
+void RenderSession::renderFrame(double t, std::vector<uint8_t>& rgba) {
+  const Camera cam = sceneCamera(scene_, runtime_, t, follow_, t - last_t_);
+  last_t_ = t;
+  renderer_->beginFrame(cam, scene_.light, scene_.render);
+  runtime_.draw(*renderer_);
+  renderer_->endFrame();
+  renderer_->readPixels(rgba);
+}
+
+}  // namespace ponyhop

@@ -1,0 +1,51 @@
+// A scene rendered headless: the simulation, an OSMesa context, the renderer and the camera,
+// one frame at a time. Used by `ponyhop render`, the snapshot tests and the bench.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/camera.h"
+#include "engine/gl_context.h"
+#include "engine/renderer.h"
+#include "engine/scene_runtime.h"
+
+namespace ponyhop {
+
+class RenderSession {
+ public:
+  // Builds the scene and the GL side. Throws SceneError on a bad scene, std::runtime_error when
+  // no GL context can be made.
+  explicit RenderSession(const Scene& scene, bool reserve_panel = false);
+  ~RenderSession();
+
+  // Steps the physics up to time t (s). False when the simulation stopped (status()).
+  bool simulateTo(double t);
+  // Draws the current state as seen at time t (the camera moves with t) and reads it back.
+  void renderFrame(double t, std::vector<uint8_t>& rgba);
+
+  const std::string& status() const { return runtime_.status(); }
+  int width() const { return scene_.render.width; }
+  int height() const { return scene_.render.height; }
+  SceneRuntime& runtime() { return runtime_; }
+  Renderer& renderer() { return *renderer_; }
+  const RenderStats& stats() const { return renderer_->stats(); }
+  std::string glRenderer() const { return context_->rendererName(); }
+  std::string glVersion() const { return context_->version(); }
+
+ private:
+  Scene scene_;
+  SceneRuntime runtime_;
+  std::unique_ptr<HeadlessContext> context_;
+  std::unique_ptr<Renderer> renderer_;
+  FollowCamera follow_;
+  double last_t_ = 0.0;
+};
+
+// The camera for a scene at time t (orbit/fixed are stateless; follow uses `follow`).
+Camera sceneCamera(const Scene& scene, const SceneRuntime& runtime, double t, FollowCamera& follow, double dt);
+
+}  // namespace ponyhop

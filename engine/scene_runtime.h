@@ -1,0 +1,67 @@
+// What a scene builds: exactly the bodies, joints and drawables its file names, nothing else.
+// The physics part needs no GL (used by `ponyhop sim`, the bench, tests); draw() needs a current
+// GL context and a Renderer.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "engine/mesh.h"
+#include "engine/renderer.h"
+#include "engine/scene.h"
+#include "physics/chain.h"
+#include "physics/world.h"
+
+namespace ponyhop {
+
+class SceneRuntime {
+ public:
+  // Builds the world (and loads the head mesh and its clip). Throws SceneError naming the file
+  // and the field when something cannot be built (a mesh that does not load, a bad clip).
+  explicit SceneRuntime(const Scene& scene);
+
+  // Steps the physics (fixed dt, never the frame rate) until the next step would pass t.
+  // Returns false when the world stopped (status() says when, where and why).
+  bool advanceTo(double t);
+  // One physics step (dt). False when the world stopped.
+  bool step();
+
+  double time() const { return world_.time(); }
+  bool ok() const { return world_.ok(); }
+  const std::string& status() const { return world_.status(); }
+  const Scene& scene() const { return scene_; }
+  World& world() { return world_; }
+  const World& world() const { return world_; }
+  const Chain* chain() const { return chain_ ? &*chain_ : nullptr; }
+  int headBody() const { return head_body_; }
+
+  // Energy of the chain (kinetic + gravity, against the chain's hanging-at-rest reference) and
+  // the largest joint separation (m).
+  double chainEnergy() const;
+  double maxJointError() const { return world_.maxJointError(); }
+
+  // The point the follow camera looks at: the body named by camera.follow, else the head, the
+  // chain's anchor, or the origin.
+  Eigen::Vector3d followPoint() const;
+
+  // GL: uploads the meshes (once per renderer) and draws the current state.
+  void upload(Renderer& renderer);
+  void draw(Renderer& renderer) const;
+
+ private:
+  void buildHead();
+  void buildChain();
+
+  Scene scene_;
+  World world_;
+  int head_body_ = -1;
+  int anchor_body_ = -1;
+  std::optional<Chain> chain_;
+  MeshData head_mesh_;
+  Eigen::Affine3d head_mesh_to_body_ = Eigen::Affine3d::Identity();
+  MeshHandle head_handle_;
+};
+
+}  // namespace ponyhop

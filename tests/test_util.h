@@ -1,0 +1,54 @@
+// Helpers for tests that run the real `ponyhop` executable.
+#pragma once
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace ponyhop::testing {
+
+struct RunResult {
+  int code = -1;
+  std::string out;  // stdout + stderr
+};
+
+// Runs `ponyhop ARGS` from the repository root; captures the output.
+inline RunResult runPonyhop(const std::string& args, const std::string& tag) {
+  std::filesystem::create_directories(PONYHOP_TEST_OUT);
+  const std::string log = std::string(PONYHOP_TEST_OUT) + "/" + tag + ".log";
+  const std::string cmd = std::string(PONYHOP_EXE) + " " + args + " > " + log + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  RunResult r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(log);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  r.out = ss.str();
+  return r;
+}
+
+inline std::string readFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+inline void writeFile(const std::string& path, const std::string& text) {
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+// A fresh scratch folder under the test output folder.
+inline std::string scratch(const std::string& name) {
+  const std::string dir = std::string(PONYHOP_TEST_OUT) + "/" + name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+}  // namespace ponyhop::testing
