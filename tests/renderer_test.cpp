@@ -131,16 +131,20 @@ TEST(Renderer, LitSphereCoversItsDiscAndIsShaded) {
   save("sphere_no_ground.png", img);
 
   // Pixels that changed = the sphere. Its projected disc: radius ~ f * r / distance.
+  auto changed = [&](int x, int y) {
+    const size_t i = (size_t(y) * kW + size_t(x)) * 4;
+    return std::abs(img[i] - empty[i]) + std::abs(img[i + 1] - empty[i + 1]) + std::abs(img[i + 2] - empty[i + 2]) > 12;
+  };
   int covered = 0;
-  std::vector<double> lum;
-  for (int y = 0; y < kH; ++y)
-    for (int x = 0; x < kW; ++x) {
-      const size_t i = (size_t(y) * kW + size_t(x)) * 4;
-      const int d = std::abs(img[i] - empty[i]) + std::abs(img[i + 1] - empty[i + 1]) + std::abs(img[i + 2] - empty[i + 2]);
-      if (d > 12) {
-        ++covered;
-        lum.push_back(luminance(img, x, y));
-      }
+  std::vector<double> lum;  // interior pixels only (3 px from the silhouette: no edge blending)
+  for (int y = 3; y < kH - 3; ++y)
+    for (int x = 3; x < kW - 3; ++x) {
+      if (!changed(x, y)) continue;
+      ++covered;
+      bool interior = true;
+      for (int dy = -3; dy <= 3 && interior; ++dy)
+        for (int dx = -3; dx <= 3 && interior; ++dx) interior = changed(x + dx, y + dy);
+      if (interior) lum.push_back(luminance(img, x, y));
     }
   const double dist = (kSphereC - cam.eye).norm();
   const double f_px = 0.5 * kH / std::tan(cam.fov * M_PI / 360.0);
@@ -169,9 +173,10 @@ TEST(Renderer, ShadowDarkensTheGroundUnderTheSphere) {
   REQUIRE_GL();
   const Camera cam = testCamera();
   const RenderParams rp = testParams(4, true);
-  const LightParams light = testLight();
-  const auto empty = render(cam, rp, [](Renderer&) {});
-  const auto img = render(cam, rp, [](Renderer& r) { r.drawSphere(kSphereC, kSphereR, red()); });
+  LightParams light = testLight();
+  light.direction = Eigen::Vector3d(1.0, 0.3, -1.0);  // shadow falls to +x: in view, beside the sphere
+  const auto empty = render(cam, rp, [](Renderer&) {}, light);
+  const auto img = render(cam, rp, [](Renderer& r) { r.drawSphere(kSphereC, kSphereR, red()); }, light);
   save("sphere_shadow.png", img);
   save("empty_ground.png", empty);
   // Where the light ray through the centre meets z = 0: the middle of the shadow.
@@ -179,14 +184,23 @@ TEST(Renderer, ShadowDarkensTheGroundUnderTheSphere) {
   const Eigen::Vector3d hit = kSphereC + d * (kSphereC.z() / -d.z());
   const Eigen::Vector2d p = project(cam, hit);
   ASSERT_TRUE(p.x() > 2 && p.x() < kW - 3 && p.y() > 2 && p.y() < kH - 3) << p.transpose();
+  // ... and not hidden behind the sphere itself.
+  const Eigen::Vector2d c = project(cam, kSphereC);
+  const double r_px = (project(cam, kSphereC + cam.view().block<1, 3>(1, 0).transpose() * kSphereR) - c).norm();
+  ASSERT_GT((p - c).norm(), r_px * 1.2);
   const double shadowed = luminance(img, int(p.x()), int(p.y()));
   const double lit = luminance(empty, int(p.x()), int(p.y()));
   EXPECT_LT(shadowed, 0.7 * lit) << "shadow " << shadowed << " vs lit ground " << lit;
   EXPECT_GT(shadowed, 15.0) << "shadow should not be black (ambient + fill)";
 
-  // No acne: the lit ground away from the shadow is smooth (neighbouring pixels within a few
-  // levels, apart from the checker edges). Check a patch in front of the sphere, toward the light.
-  const Eigen::Vector2d q = project(cam, Eigen::Vector3d(0.35, 0.1, 0.0));
+  // Contact: the shadow reaches the ground right below the sphere's lowest point on the light
+  // side (no peter-panning) -- the point 1 cm from the shadow's start along the light.
+  const Eigen::Vector3d bottom = kSphereC - Eigen::Vector3d(0, 0, kSphereR);
+  const Eigen::Vector2d pc = project(cam, bottom + Eigen::Vector3d(d.x(), d.y(), 0).normalized() * 0.03);
+  EXPECT_LT(luminance(img, int(pc.x()), int(pc.y())), 0.8 * luminance(empty, int(pc.x()), int(pc.y())));
+
+  // No acne: lit ground away from the shadow is unchanged by the caster.
+  const Eigen::Vector2d q = project(cam, Eigen::Vector3d(-0.3, -0.3, 0.0));
   double worst = 0.0;
   for (int y = int(q.y()) - 4; y < int(q.y()) + 4; ++y)
     for (int x = int(q.x()) - 4; x < int(q.x()) + 4; ++x)
