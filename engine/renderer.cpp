@@ -19,6 +19,9 @@ double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
+// Angular radius of the key light (rad) for the penumbra of the soft shadows.
+constexpr double kKeyLightAngularRadius = 1.5 * 3.14159265358979 / 180.0;
+
 float srgbToLinear(float c) {
   c = std::clamp(c, 0.0f, 1.0f);
   return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
@@ -57,6 +60,7 @@ struct LineVertex {
 struct LightFrustum {
   Eigen::Matrix4d view_proj = Eigen::Matrix4d::Identity();
   double texel_world = 0.0;  // m per shadow texel
+  double depth_range = 1.0;  // m between the near and far planes
 };
 
 Eigen::Matrix4d lookAlong(const Eigen::Vector3d& dir) {
@@ -112,6 +116,7 @@ LightFrustum fitLightFrustum(const Eigen::Vector3d& dir, const Eigen::AlignedBox
                                   center.y() + extent / 2, n, f);
   lf.view_proj = P * V;
   lf.texel_world = texel;
+  lf.depth_range = f - n;
   return lf;
 }
 
@@ -134,6 +139,8 @@ struct Renderer::Impl {
   GLuint msaa_fbo = 0, msaa_color = 0, msaa_depth = 0;
   GLuint resolve_fbo = 0, resolve_color = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0;
+  GLuint raw_depth_sampler = 0;  // reads shadow_tex without comparison (blocker search)
+  LightFrustum frustum;
   int target_w = 0, target_h = 0, target_samples = -1, shadow_size = 0;
   int max_samples = 1;
   // The frame being built.
@@ -181,6 +188,7 @@ Renderer::~Renderer() {
   GLuint rbs[] = {I.msaa_color, I.msaa_depth, I.resolve_color};
   glDeleteRenderbuffers(3, rbs);
   if (I.shadow_tex) glDeleteTextures(1, &I.shadow_tex);
+  if (I.raw_depth_sampler) glDeleteSamplers(1, &I.raw_depth_sampler);
 }
 
 bool Renderer::init(std::string* err) {
@@ -206,8 +214,9 @@ bool Renderer::init(std::string* err) {
   for (const P& p : progs)
     if (!(*p.out = buildProgram(p.name, p.vs, p.fs, err))) return false;
 
-  // Hull template: 32 slices x 10 rings per cap (about 1.3k triangles); instanced.
-  const HullTemplate ht = makeHullTemplate(32, 10);
+  // Hull template: 24 slices x 8 rings per cap (768 triangles); instanced. Smooth at the sizes
+  // links have on screen (tens of pixels); the normals are exact, only the outline is polygonal.
+  const HullTemplate ht = makeHullTemplate(24, 8);
   I.hull_index_count = GLsizei(ht.indices.size());
   I.hull_triangles = ht.indices.size() / 3;
   glGenVertexArrays(1, &I.hull_vao);
@@ -248,6 +257,13 @@ bool Renderer::init(std::string* err) {
   glBufferData(GL_ARRAY_BUFFER, sizeof(quad), quad, GL_STATIC_DRAW);
   glEnableVertexAttribArray(0);
   glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 2 * sizeof(float), nullptr);
+
+  glGenSamplers(1, &I.raw_depth_sampler);
+  glSamplerParameteri(I.raw_depth_sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glSamplerParameteri(I.raw_depth_sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glSamplerParameteri(I.raw_depth_sampler, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glSamplerParameteri(I.raw_depth_sampler, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glSamplerParameteri(I.raw_depth_sampler, GL_TEXTURE_COMPARE_MODE, GL_NONE);
 
   glGenVertexArrays(1, &I.empty_vao);  // core profile: a draw needs a VAO even without attributes
 
@@ -462,6 +478,12 @@ void Renderer::Impl::setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_
   glUniform1f(loc(prog, "u_shadowSoftness"), float(std::clamp(light.shadow_softness, 0.0, 8.0)));
   glUniform1f(loc(prog, "u_normalOffset"), normal_offset);
   glUniform1i(loc(prog, "u_shadowsOn"), shadows_on ? 1 : 0);
+  glUniform1i(loc(prog, "u_shadowDepth"), 1);
+  glUniform1f(loc(prog, "u_lightDepthRange"), float(frustum.depth_range));
+  glUniform1f(loc(prog, "u_texelWorld"), float(std::max(frustum.texel_world, 1e-9)));
+  // The sun is 0.27 deg in radius; a softer 1.5 deg reads better at the scale of a head.
+  glUniform1f(loc(prog, "u_penumbraSlope"), float(std::tan(kKeyLightAngularRadius)));
+  glUniform1f(loc(prog, "u_maxPenumbraTexels"), float(std::clamp(0.03 / std::max(frustum.texel_world, 1e-9), 2.0, 48.0)));
   const Eigen::Vector3f top = params.background.cast<float>().cwiseMax(0.0f).cwiseMin(1.0f);
   // Brighter, slightly warm towards the horizon: reads as sky haze; the ground fades into it.
   const Eigen::Vector3f bottom = top + (Eigen::Vector3f(0.97f, 0.96f, 0.94f) - top) * 0.55f;
@@ -492,7 +514,11 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
     glUseProgram(hull_prog);
     if (depth_only) setMat4(hull_prog, "u_viewProj", view_proj);
     glBindVertexArray(hull_vao);
+    // Hulls are closed and wound counter-clockwise: cull their back faces in the main pass (half
+    // the rasterization). The shadow pass draws both sides (thin links keep casting).
+    if (!depth_only) glEnable(GL_CULL_FACE);
     glDrawElementsInstanced(GL_TRIANGLES, hull_index_count, GL_UNSIGNED_INT, nullptr, GLsizei(hulls.size()));
+    glDisable(GL_CULL_FACE);
   }
   glBindVertexArray(0);
 }
@@ -524,6 +550,7 @@ void Renderer::endFrame() {
   if (shadows_on) {
     I.ensureShadowMap(std::clamp(I.light.shadow_size, 64, 8192));
     lf = fitLightFrustum(ld, casters, I.shadow_size, I.light.shadow_softness);
+    I.frustum = lf;
     glBindFramebuffer(GL_FRAMEBUFFER, I.shadow_fbo);
     glViewport(0, 0, I.shadow_size, I.shadow_size);
     glEnable(GL_DEPTH_TEST);
@@ -570,6 +597,10 @@ void Renderer::endFrame() {
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, I.shadow_tex);
+  glActiveTexture(GL_TEXTURE1);  // same texture, through a sampler without comparison
+  glBindTexture(GL_TEXTURE_2D, I.shadow_tex);
+  glBindSampler(1, I.raw_depth_sampler);
+  glActiveTexture(GL_TEXTURE0);
 
   // Background: the gradient, no depth.
   glDisable(GL_DEPTH_TEST);

@@ -25,6 +25,11 @@ uniform float u_shadowTexel;     // 1 / shadow map size
 uniform float u_shadowSoftness;  // PCF radius, texels
 uniform float u_normalOffset;    // m, receiver offset along the normal (about 1.5 texels)
 uniform int u_shadowsOn;
+uniform sampler2D u_shadowDepth;       // the same depth texture, raw depths (blocker search)
+uniform float u_lightDepthRange;       // m per unit of shadow-map depth
+uniform float u_texelWorld;            // m per shadow texel
+uniform float u_penumbraSlope;         // tan(angular radius of the key light)
+uniform float u_maxPenumbraTexels;     // cap of the penumbra radius (and the blocker search)
 uniform vec3 u_bgTop;            // sRGB, display values
 uniform vec3 u_bgBottom;
 uniform vec2 u_viewport;
@@ -53,6 +58,11 @@ const vec2 kPoisson[12] = vec2[](
   vec2(0.962, -0.195), vec2(0.473, -0.480), vec2(0.519, 0.767), vec2(0.185, -0.893),
   vec2(0.507, 0.064), vec2(0.896, 0.412), vec2(-0.322, -0.933), vec2(-0.792, -0.598));
 
+// Soft shadows with contact hardening (percentage-closer soft shadows, Fernando 2005, for a
+// directional light of angular radius theta): 1) blocker search: the mean depth d_b of the
+// occluders around the lookup; 2) penumbra radius w = (d_r - d_b) * tan(theta) in metres, at
+// least `shadow_softness` texels; 3) PCF over that radius. Shadows are crisp where an object
+// touches the ground and widen with the distance to the caster, like a real sky-lit sun.
 float shadowFactor(vec3 P, vec3 N) {
   if (u_shadowsOn == 0) return 1.0;
   // Normal offset: move the lookup off the surface by ~1.5 texels, more at grazing light, so a
@@ -62,10 +72,25 @@ float shadowFactor(vec3 P, vec3 N) {
   vec4 s = u_lightViewProj * vec4(Po, 1.0);
   vec3 c = s.xyz / s.w * 0.5 + 0.5;
   if (c.x <= 0.0 || c.x >= 1.0 || c.y <= 0.0 || c.y >= 1.0 || c.z >= 1.0) return 1.0;
-  float r = u_shadowSoftness * u_shadowTexel;
+  // 1) Blockers within the largest penumbra we allow.
+  float searchR = u_maxPenumbraTexels * u_shadowTexel;
+  float sumB = 0.0, nB = 0.0;
+  for (int i = 0; i < 12; ++i) {
+    float d = texture(u_shadowDepth, c.xy + kPoisson[i] * searchR).r;
+    if (d < c.z) { sumB += d; nB += 1.0; }
+  }
+  float dCentre = texture(u_shadowDepth, c.xy).r;
+  if (dCentre < c.z) { sumB += dCentre; nB += 1.0; }
+  if (nB == 0.0) return 1.0;  // nothing between this point and the light: fully lit, no PCF
+  // 2) Penumbra (depths are linear for an orthographic light: metres = depth * range).
+  float dBlocker = sumB / nB;
+  float wTexels = (c.z - dBlocker) * u_lightDepthRange * u_penumbraSlope / u_texelWorld;
+  float r = clamp(max(u_shadowSoftness, wTexels), 0.0, u_maxPenumbraTexels) * u_shadowTexel;
+  // 3) PCF: each tap is a hardware 2x2 bilinear depth compare.
   float sum = texture(u_shadowMap, c);
   for (int i = 0; i < 12; ++i) sum += texture(u_shadowMap, vec3(c.xy + kPoisson[i] * r, c.z));
-  return sum / 13.0;
+  for (int i = 0; i < 12; ++i) sum += texture(u_shadowMap, vec3(c.xy - kPoisson[i].yx * (0.5 * r), c.z));
+  return sum / 25.0;
 }
 
 // Linear radiance of a surface point (before tone mapping).
