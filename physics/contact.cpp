@@ -1,0 +1,255 @@
+#include "physics/contact.h"
+
+#include <cmath>
+
+#include "physics/prismatic_joint.h"
+#include "physics/stabilization.h"
+
+namespace ponyhop {
+
+int FootContact::dimension() const {
+  switch (state_->mode) {
+    case ContactMode::Off:
+      return 0;
+    case ContactMode::Stick:
+      return state_->twist ? 4 : 3;
+    case ContactMode::Slide:
+      return 1;
+  }
+  return 0;
+}
+
+// Stick rows 0-2 are the spherical joint's (physics/spherical_joint.cpp) with b = the world and
+// p_b = anchor: C = R + r - anchor, J = [I  -r~], J'q' = w x (w x r), r = c - R the arm from the
+// foot's centre of mass to the sphere's centre. Row 3 is the dot-product row x_f . g with g fixed
+// in the world (physics/prismatic_joint.cpp): a torque about x_f x g, close to vertical.
+// Slide: the z row alone (C = c_z - rho).
+void FootContact::evaluate(const RigidBody& a, const RigidBody& b, ConstraintRows& out) const {
+  const Eigen::Vector3d r = a.q * center_;
+  const Eigen::Vector3d c = a.x + r;
+  const Eigen::Vector3d wwr = a.w.cross(a.w.cross(r));
+  const Eigen::Matrix3d minus_skew = -skew(r);
+  switch (state_->mode) {
+    case ContactMode::Off:
+      return;
+    case ContactMode::Stick: {
+      out.C.head<3>() = c - state_->anchor;
+      out.ja.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity();
+      out.ja.block<3, 3>(0, 3) = minus_skew;
+      out.jb.topRows<3>().setZero();
+      out.bias.head<3>() = wwr;
+      if (state_->twist) {
+        const JointRow t = dotRow(a, a.q * Eigen::Vector3d::UnitX(), b, state_->twist_ref);
+        out.C(3) = t.C;
+        out.ja.row(3) = t.ja;
+        out.jb.row(3).setZero();
+        out.bias(3) = t.bias;
+      }
+      return;
+    }
+    case ContactMode::Slide:
+      out.C(0) = c.z() - radius_;
+      out.ja.row(0) << 0.0, 0.0, 1.0, minus_skew.row(2);
+      out.jb.row(0).setZero();
+      out.bias(0) = wwr.z();
+      return;
+  }
+}
+
+void KineticFriction::apply(std::vector<RigidBody>& bodies) const {
+  if (state_->mode != ContactMode::Slide) return;
+  RigidBody& foot = bodies[foot_];
+  const Eigen::Vector3d p = foot.pointToWorld(center_) - radius_ * Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d f = -mu_ * state_->normal_force * state_->slip_dir;
+  foot.force += f;
+  foot.torque += (p - foot.x).cross(f);
+}
+
+GroundContact::GroundContact(World& world, int foot, const Eigen::Vector3d& center_local, double radius, double mu,
+                             double twist_radius)
+    : foot_(foot),
+      center_(center_local),
+      radius_(radius),
+      mu_(mu),
+      twist_radius_(twist_radius),
+      state_(std::make_shared<ContactState>()) {
+  joint_ = world.addJoint(std::make_unique<FootContact>(foot, center_local, radius, state_));
+  world.addForceElement(std::make_unique<KineticFriction>(foot, center_local, radius, mu, state_));
+}
+
+int GroundContact::rowOffset(const World& world) const {
+  int row = 0;
+  for (int j = 0; j < joint_; ++j) row += world.joints()[j]->dimension();
+  return row;
+}
+
+void GroundContact::update(World& world) {
+  if (!world.ok()) return;
+  if (state_->mode == ContactMode::Off) {
+    const RigidBody& f = world.body(foot_);
+    const Eigen::Vector3d c = f.pointToWorld(center_);
+    const double gap = c.z() - radius_;
+    // Touching and moving into the ground (or clearly below it): the foot lands.
+    if (gap < -1e-6 || (gap <= 0.0 && f.velocityAt(c).z() <= 0.0)) touchdown(world);
+    return;
+  }
+  checkForces(world);
+}
+
+Eigen::VectorXd GroundContact::projectVelocities(World& world, bool& ok) {
+  std::vector<RigidBody>& bodies = world.bodies();
+  system_.evaluate(bodies, world.joints());
+  ok = true;
+  if (system_.rows() == 0) return {};
+  std::vector<Vector6d> vel(bodies.size());
+  for (size_t i = 0; i < bodies.size(); ++i) vel[i] << bodies[i].v, bodies[i].w;
+  // (J M^-1 J^T) y = -J v, dv = M^-1 J^T y: y is the impulse of every row (N s).
+  if (!solver_.factor(bodies, system_)) {
+    ok = false;
+    return {};
+  }
+  const Eigen::VectorXd y = solver_.solve(-system_.times(vel));
+  const std::vector<Vector6d> dv = solver_.massWeightedTranspose(bodies, system_, y);
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    if (!bodies[i].isDynamic()) continue;
+    if (!dv[i].allFinite()) {
+      ok = false;
+      return {};
+    }
+    bodies[i].v += dv[i].head<3>();
+    bodies[i].w += dv[i].tail<3>();
+  }
+  const int m = world.joints()[joint_]->dimension();
+  return y.segment(rowOffset(world), m);
+}
+
+void GroundContact::touchdown(World& world) {
+  std::vector<RigidBody>& bodies = world.bodies();
+  const std::vector<RigidBody> before = bodies;
+  const double energy_before = world.kineticEnergy();
+  const auto restoreVelocities = [&] {
+    for (size_t i = 0; i < bodies.size(); ++i) {
+      bodies[i].v = before[i].v;
+      bodies[i].w = before[i].w;
+    }
+  };
+  const RigidBody& f = bodies[foot_];
+  const Eigen::Vector3d c = f.pointToWorld(center_);
+  const Eigen::Vector3d xf = f.q * Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d g = Eigen::Vector3d::UnitZ().cross(xf);
+
+  state_->mode = mu_ > 0.0 ? ContactMode::Stick : ContactMode::Slide;
+  state_->anchor = Eigen::Vector3d(c.x(), c.y(), radius_);
+  state_->twist = twist_radius_ > 0.0 && mu_ > 0.0 && g.norm() > 1e-6;
+  if (state_->twist) state_->twist_ref = g.normalized();
+
+  // No penetration is left: positions onto C = 0 (the landing point lifted to the surface).
+  const ProjectionResult p = projectPositions(bodies, world.joints(), system_, solver_);
+  if (!p.problem.empty() || !(p.error < 1e-6)) {
+    world.fail("ground contact: touchdown projection failed (" + p.problem + ")");
+    return;
+  }
+  bool ok = true;
+  Eigen::VectorXd y = projectVelocities(world, ok);
+  if (ok && state_->mode == ContactMode::Stick) {
+    if (state_->twist && std::abs(y(3)) > mu_ * twist_radius_ * y(2)) {
+      state_->twist = false;  // the landing twists the foot: torsional friction cannot hold it
+      ++stats_.twist_slips;
+      restoreVelocities();
+      y = projectVelocities(world, ok);
+    }
+    if (ok && std::hypot(y(0), y(1)) > mu_ * y(2)) {
+      // Outside the friction cone: a sliding landing. Normal impulse alone, then Coulomb's
+      // friction impulse mu P_n against the remaining slip (the joints share it out).
+      ++stats_.sliding_touchdowns;
+      restoreVelocities();
+      state_->mode = ContactMode::Slide;
+      y = projectVelocities(world, ok);
+      if (ok) {
+        RigidBody& foot = bodies[foot_];
+        const Eigen::Vector3d cc = foot.pointToWorld(center_);
+        const Eigen::Vector3d p_contact = cc - radius_ * Eigen::Vector3d::UnitZ();
+        Eigen::Vector3d vt = foot.velocityAt(p_contact);
+        vt.z() = 0.0;
+        if (vt.norm() > 1e-9) {
+          state_->slip_dir = vt.normalized();
+          const Eigen::Vector3d impulse = -mu_ * std::max(0.0, y(0)) * state_->slip_dir;
+          foot.v += impulse / foot.mass;
+          foot.w += foot.worldInverseInertia() * (p_contact - foot.x).cross(impulse);
+          y = projectVelocities(world, ok);
+        }
+      }
+    }
+  }
+  if (!ok) {
+    world.fail("ground contact: touchdown velocity projection failed (singular constraint matrix)");
+    return;
+  }
+  ++stats_.touchdowns;
+  stats_.max_touchdown_energy_gain = std::max(stats_.max_touchdown_energy_gain, world.kineticEnergy() - energy_before);
+  state_->normal_force = 0.0;
+}
+
+void GroundContact::checkForces(World& world) {
+  // The multipliers at the state just reached (with the controller's current setpoints).
+  world.evaluate();
+  if (!world.ok()) return;
+  const Eigen::VectorXd& lambda = world.lambda();
+  const int row = rowOffset(world);
+  if (state_->mode == ContactMode::Stick) {
+    const double n = lambda(row + 2);
+    const Eigen::Vector3d ft(lambda(row), lambda(row + 1), 0.0);
+    state_->normal_force = n;
+    state_->friction_force = ft;
+    state_->twist_torque = state_->twist ? lambda(row + 3) : 0.0;
+    if (!(n > 0.0)) {
+      state_->mode = ContactMode::Off;  // the ground would have to pull: liftoff
+      state_->normal_force = 0.0;
+      state_->friction_force.setZero();
+      state_->twist_torque = 0.0;
+      return;
+    }
+    if (ft.norm() > mu_ * n) {
+      // The friction needed exceeds the cone: slide, opposite to the friction that held the foot.
+      ++stats_.slips;
+      state_->mode = ContactMode::Slide;
+      state_->slip_dir = -ft.normalized();
+      state_->twist_torque = 0.0;
+      return;
+    }
+    if (state_->twist && std::abs(state_->twist_torque) > mu_ * twist_radius_ * n) {
+      ++stats_.twist_slips;
+      state_->twist = false;
+      state_->twist_torque = 0.0;
+    }
+    return;
+  }
+  // Slide.
+  const double n = lambda(row);
+  state_->normal_force = std::max(0.0, n);
+  state_->friction_force = -mu_ * state_->normal_force * state_->slip_dir;
+  if (!(n > 0.0)) {
+    state_->mode = ContactMode::Off;
+    state_->normal_force = 0.0;
+    state_->friction_force.setZero();
+    return;
+  }
+  if (mu_ <= 0.0) return;
+  const RigidBody& foot = world.body(foot_);
+  const Eigen::Vector3d c = foot.pointToWorld(center_);
+  Eigen::Vector3d vt = foot.velocityAt(c - radius_ * Eigen::Vector3d::UnitZ());
+  vt.z() = 0.0;
+  if (vt.dot(state_->slip_dir) <= 0.0) {
+    // Kinetic friction has stopped the slip: stick where the foot is now.
+    state_->mode = ContactMode::Stick;
+    state_->anchor = Eigen::Vector3d(c.x(), c.y(), radius_);
+    state_->twist = false;
+    bool ok = true;
+    projectVelocities(world, ok);
+    if (!ok) world.fail("ground contact: velocity projection failed when the foot stopped sliding");
+  } else {
+    state_->slip_dir = vt.normalized();
+  }
+}
+
+}  // namespace ponyhop

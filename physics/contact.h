@@ -1,0 +1,136 @@
+// The foot against the ground plane z = 0: an active-set Lagrange-multiplier contact (in the
+// spirit of the method, exact; why this and not a stiff spring: docs/HOPPER.md).
+//
+// The foot's toe is a sphere (centre c fixed in the foot, radius rho). Its contact is one
+// Constraint whose rows change with its mode (the active set):
+//
+//   Off    no rows.
+//   Stick  C = c - anchor (3 rows: the sphere's centre held where it landed, anchor_z = rho:
+//          the spherical joint's rows against the world, physics/spherical_joint.cpp), plus a
+//          torsion row C = x_f . g (x_f the foot's x axis, g a horizontal world vector with
+//          x_f . g = 0 at touchdown; the dot-product row of physics/prismatic_joint.cpp) while
+//          torsional friction holds. lambda = (friction x, friction y, normal, twist torque).
+//   Slide  C = c_z - rho (1 row, the normal force); kinetic friction mu N against the slip
+//          direction is an external force (KineticFriction), N taken from the last solve.
+//
+// GroundContact decides the mode after every step (World's contact stage):
+//   touchdown  Off and the sphere reaches the plane moving down: Stick at the landing point;
+//              positions projected onto C = 0 (no penetration is ever left in a state) and
+//              velocities projected onto J v = 0 in the mass metric: a perfectly inelastic
+//              impulse, which can only remove kinetic energy (Kelvin). If the impulse lies outside
+//              the friction cone (|P_t| > mu P_n) the landing is a sliding one instead (normal
+//              impulse only, then a friction impulse mu P_n against the slip).
+//   liftoff    in contact and the normal multiplier, solved at the state just reached, is
+//              N <= 0: the ground would have to pull, so the rows are dropped (unilateral).
+//   slip       Stick and |lambda_t| > mu N: Slide, the slip direction opposite the friction
+//              that no longer holds. Torsion: |lambda_twist| > mu N twist_radius drops the
+//              torsion row for the rest of the stance.
+//   re-stick   Slide and the slip velocity reversed (v_t . slip_dir <= 0): Stick where it is.
+//
+// Cost: one extra force evaluation (a joint-force solve) per step in contact, and one or two
+// projections per touchdown. Accuracy: a contact event is resolved at the end of the step in
+// which it happens (up to one step late); the inelastic projection is exact for that state.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+
+#include "physics/constraint.h"
+#include "physics/dense_solver.h"
+#include "physics/force_elements.h"
+#include "physics/world.h"
+
+namespace ponyhop {
+
+enum class ContactMode { Off, Stick, Slide };
+
+// Shared between the constraint, the friction element and the manager.
+struct ContactState {
+  ContactMode mode = ContactMode::Off;
+  bool twist = false;                                   // Stick: the torsion row is active
+  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();     // Stick: where c is held (world)
+  Eigen::Vector3d twist_ref = Eigen::Vector3d::UnitY(); // Stick: g (world, horizontal)
+  Eigen::Vector3d slip_dir = Eigen::Vector3d::UnitX();  // Slide: unit direction of slip
+  double normal_force = 0.0;                            // N, last solve (0 when Off)
+  Eigen::Vector3d friction_force = Eigen::Vector3d::Zero();  // N, tangential, last solve
+  double twist_torque = 0.0;                            // N m, last solve
+};
+
+class FootContact final : public Constraint {
+ public:
+  FootContact(int foot, const Eigen::Vector3d& center_local, double radius, std::shared_ptr<ContactState> state)
+      : Constraint(foot, kWorldBody), center_(center_local), radius_(radius), state_(std::move(state)) {}
+
+  int dimension() const override;
+  const char* typeName() const override { return "contact"; }
+  void evaluate(const RigidBody& a, const RigidBody& b, ConstraintRows& out) const override;
+  double error(const ConstraintRows& rows) const override {
+    return rows.C.size() ? rows.C.cwiseAbs().maxCoeff() : 0.0;
+  }
+
+ private:
+  Eigen::Vector3d center_;
+  double radius_;
+  std::shared_ptr<ContactState> state_;
+};
+
+// Kinetic friction while sliding: f = -mu N slip_dir at the contact point (N from the last solve).
+class KineticFriction final : public ForceElement {
+ public:
+  KineticFriction(int foot, const Eigen::Vector3d& center_local, double radius, double mu,
+                  std::shared_ptr<ContactState> state)
+      : foot_(foot), center_(center_local), radius_(radius), mu_(mu), state_(std::move(state)) {}
+  void apply(std::vector<RigidBody>& bodies) const override;
+
+ private:
+  int foot_;
+  Eigen::Vector3d center_;
+  double radius_, mu_;
+  std::shared_ptr<ContactState> state_;
+};
+
+struct ContactStats {
+  int touchdowns = 0;
+  int sliding_touchdowns = 0;
+  int slips = 0;          // Stick -> Slide transitions in stance
+  int twist_slips = 0;    // torsion rows dropped
+  double max_touchdown_energy_gain = -1e300;  // J, kinetic energy after - before the impulse
+};
+
+class GroundContact {
+ public:
+  // Adds the contact constraint and the friction element to `world` for the toe sphere of body
+  // `foot` (centre in the foot's frame, radius). Contact with the plane z = 0.
+  GroundContact(World& world, int foot, const Eigen::Vector3d& center_local, double radius, double mu,
+                double twist_radius);
+
+  // The contact stage (World::setContactHandler calls it after each step).
+  void update(World& world);
+
+  bool inContact() const { return state_->mode != ContactMode::Off; }
+  const ContactState& state() const { return *state_; }
+  const ContactStats& stats() const { return stats_; }
+  int jointIndex() const { return joint_; }
+  Eigen::Vector3d center(const World& world) const { return world.body(foot_).pointToWorld(center_); }
+  // The lowest point of the toe sphere (the contact point in stance).
+  Eigen::Vector3d point(const World& world) const { return center(world) - radius_ * Eigen::Vector3d::UnitZ(); }
+
+ private:
+  void touchdown(World& world);
+  void checkForces(World& world);
+  // Velocities onto the joints' and the contact's velocity constraints; returns the contact's
+  // impulse rows (empty when it has none) or sets ok = false.
+  Eigen::VectorXd projectVelocities(World& world, bool& ok);
+  int rowOffset(const World& world) const;
+
+  int foot_;
+  Eigen::Vector3d center_;
+  double radius_, mu_, twist_radius_;
+  int joint_ = -1;
+  std::shared_ptr<ContactState> state_;
+  DenseSolver solver_;
+  ConstraintSystem system_;
+  ContactStats stats_;
+};
+
+}  // namespace ponyhop

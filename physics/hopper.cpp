@@ -1,0 +1,454 @@
+#include "physics/hopper.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <type_traits>
+
+#include "physics/prismatic_joint.h"
+#include "physics/soft_constraint.h"
+#include "physics/spherical_joint.h"
+
+namespace ponyhop {
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+std::string number(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", x);
+  return buf;
+}
+
+// Range check through reflect() (the same ranges the scene loader enforces).
+struct HopperRangeCheck {
+  std::string prefix;
+  std::string error;
+
+  void check(const std::string& name, double value, const FieldMeta& m) {
+    if (!error.empty() || (std::isfinite(value) && value >= m.min && value <= m.max)) return;
+    error = prefix + "." + name + " = " + number(value) + ": must be a finite number in [" + number(m.min) + ", " +
+            number(m.max) + "]" + (*m.unit ? std::string(" ") + m.unit : "") + " (" + m.help + ")";
+  }
+  template <class T>
+  void operator()(const char* name, T& field, const FieldMeta& m) {
+    if constexpr (std::is_same_v<T, double>) {
+      check(name, field, m);
+    } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+      for (int i = 0; i < 3; ++i) check(std::string(name) + "[" + std::to_string(i) + "]", field[i], m);
+    } else if constexpr (std::is_same_v<T, HopperCommand>) {
+      HopperRangeCheck c{prefix + "." + name, ""};
+      field.reflect(c);
+      if (error.empty()) error = c.error;
+    } else if constexpr (std::is_same_v<T, std::vector<HopperCommandKey>>) {
+      for (size_t i = 0; i < field.size(); ++i) {
+        HopperRangeCheck c{prefix + "." + name + "." + std::to_string(i), ""};
+        field[i].reflect(c);
+        if (error.empty()) error = c.error;
+      }
+    }
+  }
+};
+
+Eigen::Vector3d axisOf(const RigidBody& b, int i) { return b.q * Eigen::Vector3d::Unit(i); }
+
+}  // namespace
+
+std::string validate(const HopperParams& p_in, const std::string& prefix) {
+  HopperParams p = p_in;
+  HopperRangeCheck check{prefix, ""};
+  p.reflect(check);
+  if (!check.error.empty()) return check.error;
+  if (!(p.body_mass > 0.0) || !(p.upper_mass > 0.0) || !(p.foot_mass > 0.0)) {
+    return prefix + ": body_mass, upper_mass and foot_mass must be positive";
+  }
+  if (!(p.body_inertia.minCoeff() > 0.0)) return prefix + ".body_inertia: every component must be positive";
+  if (!(p.min_length < p.rest_length && p.rest_length < p.max_length)) {
+    return prefix + ": leg lengths must satisfy min_length < rest_length < max_length (got " + number(p.min_length) +
+           ", " + number(p.rest_length) + ", " + number(p.max_length) + " m)";
+  }
+  if (!(p.foot_length + p.toe_radius < p.min_length)) {
+    return prefix + ".foot_length + toe_radius = " + number(p.foot_length + p.toe_radius) +
+           " m: must be less than min_length (the foot's upper end would hit the hip at full compression)";
+  }
+  if (!(p.max_length - p.toe_radius - p.foot_length < p.upper_length)) {
+    return prefix + ".upper_length = " + number(p.upper_length) +
+           " m: must exceed max_length - toe_radius - foot_length (the foot would leave the upper leg)";
+  }
+  if (p.position.z() - p.hip_offset - p.rest_length < 0.0) {
+    return prefix + ".position.z = " + number(p.position.z()) + " m: the foot would start below the ground (needs >= " +
+           number(p.hip_offset + p.rest_length) + " m)";
+  }
+  for (size_t i = 1; i < p.script.size(); ++i) {
+    if (p.script[i].t < p.script[i - 1].t) {
+      return prefix + ".script." + std::to_string(i) + ".t = " + number(p.script[i].t) +
+             " s: keys must be in time order (the previous key is at " + number(p.script[i - 1].t) + " s)";
+    }
+  }
+  return "";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Leg length along the knee's free axis (seed 000, "Access to Current State: derived state, e.g.
+// scalar leg length, and its derivatives"):
+//
+//   z_a  the upper leg's axis (world), from the toe toward the hip
+//   r    = (p_hip - c) . z_a + rho            (c the toe sphere's centre, rho its radius)
+//   r'   = (v_hip - v_c) . z_a + (p_hip - c) . (w_a x z_a)
+//
+// p_hip is the upper leg's hip point and c lies on the axis, so r is the hip-to-ground distance
+// of a vertical leg, and (by the knee's constraints) r' is the sliding speed.
+LegState legState(const HopperModel& m, const std::vector<RigidBody>& bodies) {
+  const RigidBody& upper = bodies[m.upper];
+  const RigidBody& foot = bodies[m.foot];
+  LegState s;
+  s.axis = axisOf(upper, 2);
+  const Eigen::Vector3d hip = upper.pointToWorld(m.hip_in_upper);
+  const Eigen::Vector3d c = foot.pointToWorld(m.toe_in_foot);
+  s.length = (hip - c).dot(s.axis) + m.params.toe_radius;
+  s.rate = (upper.velocityAt(hip) - foot.velocityAt(c)).dot(s.axis) + (hip - c).dot(upper.w.cross(s.axis));
+  return s;
+}
+
+// ComputeControllerForces (seed 000): soft constraints f = k_s (C - C_d) + k_d (C' - C_d'),
+// each applied along its constraint's Jacobian with equal and opposite parts on the two bodies.
+//
+// 1. Leg spring along the knee's free axis (C = r, C_d = r_set; seed: "knee length: pick good
+//    gains for bouncing, change leg setpoint for length control"), plus end stops at r_min and
+//    r_max written with the smooth ramp (no max):
+//      f = k (r_set - r) - b r'
+//          + k_s ramp(r_min - r) - b_s r' step(r_min - r)      (compression stop pushes out)
+//          - k_s ramp(r - r_max) - b_s r' step(r - r_max)      (extension stop pulls in)
+//    f > 0 extends the leg: -f z_a on the foot, +f z_a on the upper leg, both at the foot's
+//    centre of mass (on the axis, so neither gets a torque).
+// 2. Hip servos, torques only (the hip is a ball joint), on the upper leg (a) and the body (b)
+//    (seed: "roll & pitch: move z_a around in b's coordinate frame using z_a . x_b and
+//    z_a . y_b; yaw: x_a . y_b"). For C = s . t, C' = (w_s - w_t) . (s x t) (the dot-product
+//    row of physics/prismatic_joint.cpp), so the torque is -f (s x t) on s's body and +f (s x t)
+//    on t's body:
+//      flight (place_weight):  C = z_a . x_b -> placement_x,  C = z_a . y_b -> placement_y,
+//                              C = x_a . y_b -> 0 (leg twist follows the body)
+//      stance (attitude_weight), the body against the world, the torque's reaction on the leg
+//      (the ground holds the leg):  C = z_b . x_world -> 0, C = z_b . y_world -> 0 (upright),
+//                              C = x_b . h_perp -> 0, h_perp = (-sin psi_d, cos psi_d, 0) (heading)
+//    The weights are setpoints (0 or 1, set by Think), not branches in the force law.
+void computeHopperForces(const HopperModel& m, const HopperSetpoints& s, double /*t*/,
+                         std::vector<RigidBody>& bodies) {
+  const HopperParams& p = m.params;
+  RigidBody& body = bodies[m.body];
+  RigidBody& upper = bodies[m.upper];
+  RigidBody& foot = bodies[m.foot];
+
+  // 1. Leg spring and stops.
+  const LegState leg = legState(m, bodies);
+  const double r = leg.length, rd = leg.rate, eps = p.stop_smoothing;
+  const double f = p.leg_stiffness * (s.leg_length - r) - p.leg_damping * rd +
+                   p.stop_stiffness * smoothRamp(p.min_length - r, eps) -
+                   p.stop_damping * rd * smoothStep(p.min_length - r, eps) -
+                   p.stop_stiffness * smoothRamp(r - p.max_length, eps) -
+                   p.stop_damping * rd * smoothStep(r - p.max_length, eps);
+  foot.force -= f * leg.axis;
+  upper.force += f * leg.axis;
+
+  // 2. Hip servos.
+  const Eigen::Vector3d xa = axisOf(upper, 0), za = leg.axis;
+  const Eigen::Vector3d xb = axisOf(body, 0), yb = axisOf(body, 1), zb = axisOf(body, 2);
+  const Eigen::Vector3d dw = upper.w - body.w;
+  Eigen::Vector3d torque_leg = Eigen::Vector3d::Zero();  // on the upper leg; the body gets -torque_leg
+  const auto relative = [&](const Eigen::Vector3d& sa, const Eigen::Vector3d& tb, double ks, double kd, double cd) -> Eigen::Vector3d {
+    const Eigen::Vector3d n = sa.cross(tb);
+    return softConstraintForce(ks, kd, sa.dot(tb), cd, dw.dot(n)) * n;  // f (s x t)
+  };
+  torque_leg -= s.place_weight * relative(za, xb, p.placement_stiffness, p.placement_damping, s.placement_x);
+  torque_leg -= s.place_weight * relative(za, yb, p.placement_stiffness, p.placement_damping, s.placement_y);
+  torque_leg -= s.place_weight * relative(xa, yb, p.twist_stiffness, p.twist_damping, 0.0);
+
+  Eigen::Vector3d torque_body = Eigen::Vector3d::Zero();  // on the body; the leg gets -torque_body
+  const auto absolute = [&](const Eigen::Vector3d& sb, const Eigen::Vector3d& t_world, double ks, double kd) -> Eigen::Vector3d {
+    const Eigen::Vector3d n = sb.cross(t_world);
+    return softConstraintForce(ks, kd, sb.dot(t_world), 0.0, body.w.dot(n)) * n;
+  };
+  const Eigen::Vector3d h_perp(-std::sin(s.heading), std::cos(s.heading), 0.0);
+  torque_body -= s.attitude_weight * absolute(zb, Eigen::Vector3d::UnitX(), p.attitude_stiffness, p.attitude_damping);
+  torque_body -= s.attitude_weight * absolute(zb, Eigen::Vector3d::UnitY(), p.attitude_stiffness, p.attitude_damping);
+  torque_body -= s.attitude_weight * absolute(xb, h_perp, p.yaw_stiffness, p.yaw_damping);
+
+  upper.torque += torque_leg - torque_body;
+  body.torque += torque_body - torque_leg;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+Hopper::Hopper(World& world, const HopperParams& params) : params_(params) {
+  if (std::string e = validate(params); !e.empty()) {
+    world.fail(e);
+    return;
+  }
+  const HopperParams& p = params_;
+  core_ = std::make_shared<Core>();
+  HopperModel& m = core_->model;
+  m.params = p;
+  stance_time_ = p.stance_time;
+  heading_ = commandAt(world.time()).heading * kDeg;
+
+  // Body: hip below its centre of mass. Upper leg: a tube (solid-cylinder inertia) from the hip
+  // down, centre of mass halfway. Foot: a rod, the toe sphere's centre at its lower end, centre
+  // of mass halfway. All frames start aligned with the world, the leg vertical at rest length.
+  const Eigen::Vector3d ez = Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d hip = p.position - p.hip_offset * ez;
+  RigidBody body;
+  body.name = "hopper body";
+  body.mass = p.body_mass;
+  body.inertia = p.body_inertia;
+  body.x = p.position;
+  body.v = p.velocity;
+  m.body = world.addDynamicBody(body);
+
+  const auto rod = [](double mass, double length, double radius) {
+    const double across = mass * (3.0 * radius * radius + length * length) / 12.0;
+    return Eigen::Vector3d(across, across, 0.5 * mass * radius * radius);
+  };
+  RigidBody upper;
+  upper.name = "hopper upper leg";
+  upper.mass = p.upper_mass;
+  upper.inertia = rod(p.upper_mass, p.upper_length, p.upper_radius);
+  upper.x = hip - 0.5 * p.upper_length * ez;
+  upper.v = p.velocity;
+  m.upper = world.addDynamicBody(upper);
+
+  RigidBody foot;
+  foot.name = "hopper foot";
+  foot.mass = p.foot_mass;
+  foot.inertia = rod(p.foot_mass, p.foot_length, p.foot_radius);
+  const Eigen::Vector3d toe = hip - (p.rest_length - p.toe_radius) * ez;
+  foot.x = toe + 0.5 * p.foot_length * ez;
+  foot.v = p.velocity;
+  m.foot = world.addDynamicBody(foot);
+
+  m.hip_in_body = -p.hip_offset * ez;
+  m.hip_in_upper = 0.5 * p.upper_length * ez;
+  m.toe_in_foot = -0.5 * p.foot_length * ez;
+  m.hip_joint = world.addJoint(std::make_unique<SphericalJoint>(m.body, m.hip_in_body, m.upper, m.hip_in_upper));
+  m.knee_joint = world.addJoint(std::make_unique<PrismaticJoint>(m.upper, Eigen::Vector3d::Zero(),
+                                                                 Eigen::Quaterniond::Identity(), m.foot,
+                                                                 Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
+  core_->contact = std::make_unique<GroundContact>(world, m.foot, m.toe_in_foot, p.toe_radius, p.friction, p.twist_radius);
+
+  core_->setpoints.leg_length = p.rest_length;
+  core_->setpoints.heading = heading_;
+  std::shared_ptr<Core> core = core_;
+  world.setController([core](double t, std::vector<RigidBody>& bodies) {
+    computeHopperForces(core->model, core->setpoints, t, bodies);
+  });
+  World* w = &world;
+  world.setContactHandler([core, w](double, std::vector<RigidBody>&) { core->contact->update(*w); });
+}
+
+HopperCommand Hopper::commandAt(double t) const {
+  HopperCommand c = params_.command;
+  for (const HopperCommandKey& k : params_.script) {
+    if (k.t > t + 1e-12) break;
+    c = HopperCommand{k.vx, k.vy, k.height, k.heading};
+  }
+  return c;
+}
+
+double Hopper::mass() const { return params_.body_mass + params_.upper_mass + params_.foot_mass; }
+
+Eigen::Vector3d Hopper::centerOfMassVelocity(const World& world) const {
+  const HopperModel& m = core_->model;
+  const RigidBody &b = world.body(m.body), &u = world.body(m.upper), &f = world.body(m.foot);
+  return (b.mass * b.v + u.mass * u.v + f.mass * f.v) / (b.mass + u.mass + f.mass);
+}
+
+// Think (seed 000): the state machine over the hop; it changes setpoints only.
+//
+//   FLIGHT      -> LOADING      touchdown (the contact became active)
+//   LOADING     -> COMPRESSION  r < rest_length - load_depth
+//   COMPRESSION -> THRUST       r' >= 0 (the leg stops shortening: bottom of the stance)
+//   THRUST      -> UNLOADING    r > r_set - unload_margin (the spring is nearly spent)
+//   any stance  -> FLIGHT       liftoff (the contact released: the ground would have to pull)
+//
+// Setpoints per phase (Raibert's three parts):
+//   FLIGHT       leg at rest length (shortened by flight_retract while rising); hip servo places
+//                the leg for the touchdown: foot at x_f = xdot T_s / 2 + k_xdot (xdot - xdot_d)
+//                from the centre of mass, both horizontal axes, T_s the last measured stance.
+//   LOADING      leg at rest length; hip torque off (the foot is barely loaded and would slip).
+//   COMPRESSION  leg at rest length; hip servos the body upright and to the heading.
+//   THRUST       leg setpoint r0 + delta: hop height (delta from the energy still needed to
+//                reach the commanded apex, plus a per-hop trim from the apex error); attitude on.
+//   UNLOADING    thrust held; hip torque off.
+void Hopper::think(World& world) {
+  if (!built() || !world.ok()) return;
+  const double now = world.time();
+  const double dt = last_time_ < 0.0 ? 0.0 : now - last_time_;
+  last_time_ = now;
+  const HopperParams& p = params_;
+  const HopperCommand cmd = commandAt(now);
+  const RigidBody& body = world.body(core_->model.body);
+  const LegState leg = this->leg(world);
+  const bool contact = core_->contact->inContact();
+  const double g = std::max(1e-9, -world.params().gravity.z());
+
+  const auto liftoff = [&] {
+    phase_ = HopperPhase::Flight;
+    stance_time_ = std::clamp(now - touchdown_time_, 0.05, 1.0);
+    flight_max_z_ = body.x.z();
+    ++hops_;
+  };
+  switch (phase_) {
+    case HopperPhase::Flight:
+      flight_max_z_ = std::max(flight_max_z_, body.x.z());
+      if (contact) {
+        phase_ = HopperPhase::Loading;
+        touchdown_time_ = now;
+        if (touchdowns_ > 0) {
+          last_apex_ = flight_max_z_;
+          // Per-hop trim of the thrust from the apex error (integral action on the losses the
+          // energy estimate below does not know: damping, the foot's impact, a ponytail).
+          height_trim_ = std::clamp(height_trim_ + p.height_gain * (cmd.height - last_apex_), -p.thrust_max,
+                                    p.thrust_max);
+        }
+        ++touchdowns_;
+      }
+      break;
+    case HopperPhase::Loading:
+      if (!contact) {
+        liftoff();
+      } else if (leg.length < p.rest_length - p.load_depth) {
+        phase_ = HopperPhase::Compression;
+      }
+      break;
+    case HopperPhase::Compression:
+      if (!contact) {
+        liftoff();
+      } else if (leg.rate >= 0.0) {
+        phase_ = HopperPhase::Thrust;
+        // Energy to reach the commanded apex from here (vertical part): the spring, extended to
+        // r0 + delta, must release 1/2 k (r0 + delta - r)^2 = M g (h_d - z) - 1/2 M z'^2.
+        const double m_total = mass();
+        const double needed =
+            std::max(0.0, m_total * g * (cmd.height - body.x.z()) - 0.5 * m_total * body.v.z() * body.v.z());
+        const double feedforward = std::sqrt(2.0 * needed / p.leg_stiffness) - (p.rest_length - leg.length);
+        thrust_ = std::clamp(feedforward + height_trim_, -0.5 * (p.rest_length - p.min_length), p.thrust_max);
+      }
+      break;
+    case HopperPhase::Thrust:
+      if (!contact) {
+        liftoff();
+      } else if (leg.length > p.rest_length + thrust_ - p.unload_margin) {
+        phase_ = HopperPhase::Unloading;
+      }
+      break;
+    case HopperPhase::Unloading:
+      if (!contact) liftoff();
+      break;
+  }
+  updateSetpoints(world, cmd, dt);
+}
+
+void Hopper::updateSetpoints(const World& world, const HopperCommand& cmd, double dt) {
+  const HopperParams& p = params_;
+  HopperSetpoints& s = core_->setpoints;
+  const RigidBody& body = world.body(core_->model.body);
+
+  // Heading setpoint slews toward the command (a step of 180 degrees would sit on the servo's
+  // unstable equilibrium).
+  const double target = cmd.heading * kDeg;
+  const double step = p.max_yaw_rate * kDeg * dt;
+  heading_ += std::clamp(std::remainder(target - heading_, 2.0 * std::numbers::pi), -step, step);
+  s.heading = heading_;
+
+  switch (phase_) {
+    case HopperPhase::Flight: {
+      s.leg_length = body.v.z() > 0.0 ? p.rest_length - p.flight_retract : p.rest_length;
+      s.place_weight = 1.0;
+      s.attitude_weight = 0.0;
+      // Foot placement (Raibert): neutral point plus the speed correction, both axes.
+      const Eigen::Vector3d v = centerOfMassVelocity(world);
+      Eigen::Vector2d xf = v.head<2>() * stance_time_ / 2.0 +
+                           p.speed_gain * (v.head<2>() - Eigen::Vector2d(cmd.vx, cmd.vy));
+      const double limit = p.rest_length * std::sin(p.max_leg_angle * kDeg);
+      if (xf.norm() > limit) xf *= limit / xf.norm();
+      // Desired leg axis (from the foot up to the hip) in the world, then in the body's frame.
+      const Eigen::Vector3d za_d =
+          Eigen::Vector3d(-xf.x(), -xf.y(), std::sqrt(p.rest_length * p.rest_length - xf.squaredNorm())) /
+          p.rest_length;
+      s.placement_x = za_d.dot(axisOf(body, 0));
+      s.placement_y = za_d.dot(axisOf(body, 1));
+      break;
+    }
+    case HopperPhase::Loading:
+      s.leg_length = p.rest_length;
+      s.place_weight = 0.0;
+      s.attitude_weight = 0.0;
+      break;
+    case HopperPhase::Compression:
+      s.leg_length = p.rest_length;
+      s.place_weight = 0.0;
+      s.attitude_weight = 1.0;
+      break;
+    case HopperPhase::Thrust:
+      s.leg_length = p.rest_length + thrust_;
+      s.place_weight = 0.0;
+      s.attitude_weight = 1.0;
+      break;
+    case HopperPhase::Unloading:
+      s.leg_length = p.rest_length + thrust_;
+      s.place_weight = 0.0;
+      s.attitude_weight = 0.0;
+      break;
+  }
+}
+
+Eigen::Vector3d Hopper::attitude(const World& world) const {
+  const Eigen::Matrix3d r = world.body(core_->model.body).rotation();
+  const double yaw = std::atan2(r(1, 0), r(0, 0));
+  const double pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
+  const double roll = std::atan2(r(2, 1), r(2, 2));
+  return {roll, pitch, yaw};
+}
+
+double Hopper::tilt(const World& world) const {
+  const Eigen::Vector3d zb = axisOf(world.body(core_->model.body), 2);
+  return std::acos(std::clamp(zb.z(), -1.0, 1.0));
+}
+
+namespace {
+double jointError(const World& world, int joint) {
+  const Constraint& c = *world.joints()[joint];
+  const auto bodyOf = [&](int i) -> const RigidBody& { return i == kWorldBody ? worldBody() : world.body(i); };
+  ConstraintRows rows;
+  const int n = c.dimension();
+  rows.C.resize(n);
+  rows.ja.resize(n, 6);
+  rows.jb.resize(n, 6);
+  rows.bias.resize(n);
+  c.evaluate(bodyOf(c.bodyA()), bodyOf(c.bodyB()), rows);
+  return n ? rows.C.cwiseAbs().maxCoeff() : 0.0;
+}
+}  // namespace
+
+double Hopper::kneeError(const World& world) const { return jointError(world, core_->model.knee_joint); }
+double Hopper::hipError(const World& world) const { return jointError(world, core_->model.hip_joint); }
+
+HopperShape Hopper::shape(const World& world) const {
+  const HopperModel& m = core_->model;
+  const RigidBody &b = world.body(m.body), &u = world.body(m.upper), &f = world.body(m.foot);
+  HopperShape s;
+  s.body_x = b.x;
+  s.body_q = b.q;
+  s.hip = u.pointToWorld(m.hip_in_upper);
+  s.upper_bottom = u.pointToWorld(-m.hip_in_upper);
+  s.toe = f.pointToWorld(m.toe_in_foot);
+  s.foot_top = f.pointToWorld(-m.toe_in_foot);
+  return s;
+}
+
+Eigen::Vector3d Hopper::backPoint() const {
+  return Eigen::Vector3d(-0.5 * params_.body_size.x(), 0.0, 0.1 * params_.body_size.z());
+}
+
+}  // namespace ponyhop

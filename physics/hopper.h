@@ -1,0 +1,139 @@
+// The Raibert hopper (Hecker, seed 000, "Hopper Demo"; Raibert, "Legged Robots That Balance"):
+// a massive body, a light upper leg hanging from it by a spherical hip, and a foot sliding in the
+// upper leg on a prismatic knee, hopping on the ground plane z = 0.
+//
+//   body ── hip: SphericalJoint (3 rows) ── upper leg ── knee: PrismaticJoint (5 rows) ── foot
+//   foot ── ground: GroundContact (0, 1, 3 or 4 rows: physics/contact.h)
+//
+// Control follows the method's split (seed 000, "Think" / "ComputeControllerForces"):
+//   Hopper::think(world)   once per step, before World::step(): the state machine over the hop
+//                          (FLIGHT, LOADING, COMPRESSION, THRUST, UNLOADING) and Raibert's three
+//                          parts; it only changes setpoints (HopperSetpoints).
+//   computeHopperForces()  the muscles: soft constraints (leg spring with thrust setpoint and end
+//                          stops, hip servos) from the current state, time and setpoints only;
+//                          smooth, stateless, callable at any time (RK4 stages). Installed with
+//                          World::setController.
+// The World must stay where it is (not be moved) while the hopper lives: the contact stage keeps
+// a pointer to it.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <memory>
+#include <string>
+
+#include "physics/contact.h"
+#include "physics/hopper_params.h"
+#include "physics/world.h"
+
+namespace ponyhop {
+
+// What Think sets and the force law reads.
+struct HopperSetpoints {
+  double leg_length = 0.8;     // m, r_set of the leg spring
+  double placement_x = 0.0;    // C_d of z_leg . x_body (leg direction in the body frame)
+  double placement_y = 0.0;    // C_d of z_leg . y_body
+  double heading = 0.0;        // rad, body yaw held in stance
+  double place_weight = 1.0;   // 0..1: leg placement + leg twist servos on (flight)
+  double attitude_weight = 0;  // 0..1: body attitude + heading servos on (stance)
+};
+
+// Indices and geometry the force law needs.
+struct HopperModel {
+  int body = -1, upper = -1, foot = -1;
+  int hip_joint = -1, knee_joint = -1;
+  Eigen::Vector3d hip_in_body = Eigen::Vector3d::Zero();   // hip point, body frame
+  Eigen::Vector3d hip_in_upper = Eigen::Vector3d::Zero();  // hip point, upper leg frame
+  Eigen::Vector3d toe_in_foot = Eigen::Vector3d::Zero();   // toe sphere centre, foot frame
+  HopperParams params;
+};
+
+// Leg length r (hip to the toe sphere's lowest point along the leg axis) and its rate r'.
+struct LegState {
+  double length = 0.0;
+  double rate = 0.0;
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // z of the upper leg: from toe toward hip
+};
+LegState legState(const HopperModel& m, const std::vector<RigidBody>& bodies);
+
+// ComputeControllerForces: adds the leg spring and the hip servo forces and torques to the
+// bodies' accumulators. Uses only the bodies' current state, t and the setpoints.
+void computeHopperForces(const HopperModel& m, const HopperSetpoints& s, double t, std::vector<RigidBody>& bodies);
+
+// Physical nonsense in the parameters: "" or a message naming the field.
+std::string validate(const HopperParams& p, const std::string& prefix = "hopper");
+
+// The drawable pose of the hopper.
+struct HopperShape {
+  Eigen::Vector3d body_x = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond body_q = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d hip = Eigen::Vector3d::Zero();
+  Eigen::Vector3d upper_bottom = Eigen::Vector3d::Zero();
+  Eigen::Vector3d foot_top = Eigen::Vector3d::Zero();
+  Eigen::Vector3d toe = Eigen::Vector3d::Zero();  // toe sphere centre
+};
+
+class Hopper {
+ public:
+  // Builds the bodies, joints, contact and controller into `world`. Invalid params: the world
+  // stops with the message (world.status()) and nothing is built.
+  Hopper(World& world, const HopperParams& params);
+
+  // Think (seed 000): the state machine; once per step, before world.step().
+  void think(World& world);
+
+  bool built() const { return core_ != nullptr; }
+  const HopperParams& params() const { return params_; }
+  const HopperModel& model() const { return core_->model; }
+  const HopperSetpoints& setpoints() const { return core_->setpoints; }
+  const GroundContact& contact() const { return *core_->contact; }
+
+  HopperPhase phase() const { return phase_; }
+  const char* phaseName() const { return enumName(phase_).data(); }
+  // The command in force at time t (the script's last key with key.t <= t, else params.command).
+  HopperCommand commandAt(double t) const;
+  bool inContact() const { return core_->contact->inContact(); }
+  int hops() const { return hops_; }                     // liftoffs so far
+  double measuredStanceTime() const { return stance_time_; }
+  double lastApex() const { return last_apex_; }         // m, body height at the last apex
+  double thrust() const { return thrust_; }              // m, last thrust setpoint extension
+
+  LegState leg(const World& world) const { return legState(core_->model, world.bodies()); }
+  Eigen::Vector3d footPoint(const World& world) const { return core_->contact->point(world); }
+  // Roll, pitch, yaw (rad) of the body: R = Rz(yaw) Ry(pitch) Rx(roll).
+  Eigen::Vector3d attitude(const World& world) const;
+  double tilt(const World& world) const;  // rad, body z from vertical
+  // Total mass and centre-of-mass velocity of body + leg.
+  double mass() const;
+  Eigen::Vector3d centerOfMassVelocity(const World& world) const;
+  // Largest |C| of the knee's five rows, and of the hip's three (m).
+  double kneeError(const World& world) const;
+  double hipError(const World& world) const;
+  HopperShape shape(const World& world) const;
+  // A point at the back of the body (body frame), where a ponytail hangs.
+  Eigen::Vector3d backPoint() const;
+
+ private:
+  struct Core {
+    HopperModel model;
+    HopperSetpoints setpoints;
+    std::unique_ptr<GroundContact> contact;
+  };
+  void updateSetpoints(const World& world, const HopperCommand& cmd, double dt);
+
+  HopperParams params_;
+  std::shared_ptr<Core> core_;
+  HopperPhase phase_ = HopperPhase::Flight;
+  double last_time_ = -1.0;
+  double touchdown_time_ = 0.0;
+  double stance_time_ = 0.2;
+  double flight_max_z_ = -1e300;
+  double last_apex_ = 0.0;
+  double thrust_ = 0.0;
+  double height_trim_ = 0.0;
+  double heading_ = 0.0;  // rad, slewed heading setpoint
+  int hops_ = 0;
+  int touchdowns_ = 0;
+};
+
+}  // namespace ponyhop
