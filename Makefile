@@ -43,7 +43,7 @@ test-asan: setup
 
 # Re-render every golden image and physics fingerprint on purpose (never done by tests or CI).
 update-snapshots: build
-	@PONYHOP_UPDATE_SNAPSHOTS=1 $(BUILD)/snapshot_test
+	@PONYHOP_UPDATE_SNAPSHOTS=1 $(BUILD)/tests/snapshot_test
 	@echo "goldens rewritten in tests/snapshots/: review them with git diff before committing"
 
 bench: build
