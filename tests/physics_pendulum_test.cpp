@@ -47,9 +47,11 @@ double measuredPeriod(Integrator integrator, Stabilization stabilization, double
   EXPECT_TRUE(cw.world.ok()) << cw.world.status();
 
   const RigidBody& link = cw.world.body(cw.chain.links[0]);
-  const double d = 0.5 * cp.length;
-  const double i_pivot = link.inertia.x() + link.mass * d * d;  // parallel axis theorem
-  *expected = 4.0 * std::sqrt(i_pivot / (link.mass * 9.81 * d)) * ellipticK(std::sin(theta0 / 2.0));
+  // Solid cylinder about a transverse axis through its end: m (3 r^2 + L^2) / 12 + m d^2
+  // (computed here from the parameters, not taken from the body, so a wrong inertia shows).
+  const double m = cp.mass, r = cp.radius, len = cp.length, d = 0.5 * len;
+  const double i_pivot = m * (3.0 * r * r + len * len) / 12.0 + m * d * d;
+  *expected = 4.0 * std::sqrt(i_pivot / (m * 9.81 * d)) * ellipticK(std::sin(theta0 / 2.0));
 
   const auto angle = [&] { return std::atan2(link.x.x(), -link.x.z()); };
   std::vector<double> crossings;
