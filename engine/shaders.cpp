@@ -75,7 +75,7 @@ float shadowFactor(vec3 P, vec3 N) {
   // 1) Blockers within the largest penumbra we allow.
   float searchR = u_maxPenumbraTexels * u_shadowTexel;
   float sumB = 0.0, nB = 0.0;
-  for (int i = 0; i < 12; ++i) {
+  for (int i = 0; i < 12; i += 2) {  // 6 of the 12 directions + the centre: cheap, and enough
     float d = texture(u_shadowDepth, c.xy + kPoisson[i] * searchR).r;
     if (d < c.z) { sumB += d; nB += 1.0; }
   }
@@ -89,8 +89,8 @@ float shadowFactor(vec3 P, vec3 N) {
   // 3) PCF: each tap is a hardware 2x2 bilinear depth compare.
   float sum = texture(u_shadowMap, c);
   for (int i = 0; i < 12; ++i) sum += texture(u_shadowMap, vec3(c.xy + kPoisson[i] * r, c.z));
-  for (int i = 0; i < 12; ++i) sum += texture(u_shadowMap, vec3(c.xy - kPoisson[i].yx * (0.5 * r), c.z));
-  return sum / 25.0;
+  for (int i = 0; i < 12; i += 3) sum += texture(u_shadowMap, vec3(c.xy - kPoisson[i].yx * (0.5 * r), c.z));
+  return sum / 17.0;
 }
 
 // Linear radiance of a surface point (before tone mapping).
