@@ -132,8 +132,16 @@ DiffResult compareImages(const Image& expected, const Image& actual, const DiffO
     if (diff_out) *diff_out = Image{};
     return r;
   }
-  r.same_size = true;
   const int w = expected.width, h = expected.height;
+  const size_t bytes = static_cast<size_t>(std::max(w, 0)) * static_cast<size_t>(std::max(h, 0)) * 4;
+  if (expected.rgba.size() != bytes || actual.rgba.size() != bytes) {
+    r.message = "inconsistent image: " + sizeText(expected) + " needs " + std::to_string(bytes) +
+                " bytes, got " + std::to_string(expected.rgba.size()) + " (expected) and " +
+                std::to_string(actual.rgba.size()) + " (actual)";
+    if (diff_out) *diff_out = Image{};
+    return r;  // same_size stays false: nothing was compared
+  }
+  r.same_size = true;
   r.pixels = static_cast<long>(w) * h;
   if (diff_out) *diff_out = Image(w, h, 255, 255, 255, 255);
   const double limit = kMaxYiqDelta * options.threshold * options.threshold;
