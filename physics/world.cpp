@@ -103,6 +103,7 @@ void World::updateKinematicBodies(double t) {
 }
 
 void World::applyExternalForces() {
+  const auto timed = clock_.time(Stage::ExternalForces);
   if (!ok()) return;
   for (RigidBody& b : bodies_) {
     b.force = b.isDynamic() ? Eigen::Vector3d(b.mass * params_.gravity) : Eigen::Vector3d::Zero();
@@ -122,6 +123,7 @@ void World::applyExternalForces() {
 }
 
 void World::applyControllerForces() {
+  const auto timed = clock_.time(Stage::Controller);
   if (!ok() || !controller_) return;
   controller_(stage_time_, bodies_);
   for (const RigidBody& b : bodies_) {
@@ -133,6 +135,7 @@ void World::applyControllerForces() {
 }
 
 void World::solveJointForces() {
+  const auto timed = clock_.time(Stage::JointForces);
   if (!ok()) return;
   system_.evaluate(bodies_, joints_);
   BaumgarteGains gains;
@@ -145,6 +148,7 @@ void World::solveJointForces() {
 }
 
 void World::integrate(double h) {
+  const auto timed = clock_.time(Stage::Integrate);
   if (!ok()) return;
   State state = gatherState();
   switch (params_.integrator) {
@@ -164,6 +168,7 @@ void World::integrate(double h) {
 }
 
 void World::stabilize() {
+  const auto timed = clock_.time(Stage::Stabilize);
   if (!ok() || params_.stabilization != Stabilization::Projection || joints_.empty()) return;
   updateKinematicBodies(time_);
   const ProjectionResult r = projectPositions(bodies_, joints_, system_, *solver_);
@@ -180,6 +185,7 @@ void World::stabilize() {
 }
 
 void World::resolveContacts() {
+  const auto timed = clock_.time(Stage::Contact);
   if (!ok() || !contact_) return;
   contact_(time_, bodies_);
   checkBodies("contact", false);

@@ -15,6 +15,7 @@
 #include "physics/integrator.h"
 #include "physics/physics_params.h"
 #include "physics/rigid_body.h"
+#include "physics/stage_times.h"
 
 namespace ponyhop {
 
@@ -65,6 +66,10 @@ class World {
   const ConstraintSolver& solver() const { return *solver_; }
   const Eigen::VectorXd& lambda() const { return solver_->lambda(); }
 
+  // Wall time per stage of step() since construction or the last reset (physics/stage_times.h).
+  const StageTimes& stageTimes() const { return clock_.times(); }
+  void resetStageTimes() { clock_.reset(); }
+
   double kineticEnergy() const;    // J, dynamic bodies
   double potentialEnergy() const;  // J, gravity + springs - reference
   double energy() const { return kineticEnergy() + potentialEnergy(); }
@@ -104,6 +109,7 @@ class World {
   double stage_time_ = 0.0;  // time of the force evaluation in progress (RK4 stages)
   double potential_reference_ = 0.0;
   std::string status_;
+  StageClock clock_;  // per-stage timing (stageTimes())
 };
 
 }  // namespace ponyhop
