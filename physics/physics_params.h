@@ -14,10 +14,12 @@ struct EnumNames<Integrator> {
   static constexpr std::array<std::string_view, 2> names{"symplectic_euler", "rk4"};
 };
 
-enum class SolverKind { Dense };
+// docs/SOLVERS.md: dense (J M^-1 J^T, LDLT, O(m^3)), tree (Baraff's block LDL^T of the augmented
+// system in tree order, O(n)), featherstone (reduced coordinates, articulated-body algorithm, O(n)).
+enum class SolverKind { Dense, Tree, Featherstone };
 template <>
 struct EnumNames<SolverKind> {
-  static constexpr std::array<std::string_view, 1> names{"dense"};
+  static constexpr std::array<std::string_view, 3> names{"dense", "tree", "featherstone"};
 };
 
 enum class Stabilization { None, Baumgarte, Projection };

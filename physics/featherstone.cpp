@@ -1,0 +1,596 @@
+#include "physics/featherstone.h"
+
+#include <Eigen/Cholesky>
+
+#include "physics/integrator.h"
+#include "physics/prismatic_joint.h"
+#include "physics/spherical_joint.h"
+
+namespace ponyhop {
+
+namespace {
+
+using Matrix6 = ArticulatedSystem::Matrix6;
+using Motion = ArticulatedSystem::Motion;
+using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 6, 6>;
+using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, 6, 1>;
+
+const RigidBody& bodyOf(const std::vector<RigidBody>& bodies, int i) { return i == kWorldBody ? worldBody() : bodies[i]; }
+bool dynamicBody(const std::vector<RigidBody>& bodies, int i) { return i != kWorldBody && bodies[i].isDynamic(); }
+
+// X = [ I  -d~ ; 0  I ]: velocity of the point x_i from the twist at x_p (d = x_i - x_p);
+// X^T moves a force from x_i to x_p (same force, torque + d x f).
+Matrix6 shift(const Eigen::Vector3d& d) {
+  Matrix6 x = Matrix6::Identity();
+  x.topRightCorner<3, 3>() = -skew(d);
+  return x;
+}
+Vector6d shiftMotion(const Eigen::Vector3d& d, const Vector6d& a) {
+  Vector6d out = a;
+  out.head<3>() += a.tail<3>().cross(d);
+  return out;
+}
+Vector6d shiftForce(const Eigen::Vector3d& d, const Vector6d& f) {
+  Vector6d out = f;
+  out.tail<3>() += d.cross(f.head<3>());
+  return out;
+}
+
+// Newton-Euler at the centre: F = M A + b, M = diag(m I, I_world), b = [-f; w x I w - t].
+Matrix6 spatialInertia(const RigidBody& b) {
+  Matrix6 m = Matrix6::Zero();
+  m.topLeftCorner<3, 3>().diagonal().setConstant(b.mass);
+  m.bottomRightCorner<3, 3>() = b.worldInertia();
+  return m;
+}
+Vector6d biasForce(const RigidBody& b) {
+  Vector6d out;
+  out.head<3>() = -b.force;
+  out.tail<3>() = b.w.cross(b.worldInertia() * b.w) - b.torque;
+  return out;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// The tree
+
+std::string ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Constraints& joints) {
+  std::vector<int> sig{static_cast<int>(bodies.size()), static_cast<int>(joints.size())};
+  for (const RigidBody& b : bodies) sig.push_back(b.isDynamic() ? 1 : 0);
+  for (const auto& j : joints) sig.insert(sig.end(), {j->bodyA(), j->bodyB()});
+  if (sig == signature_) return error_;
+  signature_ = sig;
+  nodes_.clear();
+  dofs_ = 0;
+  have_state_ = false;
+  const auto fail = [&](std::string e) {
+    nodes_.clear();
+    error_ = "solver 'featherstone': " + std::move(e) + "; use physics.solver = tree or dense for this scene";
+    return error_;
+  };
+  const auto name = [&](int b) { return b == kWorldBody ? std::string("world") : "'" + bodies[b].name + "'"; };
+
+  const size_t n = bodies.size();
+  std::vector<std::vector<std::pair<int, int>>> adjacent(n);  // (joint, other body) between dynamic bodies
+  std::vector<int> grounding(n, -1);                          // joint to the world or a prescribed body
+  for (size_t j = 0; j < joints.size(); ++j) {
+    const Constraint& c = *joints[j];
+    if (!dynamic_cast<const SphericalJoint*>(&c) && !dynamic_cast<const PrismaticJoint*>(&c)) {
+      return fail("joint " + std::to_string(j) + " ('" + c.typeName() +
+                  "') cannot be expressed in reduced coordinates (spherical and prismatic joints only; a contact "
+                  "closes a loop through the ground)");
+    }
+    const int a = c.bodyA(), b = c.bodyB();
+    const bool da = dynamicBody(bodies, a), db = dynamicBody(bodies, b);
+    if (da && db) {
+      adjacent[a].push_back({static_cast<int>(j), b});
+      adjacent[b].push_back({static_cast<int>(j), a});
+    } else if (da || db) {
+      const int body = da ? a : b;
+      if (grounding[body] >= 0) {
+        return fail("body " + name(body) + " is held by joints " + std::to_string(grounding[body]) + " and " +
+                    std::to_string(j) + " to prescribed bodies: a closed loop");
+      }
+      grounding[body] = static_cast<int>(j);
+    }
+  }
+
+  std::vector<char> seen(n, 0);
+  std::vector<int> parent_joint(n, -1);
+  for (size_t start = 0; start < n; ++start) {
+    if (seen[start] || !bodies[start].isDynamic()) continue;
+    // The component: its root is the body held by the world / a prescribed body, else the
+    // first body (a free-floating base). Two such holds make a loop through the world.
+    std::vector<int> component{static_cast<int>(start)};
+    seen[start] = 1;
+    for (size_t k = 0; k < component.size(); ++k) {
+      for (const auto& [j, other] : adjacent[component[k]]) {
+        if (!seen[other]) {
+          seen[other] = 1;
+          component.push_back(other);
+        }
+      }
+    }
+    int root = component.front(), held = -1;
+    for (int b : component) {
+      if (grounding[b] < 0) continue;
+      if (held >= 0) {
+        return fail("bodies " + name(held) + " and " + name(b) +
+                    " of one connected system are both held by the world or a prescribed body: a closed loop");
+      }
+      held = root = b;
+    }
+    for (int b : component) seen[b] = 2;  // 2: in this component, not yet placed
+
+    // Breadth-first from the root: parents before children. Reaching a placed body again
+    // through another joint is a loop.
+    const size_t first = nodes_.size();
+    const auto addNode = [&](int body, int parent, int joint) -> std::string {
+      Node nd;
+      nd.body = body;
+      nd.parent = parent;
+      nd.dof = dofs_;
+      if (dynamicBody(bodies, parent)) {
+        for (size_t k = first; k < nodes_.size(); ++k) {
+          if (nodes_[k].body == parent) nd.parent_node = static_cast<int>(k);
+        }
+      }
+      const RigidBody& p = bodyOf(bodies, parent);
+      const RigidBody& c = bodies[body];
+      if (joint < 0) {
+        nd.type = Type::Free;
+        nd.dofs = 6;
+      } else if (const auto* s = dynamic_cast<const SphericalJoint*>(joints[joint].get())) {
+        nd.type = Type::Spherical;
+        nd.dofs = 3;
+        const bool parent_is_a = s->bodyA() == parent && s->bodyB() == body;
+        nd.point_parent = parent_is_a ? s->pointA() : s->pointB();
+        nd.point_child = parent_is_a ? s->pointB() : s->pointA();
+      } else {
+        const auto* pj = dynamic_cast<const PrismaticJoint*>(joints[joint].get());
+        if (pj->bodyA() != parent) {
+          return "prismatic joint " + std::to_string(joint) + " has its sliding frame on " + name(pj->bodyA()) +
+                 ", which is the child here (the frame must be on the parent, the body nearer the root)";
+        }
+        nd.type = Type::Prismatic;
+        nd.dofs = 1;
+        // Geometry from the joint as it is now (it holds C = 0): Q0 = q_p^-1 q_c, z and
+        // e = R_p^T (x_c - x_p) - s z in the parent's frame, so x_c = x_p + R_p (e + s z).
+        const Eigen::Matrix3d rp = p.rotation();
+        nd.rest = (p.q.conjugate() * c.q).normalized();
+        nd.axis = (rp.transpose() * pj->axis(p)).normalized();
+        nd.offset = rp.transpose() * (c.x - p.x) - pj->slide(p, c) * nd.axis;
+      }
+      dofs_ += nd.dofs;
+      nodes_.push_back(nd);
+      return "";
+    };
+    if (std::string e = addNode(root, held >= 0 ? (joints[grounding[root]]->bodyA() == root
+                                                        ? joints[grounding[root]]->bodyB()
+                                                        : joints[grounding[root]]->bodyA())
+                                                 : kWorldBody,
+                                held >= 0 ? grounding[root] : -1);
+        !e.empty()) {
+      return fail(e);
+    }
+    seen[root] = 1;
+    for (size_t k = first; k < nodes_.size(); ++k) {
+      const int body = nodes_[k].body;
+      for (const auto& [j, other] : adjacent[body]) {
+        if (j == parent_joint[body]) continue;
+        if (seen[other] == 1) {
+          return fail("joint " + std::to_string(j) + " between " + name(body) + " and " + name(other) +
+                      " closes a loop");
+        }
+        seen[other] = 1;
+        parent_joint[other] = j;
+        if (std::string e = addNode(other, body, j); !e.empty()) return fail(e);
+        nodes_[k].children.push_back(static_cast<int>(nodes_.size()) - 1);
+      }
+    }
+  }
+  coords_.x.assign(nodes_.size(), Eigen::Vector3d::Zero());
+  coords_.q.assign(nodes_.size(), Eigen::Quaterniond::Identity());
+  coords_.s.assign(nodes_.size(), 0.0);
+  u_.setZero(dofs_);
+  error_.clear();
+  return error_;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Maximal <-> joint coordinates
+
+void ArticulatedSystem::readState(const std::vector<RigidBody>& bodies) {
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    const Node& nd = nodes_[i];
+    const RigidBody& p = bodyOf(bodies, nd.parent);
+    const RigidBody& b = bodies[nd.body];
+    switch (nd.type) {
+      case Type::Free:
+        coords_.x[i] = b.x;
+        coords_.q[i] = b.q.normalized();
+        u_.segment<3>(nd.dof) = b.v;
+        u_.segment<3>(nd.dof + 3) = b.w;
+        break;
+      case Type::Spherical:
+        coords_.q[i] = (p.q.conjugate() * b.q).normalized();
+        u_.segment<3>(nd.dof) = p.rotation().transpose() * (b.w - p.w);
+        break;
+      case Type::Prismatic: {
+        const Eigen::Vector3d d = b.x - p.x;
+        coords_.s[i] = (p.rotation().transpose() * d - nd.offset).dot(nd.axis);
+        u_(nd.dof) = (b.v - p.v - p.w.cross(d)).dot(p.q * nd.axis);
+        break;
+      }
+    }
+  }
+  have_state_ = true;
+}
+
+// Forward kinematics, parents first:
+//   spherical: q_i = q_p Q, joint point P = x_p + r_p (r_p = q_p point_p), x_i = P - r_i,
+//              w_i = w_p + R_p omega, v_i = v_p + w_p x r_p - w_i x r_i (both ends of the joint
+//              move with P);
+//   prismatic: q_i = q_p Q0, d = R_p (e + s z), x_i = x_p + d, w_i = w_p, v_i = v_p + w_p x d + s' R_p z.
+void ArticulatedSystem::writeState(std::vector<RigidBody>& bodies) const {
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    const Node& nd = nodes_[i];
+    const RigidBody& p = bodyOf(bodies, nd.parent);
+    RigidBody& b = bodies[nd.body];
+    switch (nd.type) {
+      case Type::Free:
+        b.x = coords_.x[i];
+        b.q = coords_.q[i].normalized();
+        b.v = u_.segment<3>(nd.dof);
+        b.w = u_.segment<3>(nd.dof + 3);
+        break;
+      case Type::Spherical: {
+        b.q = (p.q * coords_.q[i].normalized()).normalized();
+        const Eigen::Vector3d r_p = p.q * nd.point_parent;
+        const Eigen::Vector3d r_i = b.q * nd.point_child;
+        b.x = p.x + r_p - r_i;
+        b.w = p.w + p.q * Eigen::Vector3d(u_.segment<3>(nd.dof));
+        b.v = p.v + p.w.cross(r_p) - b.w.cross(r_i);
+        break;
+      }
+      case Type::Prismatic: {
+        b.q = (p.q * nd.rest).normalized();
+        const Eigen::Vector3d d = p.q * (nd.offset + coords_.s[i] * nd.axis);
+        b.x = p.x + d;
+        b.w = p.w;
+        b.v = p.v + p.w.cross(d) + u_(nd.dof) * (p.q * nd.axis);
+        break;
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Joint kinematics: S and c in A_i = X_i A_p + S_i u' + c_i.
+//
+// Spherical (r_p = R_p point_p, r_i = R_i point_i, d = x_i - x_p = r_p - r_i, omega in p's frame):
+//   w_i = w_p + R_p omega                       => S angular = R_p
+//   v_i = v_p + w_p x r_p - w_i x r_i
+//       = v_p + w_p x d + r_i x (R_p omega)     => S linear = r_i~ R_p
+//   alpha_i = alpha_p + R_p omega' + w_p x (R_p omega)          => c angular = w_p x (R_p omega)
+//   a_i = a_p + alpha_p x r_p + w_p x (w_p x r_p) - alpha_i x r_i - w_i x (w_i x r_i)
+//       = a_p + alpha_p x d + r_i x (R_p omega') + c linear,
+//   c linear = w_p x (w_p x r_p) - w_i x (w_i x r_i) - (c angular) x r_i
+//   (the spherical joint's J'q' of physics/spherical_joint.cpp plus the relative term).
+// Prismatic (z = R_p z_local, d = x_i - x_p, d' = w_p x d + s' z):
+//   w_i = w_p, v_i = v_p + w_p x d + s' z          => S = [z; 0]
+//   a_i = a_p + alpha_p x d + w_p x (w_p x d) + 2 s' w_p x z + s'' z
+//   c = [w_p x (w_p x d) + 2 s' w_p x z; 0]
+// Free root: S = I (u = [v; w]), c = 0.
+void ArticulatedSystem::jointKinematics(const std::vector<RigidBody>& bodies, std::vector<Kinematics>& out) const {
+  out.resize(nodes_.size());
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    const Node& nd = nodes_[i];
+    const RigidBody& p = bodyOf(bodies, nd.parent);
+    const RigidBody& b = bodies[nd.body];
+    Kinematics& k = out[i];
+    k.c.setZero();
+    k.a_base.setZero();
+    k.d = b.x - p.x;
+    switch (nd.type) {
+      case Type::Free:
+        k.d.setZero();
+        k.S = Matrix6::Identity();
+        break;
+      case Type::Spherical: {
+        const Eigen::Matrix3d rp = p.rotation();
+        const Eigen::Vector3d r_p = p.q * nd.point_parent;
+        const Eigen::Vector3d r_i = b.q * nd.point_child;
+        const Eigen::Vector3d w_rel = rp * u_.segment<3>(nd.dof);
+        k.S.resize(6, 3);
+        k.S.topRows<3>() = skew(r_i) * rp;
+        k.S.bottomRows<3>() = rp;
+        const Eigen::Vector3d c_ang = p.w.cross(w_rel);
+        k.c.head<3>() = p.w.cross(p.w.cross(r_p)) - b.w.cross(b.w.cross(r_i)) - c_ang.cross(r_i);
+        k.c.tail<3>() = c_ang;
+        break;
+      }
+      case Type::Prismatic: {
+        const Eigen::Vector3d z = p.q * nd.axis;
+        k.S.resize(6, 1);
+        k.S.col(0) << z, Eigen::Vector3d::Zero();
+        k.c.head<3>() = p.w.cross(p.w.cross(k.d)) + 2.0 * u_(nd.dof) * p.w.cross(z);
+        break;
+      }
+    }
+    // A prescribed parent's (or the world's) acceleration is the base acceleration.
+    if (nd.type != Type::Free && nd.parent_node < 0) {
+      Vector6d ap;
+      ap << p.a, p.alpha;
+      k.a_base = shiftMotion(k.d, ap);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// ABA (Featherstone; seed 001: "a = f + b ... Invert f = I^A a + p^A ... Propagate I^A, p^A
+// inward ... Solve for q'' ... Propagate a outward"):
+//   pass 1 (forward kinematics): writeState() and jointKinematics().
+//   pass 2 (leaves to root): I^A_i = M_i + sum_c X_c^T I^a_c X_c,  p^A_i = b_i + sum_c X_c^T p^a_c,
+//     U = I^A S, D = S^T U, u = tau - S^T p^A,
+//     I^a = I^A - U D^-1 U^T,  p^a = p^A + I^a c + U D^-1 u.
+//   pass 3 (root to leaves): A' = X A_p + c,  u' = D^-1 (u - U^T A'),  A = A' + S u'.
+// The joint force on i (from its parent, at i's centre) is F^J_i = I^A_i A_i + p^A_i; a body's
+// constraint force is F^J_i - sum_c X_c^T F^J_c.
+Eigen::VectorXd ArticulatedSystem::forwardDynamics(std::vector<RigidBody>& bodies, const Eigen::VectorXd& tau) {
+  const size_t n = nodes_.size();
+  std::vector<Kinematics> kin;
+  jointKinematics(bodies, kin);
+  std::vector<Matrix6> ia(n);
+  std::vector<Vector6d> pa(n), acc(n);
+  std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, 6>> U(n);
+  std::vector<Small> dinv(n);
+  std::vector<SmallVec> uu(n);
+  for (size_t i = 0; i < n; ++i) {
+    ia[i] = spatialInertia(bodies[nodes_[i].body]);
+    pa[i] = biasForce(bodies[nodes_[i].body]);
+  }
+  for (size_t r = n; r-- > 0;) {
+    const Node& nd = nodes_[r];
+    const Kinematics& k = kin[r];
+    U[r] = ia[r] * k.S;
+    const Small d = k.S.transpose() * U[r];
+    dinv[r] = d.llt().solve(Small::Identity(nd.dofs, nd.dofs));
+    uu[r] = -k.S.transpose() * pa[r];
+    if (tau.size() == dofs_) uu[r] += tau.segment(nd.dof, nd.dofs);
+    if (nd.parent_node < 0) continue;
+    const Matrix6 ia_a = ia[r] - U[r] * dinv[r] * U[r].transpose();
+    const Vector6d pa_a = pa[r] + ia_a * k.c + U[r] * (dinv[r] * uu[r]);
+    const Matrix6 x = shift(k.d);
+    ia[nd.parent_node] += x.transpose() * ia_a * x;
+    pa[nd.parent_node] += shiftForce(k.d, pa_a);
+  }
+  Eigen::VectorXd udot(dofs_);
+  for (size_t i = 0; i < n; ++i) {
+    const Node& nd = nodes_[i];
+    const Kinematics& k = kin[i];
+    const Vector6d a_prime = (nd.parent_node >= 0 ? shiftMotion(k.d, acc[nd.parent_node]) : k.a_base) + k.c;
+    const SmallVec ud = dinv[i] * (uu[i] - U[i].transpose() * a_prime);
+    udot.segment(nd.dof, nd.dofs) = ud;
+    acc[i] = a_prime + k.S * ud;
+  }
+  // Accelerations and constraint forces of the bodies.
+  std::vector<Vector6d> fj(n), fc(n);
+  for (size_t i = 0; i < n; ++i) fc[i] = fj[i] = ia[i] * acc[i] + pa[i];
+  for (size_t i = 0; i < n; ++i) {
+    if (nodes_[i].parent_node >= 0) fc[nodes_[i].parent_node] -= shiftForce(kin[i].d, fj[i]);
+  }
+  for (size_t i = 0; i < n; ++i) {
+    RigidBody& b = bodies[nodes_[i].body];
+    b.a = acc[i].head<3>();
+    b.alpha = acc[i].tail<3>();
+    b.constraint_force = fc[i].head<3>();
+    b.constraint_torque = fc[i].tail<3>();
+  }
+  return udot;
+}
+
+// RNEA (seed 001: "propagate velocities and accelerations outward, forces inward"):
+//   A_i = X A_p + S u' + c,  F_i = M_i A_i + b_i + sum_c X_c^T F_c,  tau_i = S^T F_i.
+Eigen::VectorXd ArticulatedSystem::inverseDynamics(const std::vector<RigidBody>& bodies,
+                                                   const Eigen::VectorXd& udot) const {
+  const size_t n = nodes_.size();
+  std::vector<Kinematics> kin;
+  jointKinematics(bodies, kin);
+  std::vector<Vector6d> acc(n), f(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Node& nd = nodes_[i];
+    const Kinematics& k = kin[i];
+    acc[i] = (nd.parent_node >= 0 ? shiftMotion(k.d, acc[nd.parent_node]) : k.a_base) + k.c +
+             k.S * udot.segment(nd.dof, nd.dofs);
+    f[i] = spatialInertia(bodies[nd.body]) * acc[i] + biasForce(bodies[nd.body]);
+  }
+  Eigen::VectorXd tau(dofs_);
+  for (size_t r = n; r-- > 0;) {
+    const Node& nd = nodes_[r];
+    tau.segment(nd.dof, nd.dofs) = kin[r].S.transpose() * f[r];
+    if (nd.parent_node >= 0) f[nd.parent_node] += shiftForce(kin[r].d, f[r]);
+  }
+  return tau;
+}
+
+// CRBA (seed 001, "Composite Rigid-Body Algorithm"): I^C_i = M_i + sum_c X_c^T I^C_c X_c;
+// H_ii = S_i^T I^C_i S_i; then F = I^C_i S_i carried toward the root, F <- X_j^T F, gives
+// H_ji = S_j^T F for every ancestor j. H = Phi^T M Phi (Phi: u -> all body twists), so it is
+// symmetric positive definite.
+Eigen::MatrixXd ArticulatedSystem::massMatrix(const std::vector<RigidBody>& bodies) const {
+  const size_t n = nodes_.size();
+  std::vector<Kinematics> kin;
+  jointKinematics(bodies, kin);
+  std::vector<Matrix6> ic(n);
+  for (size_t i = 0; i < n; ++i) ic[i] = spatialInertia(bodies[nodes_[i].body]);
+  for (size_t r = n; r-- > 0;) {
+    if (nodes_[r].parent_node < 0) continue;
+    const Matrix6 x = shift(kin[r].d);
+    ic[nodes_[r].parent_node] += x.transpose() * ic[r] * x;
+  }
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(dofs_, dofs_);
+  for (size_t i = 0; i < n; ++i) {
+    const Node& ni = nodes_[i];
+    Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, 6> f = ic[i] * kin[i].S;
+    h.block(ni.dof, ni.dof, ni.dofs, ni.dofs) = kin[i].S.transpose() * f;
+    for (int j = static_cast<int>(i); nodes_[j].parent_node >= 0;) {
+      f = shift(kin[j].d).transpose() * f;
+      j = nodes_[j].parent_node;
+      const Node& nj = nodes_[j];
+      h.block(nj.dof, ni.dof, nj.dofs, ni.dofs) = kin[j].S.transpose() * f;
+      h.block(ni.dof, nj.dof, ni.dofs, nj.dofs) = h.block(nj.dof, ni.dof, nj.dofs, ni.dofs).transpose();
+    }
+  }
+  return h;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Time stepping in joint space
+
+std::string ArticulatedSystem::derivative(double t, const Coordinates& c, const Eigen::VectorXd& u,
+                                          std::vector<RigidBody>& bodies, const ReducedHooks& hooks,
+                                          Eigen::VectorXd& udot) {
+  coords_ = c;
+  u_ = u;
+  hooks.kinematics(t);
+  writeState(bodies);
+  if (!hooks.forces()) return "";  // the world stopped itself with its own message
+  udot = forwardDynamics(bodies);
+  if (!udot.allFinite()) return "non-finite joint accelerations";
+  return "";
+}
+
+// Position rates: x' = v; q' = 1/2 (0, w) q (free, world w); Q' = 1/2 (0, omega) Q (spherical,
+// omega in the parent frame); s' = u (prismatic).
+void ArticulatedSystem::rates(const Coordinates& c, const Eigen::VectorXd& u, Coordinates& out) const {
+  out = c;
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    const Node& nd = nodes_[i];
+    switch (nd.type) {
+      case Type::Free:
+        out.x[i] = u.segment<3>(nd.dof);
+        out.q[i] = quaternionRate(u.segment<3>(nd.dof + 3), c.q[i]);
+        break;
+      case Type::Spherical:
+        out.q[i] = quaternionRate(u.segment<3>(nd.dof), c.q[i]);
+        break;
+      case Type::Prismatic:
+        out.s[i] = u(nd.dof);
+        break;
+    }
+  }
+}
+
+std::string ArticulatedSystem::step(double t, double h, Integrator integrator, std::vector<RigidBody>& bodies,
+                                    const ReducedHooks& hooks) {
+  if (!have_state_ || bodiesChanged(bodies)) readState(bodies);
+  const Coordinates c0 = coords_;
+  const Eigen::VectorXd u0 = u_;
+  const auto axpy = [&](const Coordinates& base, double s, const Coordinates& rate, Coordinates& out) {
+    out = base;
+    for (size_t i = 0; i < nodes_.size(); ++i) {
+      out.x[i] += s * rate.x[i];
+      out.q[i].coeffs() += s * rate.q[i].coeffs();
+      out.s[i] += s * rate.s[i];
+    }
+  };
+  Eigen::VectorXd k1, k2, k3, k4;
+  switch (integrator) {
+    case Integrator::SymplecticEuler: {
+      // u += h u'(t, y); positions with the new speeds (exact exponential map for rotations).
+      if (std::string e = derivative(t, c0, u0, bodies, hooks, k1); !e.empty() || k1.size() != dofs_) return e;
+      u_ = u0 + h * k1;
+      coords_ = c0;
+      for (size_t i = 0; i < nodes_.size(); ++i) {
+        const Node& nd = nodes_[i];
+        switch (nd.type) {
+          case Type::Free:
+            coords_.x[i] += h * u_.segment<3>(nd.dof);
+            coords_.q[i] = (quaternionFromRotationVector(h * u_.segment<3>(nd.dof + 3)) * c0.q[i]).normalized();
+            break;
+          case Type::Spherical:
+            coords_.q[i] = (quaternionFromRotationVector(h * u_.segment<3>(nd.dof)) * c0.q[i]).normalized();
+            break;
+          case Type::Prismatic:
+            coords_.s[i] += h * u_(nd.dof);
+            break;
+        }
+      }
+      break;
+    }
+    case Integrator::RK4: {
+      // Classical RK4 on (coordinates, u), as physics/rk4.cpp does for bodies: stage quaternions
+      // used as they are (normalized when written to bodies), the result renormalized.
+      Coordinates r1, r2, r3, r4, y;
+      Eigen::VectorXd u2, u3, u4;
+      rates(c0, u0, r1);
+      if (std::string e = derivative(t, c0, u0, bodies, hooks, k1); !e.empty() || k1.size() != dofs_) return e;
+      axpy(c0, 0.5 * h, r1, y);
+      u2 = u0 + 0.5 * h * k1;
+      rates(y, u2, r2);
+      if (std::string e = derivative(t + 0.5 * h, y, u2, bodies, hooks, k2); !e.empty() || k2.size() != dofs_) return e;
+      axpy(c0, 0.5 * h, r2, y);
+      u3 = u0 + 0.5 * h * k2;
+      rates(y, u3, r3);
+      if (std::string e = derivative(t + 0.5 * h, y, u3, bodies, hooks, k3); !e.empty() || k3.size() != dofs_) return e;
+      axpy(c0, h, r3, y);
+      u4 = u0 + h * k3;
+      rates(y, u4, r4);
+      if (std::string e = derivative(t + h, y, u4, bodies, hooks, k4); !e.empty() || k4.size() != dofs_) return e;
+      Coordinates sum = c0;
+      for (size_t i = 0; i < nodes_.size(); ++i) {
+        sum.x[i] += h / 6.0 * (r1.x[i] + 2.0 * r2.x[i] + 2.0 * r3.x[i] + r4.x[i]);
+        sum.q[i].coeffs() +=
+            h / 6.0 * (r1.q[i].coeffs() + 2.0 * r2.q[i].coeffs() + 2.0 * r3.q[i].coeffs() + r4.q[i].coeffs());
+        sum.q[i].normalize();
+        sum.s[i] += h / 6.0 * (r1.s[i] + 2.0 * r2.s[i] + 2.0 * r3.s[i] + r4.s[i]);
+      }
+      coords_ = sum;
+      u_ = u0 + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+      break;
+    }
+    default:
+      return std::string("solver 'featherstone' integrates in joint space with rk4 or symplectic_euler; "
+                         "physics.integrator = '") +
+             std::string(enumName(integrator)) + "' is not available with it";
+  }
+  hooks.kinematics(t + h);
+  writeState(bodies);
+  remember(bodies);
+  return "";
+}
+
+std::string ArticulatedSystem::evaluate(double t, std::vector<RigidBody>& bodies, const ReducedHooks& hooks) {
+  if (!have_state_ || bodiesChanged(bodies)) readState(bodies);
+  Eigen::VectorXd udot;
+  const Coordinates c = coords_;
+  const Eigen::VectorXd u = u_;
+  std::string e = derivative(t, c, u, bodies, hooks, udot);
+  remember(bodies);
+  return e;
+}
+
+// Someone outside (a contact handler, the UI, a test) may set the bodies between steps: then the
+// joint coordinates are read again from them (bit-exact comparison with what was written).
+bool ArticulatedSystem::bodiesChanged(const std::vector<RigidBody>& bodies) const {
+  if (written_.size() != nodes_.size()) return true;
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    const RigidBody& b = bodies[nodes_[i].body];
+    Eigen::Matrix<double, 13, 1> s;
+    s << b.x, b.q.coeffs(), b.v, b.w;
+    if (s != written_[i]) return true;
+  }
+  return false;
+}
+
+void ArticulatedSystem::remember(const std::vector<RigidBody>& bodies) {
+  written_.resize(nodes_.size());
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    const RigidBody& b = bodies[nodes_[i].body];
+    written_[i] << b.x, b.q.coeffs(), b.v, b.w;
+  }
+}
+
+}  // namespace ponyhop

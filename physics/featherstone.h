@@ -1,0 +1,142 @@
+// Reduced (joint) coordinates for tree-shaped systems (Featherstone; seed 001, "Recursive
+// Newton-Euler", "Composite Rigid-Body", "Articulated-Body Algorithm"): physics.solver =
+// featherstone. The state is kept in joint coordinates, so joints hold by construction (no
+// drift, nothing to stabilize); the maximal-coordinate bodies (x, q, v, w) are written back after
+// every evaluation for drawing, energy, force elements and output.
+//
+// Joint coordinates and speeds (node i = one dynamic body and the joint to its parent):
+//   free root   (a dynamic body with no joint to the world or a kinematic body): x, q of the body;
+//               u = [v; w] (world frame, centre of mass). 6 dofs.
+//   spherical   Q = q_p^-1 q_i (a unit quaternion, child relative to parent); u = omega, the
+//               relative angular velocity in the parent's frame: w_i = w_p + R_p omega and
+//               Q' = 1/2 (0, omega) Q. 3 dofs.
+//   prismatic   s, the slide along z (fixed in the parent a); the child keeps the orientation
+//               q_i = q_p Q0 and x_i = x_p + R_p (e + s z). 1 dof.
+// The parent of a root joint may be the world or a kinematic body (the chain's anchor, the head):
+// its prescribed velocity and acceleration enter as the base motion.
+//
+// Spatial quantities are world-frame 6-vectors at each body's centre of mass: V = [v; w],
+// A = [a; alpha] (the ordinary accelerations), F = [f; tau about the centre]. A joint relates
+// child and parent as
+//   V_i = X_i V_p + S_i u_i,    A_i = X_i A_p + S_i u_i' + c_i,    F_p = X_i^T F_i,
+//   X_i = [ I  -d~ ; 0  I ],  d = x_i - x_p  (a rigid shift of the reference point),
+// where S_i (6 x dofs) and the velocity-product term c_i are derived above jointKinematics() in
+// featherstone.cpp. Each body obeys Newton-Euler at its centre: F = M_i A_i + b_i with
+// M_i = diag(m I, I_world) and b_i = [-f_ext; w x I w - t_ext] (gravity, force elements and the
+// controller's forces are the bodies' accumulators, exactly as in the multiplier path).
+//
+//   ABA (forward dynamics, O(n)): three passes, see forwardDynamics().
+//   RNEA (inverse dynamics, O(n)): tau = S^T F^J given u'.
+//   CRBA (joint-space mass matrix H = Phi^T M Phi, O(n d) for depth d): composite inertias.
+// Cross-checks (tests/physics_featherstone_test.cpp): RNEA(ABA(tau)) = tau; H is SPD and
+// H^-1 (tau - C) with C = RNEA(0) equals ABA; ABA's body accelerations equal the multiplier
+// solvers' on the same state.
+//
+// What it cannot express, reported by build() as a message naming the solver: closed loops
+// (two joints reaching one body, or two joints to the world/kinematic bodies in one
+// component), contacts and any joint type other than spherical and prismatic, a prismatic joint
+// whose sliding frame is on the child.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "physics/constraint.h"
+#include "physics/physics_params.h"
+#include "physics/rigid_body.h"
+
+namespace ponyhop {
+
+// What World lends the reduced step at each force evaluation.
+struct ReducedHooks {
+  std::function<void(double t)> kinematics;  // prescribed bodies at time t
+  std::function<bool()> forces;              // external + controller forces into the accumulators
+};
+
+class ArticulatedSystem {
+ public:
+  using Matrix6 = Eigen::Matrix<double, 6, 6>;
+  using Motion = Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, 6>;  // S, 6 x dofs
+
+  // Tree from the world's bodies and joints. "" or what it cannot express. Cheap to call every
+  // step: rebuilds only when the bodies or joints changed.
+  std::string build(const std::vector<RigidBody>& bodies, const Constraints& joints);
+
+  // Joint coordinates from the maximal bodies (initial state, or after someone changed them).
+  void readState(const std::vector<RigidBody>& bodies);
+  // Forward kinematics: the dynamic bodies' x, q, v, w from the joint coordinates (kinematic
+  // bodies must be at the current time).
+  void writeState(std::vector<RigidBody>& bodies) const;
+
+  // ABA. Uses the bodies' accumulated forces and the kinematic bodies' accelerations; writes
+  // every dynamic body's a, alpha and constraint force/torque; returns u' for the generalized
+  // forces tau (zero if empty). The bodies must be written (writeState) at the current state.
+  Eigen::VectorXd forwardDynamics(std::vector<RigidBody>& bodies, const Eigen::VectorXd& tau = {});
+  // RNEA: the generalized forces that produce u' with the bodies' accumulated forces.
+  Eigen::VectorXd inverseDynamics(const std::vector<RigidBody>& bodies, const Eigen::VectorXd& udot) const;
+  // CRBA: the joint-space mass matrix H (dofs x dofs).
+  Eigen::MatrixXd massMatrix(const std::vector<RigidBody>& bodies) const;
+
+  // One step of size h from time t in joint space (rk4 or symplectic_euler), then the bodies
+  // written back at t + h. "" or what went wrong.
+  std::string step(double t, double h, Integrator integrator, std::vector<RigidBody>& bodies,
+                   const ReducedHooks& hooks);
+  // The force evaluation at time t without stepping (World::evaluate).
+  std::string evaluate(double t, std::vector<RigidBody>& bodies, const ReducedHooks& hooks);
+
+  int dofs() const { return dofs_; }
+  int nodeCount() const { return static_cast<int>(nodes_.size()); }
+  const Eigen::VectorXd& velocities() const { return u_; }
+
+ private:
+  enum class Type { Free, Spherical, Prismatic };
+  struct Node {
+    Type type = Type::Free;
+    int body = -1;         // the child body
+    int parent = kWorldBody;  // parent body index (world, kinematic or dynamic)
+    int parent_node = -1;  // node of the parent when it is dynamic
+    int dof = 0;           // first index in u
+    int dofs = 0;
+    Eigen::Vector3d point_parent = Eigen::Vector3d::Zero();  // spherical: in the parent's frame
+    Eigen::Vector3d point_child = Eigen::Vector3d::Zero();   // spherical: in the child's frame
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();        // prismatic: e (parent frame)
+    Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();         // prismatic: z (parent frame)
+    Eigen::Quaterniond rest = Eigen::Quaterniond::Identity();  // prismatic: Q0
+    std::vector<int> children;
+  };
+  // Joint coordinates (per node): x (free), q (free: body; spherical: Q), s (prismatic).
+  struct Coordinates {
+    std::vector<Eigen::Vector3d> x;
+    std::vector<Eigen::Quaterniond> q;
+    std::vector<double> s;
+  };
+  // Per-node kinematics at the current state.
+  struct Kinematics {
+    Eigen::Vector3d d;  // x_i - x_p
+    Motion S;
+    Vector6d c;
+    Vector6d a_base;  // X A_p for a prescribed parent (zero otherwise)
+  };
+
+  void jointKinematics(const std::vector<RigidBody>& bodies, std::vector<Kinematics>& out) const;
+  std::string derivative(double t, const Coordinates& c, const Eigen::VectorXd& u, std::vector<RigidBody>& bodies,
+                         const ReducedHooks& hooks, Eigen::VectorXd& udot);
+  void rates(const Coordinates& c, const Eigen::VectorXd& u, Coordinates& out) const;
+  bool bodiesChanged(const std::vector<RigidBody>& bodies) const;
+  void remember(const std::vector<RigidBody>& bodies);
+
+  std::vector<int> signature_;
+  std::string error_;        // what build() could not express ("" when fine)
+  std::vector<Node> nodes_;  // parents before children
+  int dofs_ = 0;
+  bool have_state_ = false;
+  Coordinates coords_;
+  Eigen::VectorXd u_;
+  std::vector<Eigen::Matrix<double, 13, 1>> written_;  // x, q, v, w of each node's body as last written
+  Eigen::VectorXd udot_;  // last u'
+};
+
+}  // namespace ponyhop

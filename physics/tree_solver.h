@@ -1,0 +1,96 @@
+// Baraff's linear-time Lagrange multipliers (D. Baraff, "Linear-Time Dynamics using Lagrange
+// Multipliers", SIGGRAPH 96 / CMU-RI-TR-95-44; seed 001 "Baraff gives O(N) multiplier method").
+//
+// H = [ M  J^T ; J  0 ] (one node per dynamic body, block 6, H_ii = M_i; one node per joint
+// with rows, block m_j, H_jj = 0; an edge body-joint where the joint's Jacobian block is non-zero)
+// is factored as a block LDL^T in an order that follows the tree. Kinematic bodies and the world
+// are not nodes (their accelerations are on the right-hand side), so a joint to the head or to
+// the world is a leaf of the graph.
+//
+// Elimination order. Baraff eliminates leaves first, alternating bodies and joints, with no
+// fill-in at all. That order needs every pivot block D_i invertible; but a joint to the world
+// (or to the kinematic head) is a leaf joint node whose pivot is H_jj = 0, and a body held at two
+// points (a chain fixed at both ends) gives a singular pivot even though the whole system is
+// regular. So we use the variant that never meets a singular pivot:
+//   1. every body node first: M is block diagonal, and eliminating body b couples exactly the
+//      joints that touch b. What remains on the joint nodes is -A = -J M^-1 J^T, whose only
+//      non-zero blocks are those of joint pairs sharing a body (the clique of b): no fill-in
+//      beyond A's own structure. Cost: sum over bodies of deg(b)^2 blocks.
+//   2. then the joint nodes, in tree order: the body-joint tree rooted at a joint, children
+//      before parents (leaves first). Eliminating joint j updates only the joints still left
+//      in the clique of j's parent body (its parent joint and its later siblings), which are
+//      already coupled: again no fill-in. The pivots are Schur complements of the SPD matrix A,
+//      hence SPD (Cholesky of <= 6 x 6 blocks, any rank-deficiency shows up as a failed pivot).
+//   D_j = A_jj - sum_c L_jc D_c L_jc^T,   L_xj = A_xj D_j^-1   (x in the clique, not yet eliminated)
+// Solve: forward y_x -= L_xj y_j (order), z_j = D_j^-1 y_j, backward z_j -= sum_x L_xj^T z_x.
+// O(n) flops for a tree of bounded degree (chains, the hopper, the ponytail on the hopper).
+//
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/LU>
+#include <vector>
+
+#include "physics/constraint_solver.h"
+
+namespace ponyhop {
+
+class TreeSolver final : public ConstraintSolver {
+ public:
+  bool factor(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) override;
+  Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const override;
+
+  // What the last factor() saw (tests, docs).
+  // Nodes of H: the tree's joints plus the dynamic bodies they touch.
+  int nodeCount() const { return static_cast<int>(nodes_.size() + cliques_.size()); }
+  int loopRows() const { return loop_rows_; }
+
+ private:
+  using Block = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 6, 6>;
+  using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, 6, 1>;
+
+  // A joint of the tree (a node of the elimination).
+  struct Node {
+    int block = -1;       // its block in the ConstraintSystem
+    int size = 0;         // rows
+    int row = 0;          // first row in the tree-only vector
+    int clique = -1;      // clique of its parent body (-1 for a root joint)
+    int slot = -1;        // its position in that clique
+    std::vector<int> near;  // clique positions of the joints it updates (eliminated after it)
+    std::vector<int> cliques;  // every clique it belongs to, with its slot there (pairs)
+    Block d_inv;            // D_j^-1
+    std::vector<Block> l;   // L_xj for x in near
+  };
+  // The joints that touch one dynamic body: A's blocks between them (dense, k x k blocks).
+  struct Clique {
+    int body = -1;
+    std::vector<int> members;  // node indices
+    std::vector<Block> a;      // k x k blocks, row-major by slot
+  };
+
+  bool structureChanged(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) const;
+  bool buildStructure(const std::vector<RigidBody>& bodies, const ConstraintSystem& system);
+  // A_tt^-1 r for a vector over the tree rows (tree_row numbering).
+  void treeSolve(const Eigen::VectorXd& r_tree, Eigen::VectorXd& y_tree) const;
+
+  // Structure (recomputed when it changes).
+  std::vector<int> signature_;
+  std::vector<Node> nodes_;
+  std::vector<Clique> cliques_;
+  std::vector<int> order_;        // node indices, children before parents
+  std::vector<int> tree_blocks_;  // system blocks in the tree, in system order
+  std::vector<int> loop_blocks_;  // system blocks closing loops
+  std::vector<int> tree_row_of_;  // per system row: row in the tree vector or -1
+  std::vector<int> loop_row_of_;  // per system row: row in the loop vector or -1
+  int tree_rows_ = 0;
+  int loop_rows_ = 0;
+
+  // Numbers (refreshed by every factor()).
+  Eigen::MatrixXd a_tl_;  // tree rows x loop rows: J_t M^-1 J_l^T
+  Eigen::MatrixXd g_;     // A_tt^-1 A_tl
+  Eigen::LDLT<Eigen::MatrixXd> schur_;
+  mutable std::vector<Vec> work_;  // per node: y_j, then z_j
+};
+
+}  // namespace ponyhop
