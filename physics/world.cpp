@@ -5,6 +5,7 @@
 
 #include "physics/dense_solver.h"
 #include "physics/rk4.h"
+#include "physics/solver_factory.h"
 #include "physics/stabilization.h"
 #include "physics/symplectic_euler.h"
 #include "physics/validate.h"
@@ -17,17 +18,10 @@ constexpr double kHuge = 1e10;  // |x|, |v|, |w| beyond this: the run has diverg
 
 bool finiteAndBounded(const Eigen::Vector3d& v) { return v.allFinite() && v.lpNorm<Eigen::Infinity>() < kHuge; }
 
-std::unique_ptr<ConstraintSolver> makeSolver(SolverKind kind) {
-  switch (kind) {
-    case SolverKind::Dense:
-      return std::make_unique<DenseSolver>();
-  }
-  return std::make_unique<DenseSolver>();
-}
-
 }  // namespace
 
-World::World(const PhysicsParams& params) : params_(params), solver_(makeSolver(params.solver)) {
+World::World(const PhysicsParams& params)
+    : params_(params), solver_(makeConstraintSolver(params.solver)), reduced_(makeReducedSystem(params.solver)) {
   if (std::string e = validate(params_); !e.empty()) fail(e);
 }
 
@@ -81,6 +75,10 @@ int World::addForceElement(std::unique_ptr<ForceElement> element) {
 
 void World::step() {
   if (!ok()) return;
+  if (reduced_) {  // featherstone: joint-space steps replace the maximal-coordinate stages
+    for (int i = 0; i < params_.substeps && ok(); ++i) reducedStep(params_.dt / params_.substeps);
+    return;
+  }
   const double h = params_.dt / params_.substeps;
   for (int i = 0; i < params_.substeps && ok(); ++i) substep(h);
 }
@@ -191,6 +189,31 @@ void World::resolveContacts() {
   checkBodies("contact", false);
 }
 
+// Featherstone (physics.solver = featherstone; physics/featherstone.h, docs/SOLVERS.md). The
+// state lives in joint coordinates; one reduced step replaces the joint-force, integrate and
+// stabilize stages (joints hold by construction: stabilization has nothing to do) and reuses the
+// kinematic, external and controller force stages at every evaluation; then the contact hook.
+// h = 0: evaluate only (ABA at the current state). params.substeps equal steps per dt.
+
+void World::reducedStep(double h) {
+  const ReducedHooks hooks{[this](double t) { updateKinematicBodies(t); }, [this] {
+                             applyExternalForces();
+                             applyControllerForces();
+                             return ok();
+                           }};
+  std::string e = reduced_->build(bodies_, joints_);
+  if (e.empty()) {
+    e = h > 0.0 ? reduced_->step(time_, h, params_.integrator, bodies_, hooks) : reduced_->evaluate(time_, bodies_, hooks);
+  }
+  if (!e.empty()) {
+    return stop("reduced step", e, "the scene needs what reduced coordinates cannot express (docs/SOLVERS.md)");
+  }
+  if (!ok() || h == 0.0) return;
+  time_ += h;
+  stage_time_ = time_;
+  if (checkBodies("reduced step", false)) resolveContacts();
+}
+
 // ---------------------------------------------------------------------------------------------
 
 void World::accelerationsAt(double t, const State& state, Accelerations& out) {
@@ -204,6 +227,7 @@ void World::accelerationsAt(double t, const State& state, Accelerations& out) {
 
 void World::evaluate() {
   if (!ok()) return;
+  if (reduced_) return reducedStep(0.0);  // featherstone: ABA at the current state
   updateKinematicBodies(time_);
   applyExternalForces();
   applyControllerForces();

@@ -11,6 +11,7 @@
 
 #include "physics/constraint.h"
 #include "physics/constraint_solver.h"
+#include "physics/featherstone.h"
 #include "physics/force_elements.h"
 #include "physics/integrator.h"
 #include "physics/physics_params.h"
@@ -64,6 +65,9 @@ class World {
   std::vector<RigidBody>& bodies() { return bodies_; }
   const Constraints& joints() const { return joints_; }
   const ConstraintSolver& solver() const { return *solver_; }
+  // The reduced-coordinate system (physics.solver = featherstone), else null.
+  const ArticulatedSystem* reduced() const { return reduced_.get(); }
+  ArticulatedSystem* reduced() { return reduced_.get(); }
   const Eigen::VectorXd& lambda() const { return solver_->lambda(); }
 
   // Wall time per stage of step() since construction or the last reset (physics/stage_times.h).
@@ -87,6 +91,7 @@ class World {
   void integrate(double h);
   void stabilize();
   void resolveContacts();
+  void reducedStep(double h);  // featherstone: replaces joint forces + integrate + stabilize
 
   void substep(double h);
   void accelerationsAt(double t, const State& state, Accelerations& out);
@@ -104,6 +109,7 @@ class World {
   Controller controller_;
   ContactHandler contact_;
   std::unique_ptr<ConstraintSolver> solver_;
+  std::unique_ptr<ArticulatedSystem> reduced_;  // featherstone only
   ConstraintSystem system_;
   double time_ = 0.0;
   double stage_time_ = 0.0;  // time of the force evaluation in progress (RK4 stages)
