@@ -20,19 +20,36 @@ struct SimArgs {
   std::string csv;
 };
 
-// The values written for one state; columns depend on what the scene has.
+// The values written for one state; columns depend on what the scene has. A hopper scene's
+// phase column is text; it sits after the first `split` values.
 struct SimRow {
   std::vector<double> values;
+  std::string text;
+  size_t split = 0;
 };
 
 std::string header(const SceneRuntime& rt) {
+  // Hopper: body centre of mass (m, m/s), attitude (rad), leg length (m), phase, foot contact
+  // point (m), contact 0/1, the largest violation of the knee's five constraints.
+  if (rt.hopper()) {
+    return "t,x,y,z,vx,vy,vz,roll,pitch,yaw,leg_length,phase,foot_x,foot_y,foot_z,contact,knee_error";
+  }
   if (rt.chain()) return "t,tip_x,tip_y,tip_z,energy,max_joint_error";
   return "t,max_joint_error";
 }
 
 SimRow sample(const SceneRuntime& rt) {
   SimRow r;
-  if (const Chain* c = rt.chain()) {
+  if (const Hopper* h = rt.hopper()) {
+    const World& w = rt.world();
+    const RigidBody& b = w.body(h->model().body);
+    const Eigen::Vector3d att = h->attitude(w);
+    const Eigen::Vector3d foot = h->footPoint(w);
+    r.values = {b.x.x(), b.x.y(), b.x.z(), b.v.x(), b.v.y(), b.v.z(), att[0], att[1], att[2], h->leg(w).length,
+                foot.x(), foot.y(), foot.z(), h->inContact() ? 1.0 : 0.0, h->kneeError(w)};
+    r.text = h->phaseName();
+    r.split = 10;
+  } else if (const Chain* c = rt.chain()) {
     const Eigen::Vector3d tip = c->tip(rt.world());
     r.values = {tip.x(), tip.y(), tip.z(), rt.chainEnergy(), rt.maxJointError()};
   } else {
@@ -43,7 +60,10 @@ SimRow sample(const SceneRuntime& rt) {
 
 void writeRow(std::FILE* f, double t, const SimRow& r) {
   std::fprintf(f, "%.3f", t);
-  for (double v : r.values) std::fprintf(f, ",%.9g", v);
+  for (size_t i = 0; i < r.values.size(); ++i) {
+    if (!r.text.empty() && i == r.split) std::fprintf(f, ",%s", r.text.c_str());
+    std::fprintf(f, ",%.9g", r.values[i]);
+  }
   std::fputc('\n', f);
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "physics/chain_params.h"
+#include "physics/hopper_params.h"
 #include "physics/keyframe_params.h"
 #include "physics/physics_params.h"
 #include "physics/reflect.h"
@@ -140,6 +141,7 @@ struct Scene {
   std::optional<HeadParams> head;
   std::optional<AnchorParams> anchor;
   std::optional<ChainParams> chain;
+  std::optional<HopperParams> hopper;
 
   template <class V>
   void reflect(V& v) {
@@ -152,6 +154,7 @@ struct Scene {
     v("head", head, {.help = "Keyframed kinematic head"});
     v("anchor", anchor, {.help = "Prescribed anchor point of a chain scene"});
     v("chain", chain, {.help = "Chain of links (the ponytail)"});
+    v("hopper", hopper, {.help = "Raibert hopper (body, leg, ground contact, controller)"});
   }
 };
 

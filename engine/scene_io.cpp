@@ -9,6 +9,8 @@
 #include <sstream>
 #include <type_traits>
 
+#include "physics/hopper.h"
+
 namespace ponyhop {
 namespace {
 
@@ -270,7 +272,7 @@ void applyOverride(json& j, const Override& o) {
 
 bool sectionPresent(const json& j, const std::string& name) { return j.contains(name) && !j[name].is_null(); }
 
-const char* kOptionalSections[] = {"head", "anchor", "chain"};
+const char* kOptionalSections[] = {"head", "anchor", "chain", "hopper"};
 
 }  // namespace
 
@@ -408,9 +410,13 @@ void validateScene(const Scene& scene_in, const std::string& source) {
     if (c.attach == ChainAttach::Anchor && !scene.anchor) {
       errors.push_back("chain.attach: \"anchor\" needs an anchor section in the scene");
     }
-    if (c.attach == ChainAttach::Hopper) {
-      errors.push_back("chain.attach: \"hopper\" is not available yet");
+    if (c.attach == ChainAttach::Hopper && !scene.hopper) {
+      errors.push_back("chain.attach: \"hopper\" needs a hopper section in the scene");
     }
+  }
+  if (scene.hopper && errors.empty()) {
+    // Physical sense beyond the ranges (leg lengths in order, the foot above the ground, ...).
+    if (std::string e = validate(*scene.hopper); !e.empty()) errors.push_back(e);
   }
   if (scene.render.width % 2 || scene.render.height % 2) {
     // H.264 in yuv420p needs even sizes; keep every output consistent with the video.

@@ -17,6 +17,7 @@ Eigen::Vector3f toColor(const Eigen::Vector3d& c) { return c.cast<float>(); }
 SceneRuntime::SceneRuntime(const Scene& scene) : scene_(scene), world_(scene.physics) {
   if (!world_.ok()) throw SceneError(scene_.path + ": physics: " + world_.status());
   if (scene_.head) buildHead();
+  if (scene_.hopper) buildHopper();
   if (scene_.chain) buildChain();
   if (!world_.ok()) throw SceneError(scene_.path + ": " + world_.status());
 }
@@ -75,12 +76,25 @@ void SceneRuntime::buildChain() {
       anchor_local = meshPointToBody(*scene_.head, head_mesh_.bbox, scene_.head->anchor);
       break;
     case ChainAttach::Hopper:
-      throw SceneError(scene_.path + ": chain.attach: \"hopper\" needs a hopper section");
+      if (!hopper_ || !hopper_->built()) {
+        throw SceneError(scene_.path + ": chain.attach: \"hopper\" needs a hopper section");
+      }
+      // Two-way coupled: the chain hangs from the hopper's body, at the back.
+      parent = hopper_->model().body;
+      anchor_local = hopper_->backPoint();
+      v0 = world_.body(parent).v;
+      break;
   }
   chain_ = addChain(world_, c, parent, anchor_local, v0);
 }
 
+void SceneRuntime::buildHopper() {
+  hopper_ = std::make_unique<Hopper>(world_, *scene_.hopper);
+  if (!world_.ok()) throw SceneError(scene_.path + ": " + world_.status());
+}
+
 bool SceneRuntime::step() {
+  if (hopper_) hopper_->think(world_);  // Think once per step, then the step (seed 000)
   world_.step();
   return world_.ok();
 }
@@ -88,7 +102,7 @@ bool SceneRuntime::step() {
 bool SceneRuntime::advanceTo(double t) {
   const double dt = scene_.physics.dt;
   // Half a step of slack: frame times that are multiples of dt land on a step, not one short.
-  while (world_.ok() && world_.time() + 0.5 * dt <= t) world_.step();
+  while (world_.ok() && world_.time() + 0.5 * dt <= t) step();
   return world_.ok();
 }
 
@@ -100,9 +114,52 @@ double SceneRuntime::chainEnergy() const {
 Eigen::Vector3d SceneRuntime::followPoint() const {
   const std::string& f = scene_.camera.follow;
   if (f == "chain" && chain_ && !chain_->empty()) return world_.body(chain_->links.front()).x;
+  if (hopper_ && (f == "hopper" || (f.empty() && head_body_ < 0))) return world_.body(hopper_->model().body).x;
   if (head_body_ >= 0 && (f.empty() || f == "head")) return world_.body(head_body_).x;
   if (chain_) return chain_->anchor(world_);
   return Eigen::Vector3d::Zero();
+}
+
+// The hopper: a rounded body (a fat capsule along x with a cap and two side pods), a ball at the
+// hip, the upper leg as a tapered tube and the foot as a thin rod ending in a rubber toe.
+void SceneRuntime::drawHopper(Renderer& renderer) const {
+  const HopperParams& p = hopper_->params();
+  const HopperShape s = hopper_->shape(world_);
+  Material paint;
+  paint.color = toColor(p.body_color);
+  paint.specular = 0.35f;
+  paint.shininess = 48.0f;
+  Material metal;
+  metal.color = toColor(p.leg_color);
+  metal.specular = 0.7f;
+  metal.shininess = 90.0f;
+  Material dark;
+  dark.color = {0.18f, 0.19f, 0.21f};
+  dark.specular = 0.4f;
+  dark.shininess = 60.0f;
+  Material rubber;
+  rubber.color = toColor(p.foot_color);
+  rubber.specular = 0.08f;
+  rubber.shininess = 12.0f;
+
+  const Eigen::Vector3d half = 0.5 * p.body_size;
+  const auto at = [&](double x, double y, double z) { return Eigen::Vector3d(s.body_x + s.body_q * Eigen::Vector3d(x, y, z)); };
+  const double rz = half.z();
+  const double ry = 0.75 * half.y();
+  // Main hull: a capsule along the body's x axis, squashed look from two overlapping capsules.
+  renderer.drawCapsule(at(-(half.x() - rz), 0.0, 0.0), at(half.x() - rz, 0.0, 0.0), rz, paint);
+  renderer.drawCapsule(at(-(half.x() - rz) * 0.8, 0.0, 0.15 * rz), at((half.x() - rz) * 0.8, 0.0, 0.15 * rz), 0.9 * rz, paint);
+  // Side pods (the body's mass is spread out: its inertia is large) and a sensor dome on top.
+  renderer.drawTaperedCapsule(at(-0.55 * half.x(), ry + 0.3 * rz, -0.1 * rz), at(0.35 * half.x(), ry + 0.3 * rz, -0.1 * rz),
+                              0.55 * rz, 0.45 * rz, dark);
+  renderer.drawTaperedCapsule(at(-0.55 * half.x(), -(ry + 0.3 * rz), -0.1 * rz), at(0.35 * half.x(), -(ry + 0.3 * rz), -0.1 * rz),
+                              0.55 * rz, 0.45 * rz, dark);
+  renderer.drawSphere(at(0.25 * half.x(), 0.0, 0.85 * rz), 0.45 * rz, metal);
+  // Hip ball, upper leg (tube), foot (rod) and toe.
+  renderer.drawSphere(s.hip, 1.35 * p.upper_radius, dark);
+  renderer.drawTaperedCapsule(s.hip, s.upper_bottom, p.upper_radius, 0.8 * p.upper_radius, metal);
+  renderer.drawTaperedCapsule(s.foot_top, s.toe, p.foot_radius, 0.8 * p.foot_radius, metal);
+  renderer.drawSphere(s.toe, p.toe_radius, rubber);
 }
 
 void SceneRuntime::upload(Renderer& renderer) {
@@ -110,6 +167,7 @@ void SceneRuntime::upload(Renderer& renderer) {
 }
 
 void SceneRuntime::draw(Renderer& renderer) const {
+  if (hopper_) drawHopper(renderer);
   if (head_body_ >= 0 && head_handle_.valid()) {
     const RigidBody& b = world_.body(head_body_);
     Eigen::Affine3d pose = Eigen::Affine3d::Identity();

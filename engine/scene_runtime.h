@@ -12,6 +12,7 @@
 #include "engine/renderer.h"
 #include "engine/scene.h"
 #include "physics/chain.h"
+#include "physics/hopper.h"
 #include "physics/world.h"
 
 namespace ponyhop {
@@ -21,11 +22,15 @@ class SceneRuntime {
   // Builds the world (and loads the head mesh and its clip). Throws SceneError naming the file
   // and the field when something cannot be built (a mesh that does not load, a bad clip).
   explicit SceneRuntime(const Scene& scene);
+  // The hopper's contact stage keeps a pointer to world_: a runtime stays where it was built.
+  SceneRuntime(const SceneRuntime&) = delete;
+  SceneRuntime& operator=(const SceneRuntime&) = delete;
 
   // Steps the physics (fixed dt, never the frame rate) until the next step would pass t.
   // Returns false when the world stopped (status() says when, where and why).
   bool advanceTo(double t);
-  // One physics step (dt). False when the world stopped.
+  // One physics step (dt): the hopper's Think (when there is a hopper), then World::step().
+  // False when the world stopped.
   bool step();
 
   double time() const { return world_.time(); }
@@ -36,6 +41,7 @@ class SceneRuntime {
   const World& world() const { return world_; }
   const Chain* chain() const { return chain_ ? &*chain_ : nullptr; }
   int headBody() const { return head_body_; }
+  const Hopper* hopper() const { return hopper_.get(); }
 
   // Energy of the chain (kinetic + gravity, against the chain's hanging-at-rest reference) and
   // the largest joint separation (m).
@@ -53,12 +59,15 @@ class SceneRuntime {
  private:
   void buildHead();
   void buildChain();
+  void buildHopper();
+  void drawHopper(Renderer& renderer) const;
 
   Scene scene_;
   World world_;
   int head_body_ = -1;
   int anchor_body_ = -1;
   std::optional<Chain> chain_;
+  std::unique_ptr<Hopper> hopper_;
   MeshData head_mesh_;
   Eigen::Affine3d head_mesh_to_body_ = Eigen::Affine3d::Identity();
   MeshHandle head_handle_;

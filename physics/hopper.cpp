@@ -192,6 +192,7 @@ Hopper::Hopper(World& world, const HopperParams& params) : params_(params) {
   m.params = p;
   stance_time_ = p.stance_time;
   heading_ = commandAt(world.time()).heading * kDeg;
+  desired_velocity_ = p.velocity.head<2>();  // the command is approached from the initial motion
 
   // Body: hip below its centre of mass. Upper leg: a tube (solid-cylinder inertia) from the hip
   // down, centre of mass halfway. Foot: a rod, the toe sphere's centre at its lower end, centre
@@ -257,6 +258,12 @@ HopperCommand Hopper::commandAt(double t) const {
 
 double Hopper::mass() const { return params_.body_mass + params_.upper_mass + params_.foot_mass; }
 
+Eigen::Vector3d Hopper::centerOfMass(const World& world) const {
+  const HopperModel& m = core_->model;
+  const RigidBody &b = world.body(m.body), &u = world.body(m.upper), &f = world.body(m.foot);
+  return (b.mass * b.x + u.mass * u.x + f.mass * f.x) / (b.mass + u.mass + f.mass);
+}
+
 Eigen::Vector3d Hopper::centerOfMassVelocity(const World& world) const {
   const HopperModel& m = core_->model;
   const RigidBody &b = world.body(m.body), &u = world.body(m.upper), &f = world.body(m.foot);
@@ -272,9 +279,11 @@ Eigen::Vector3d Hopper::centerOfMassVelocity(const World& world) const {
 //   any stance  -> FLIGHT       liftoff (the contact released: the ground would have to pull)
 //
 // Setpoints per phase (Raibert's three parts):
-//   FLIGHT       leg at rest length (shortened by flight_retract while rising); hip servo places
+//   FLIGHT       leg at rest length (shortened by flight_retract while rising); after swing_delay
+//                (the foot clears the ground) the hip servo places
 //                the leg for the touchdown: foot at x_f = xdot T_s / 2 + k_xdot (xdot - xdot_d)
-//                from the centre of mass, both horizontal axes, T_s the last measured stance.
+//                from the centre of mass, both horizontal axes, T_s the last measured stance,
+//                plus a small per-hop integral of the speed error (speed_integral_gain).
 //   LOADING      leg at rest length; hip torque off (the foot is barely loaded and would slip).
 //   COMPRESSION  leg at rest length; hip servos the body upright and to the heading.
 //   THRUST       leg setpoint r0 + delta: hop height (delta from the energy still needed to
@@ -295,6 +304,10 @@ void Hopper::think(World& world) {
   const auto liftoff = [&] {
     phase_ = HopperPhase::Flight;
     stance_time_ = std::clamp(now - touchdown_time_, 0.05, 1.0);
+    liftoff_time_ = now;
+    liftoff_length_ = leg.length;
+    // The leg's direction in the body frame at liftoff: the swing starts from here.
+    liftoff_placement_ = Eigen::Vector2d(leg.axis.dot(axisOf(body, 0)), leg.axis.dot(axisOf(body, 1)));
     flight_max_z_ = body.x.z();
     ++hops_;
   };
@@ -311,6 +324,12 @@ void Hopper::think(World& world) {
           height_trim_ = std::clamp(height_trim_ + p.height_gain * (cmd.height - last_apex_), -p.thrust_max,
                                     p.thrust_max);
         }
+        // Per-hop integral of the speed error on the foot placement (the neutral point
+        // x' T_s / 2 is only approximately where the hopper neither speeds up nor slows down).
+        const Eigen::Vector3d v = centerOfMassVelocity(world);
+        const double trim_limit = 0.25 * p.rest_length * std::sin(p.max_leg_angle * kDeg);
+        speed_trim_ += p.speed_integral_gain * (v.head<2>() - desired_velocity_);
+        if (speed_trim_.norm() > trim_limit) speed_trim_ *= trim_limit / speed_trim_.norm();
         ++touchdowns_;
       }
       break;
@@ -351,6 +370,7 @@ void Hopper::think(World& world) {
 
 void Hopper::updateSetpoints(const World& world, const HopperCommand& cmd, double dt) {
   const HopperParams& p = params_;
+  const double now = world.time();
   HopperSetpoints& s = core_->setpoints;
   const RigidBody& body = world.body(core_->model.body);
 
@@ -360,24 +380,40 @@ void Hopper::updateSetpoints(const World& world, const HopperCommand& cmd, doubl
   const double step = p.max_yaw_rate * kDeg * dt;
   heading_ += std::clamp(std::remainder(target - heading_, 2.0 * std::numbers::pi), -step, step);
   s.heading = heading_;
+  // Desired velocity slews toward the command at max_acceleration (a step in speed asks for
+  // one big foot placement error at once).
+  const Eigen::Vector2d v_cmd(cmd.vx, cmd.vy);
+  const Eigen::Vector2d dv = v_cmd - desired_velocity_;
+  const double max_dv = p.max_acceleration * dt;
+  desired_velocity_ += dv.norm() > max_dv ? Eigen::Vector2d(dv * (max_dv / dv.norm())) : dv;
 
   switch (phase_) {
     case HopperPhase::Flight: {
-      s.leg_length = body.v.z() > 0.0 ? p.rest_length - p.flight_retract : p.rest_length;
+      // Rising: the leg is pulled in below its liftoff length (the foot, resting on the ground
+      // when the normal force reached zero, must be lifted, not pushed back down).
+      s.leg_length = body.v.z() > 0.0 ? std::min(p.rest_length, liftoff_length_) - p.flight_retract : p.rest_length;
       s.place_weight = 1.0;
       s.attitude_weight = 0.0;
       // Foot placement (Raibert): neutral point plus the speed correction, both axes.
       const Eigen::Vector3d v = centerOfMassVelocity(world);
       Eigen::Vector2d xf = v.head<2>() * stance_time_ / 2.0 +
-                           p.speed_gain * (v.head<2>() - Eigen::Vector2d(cmd.vx, cmd.vy));
+                           p.speed_gain * (v.head<2>() - desired_velocity_) + speed_trim_;
+      // x_f is measured from the centre of mass; the leg pivots at the hip, which a pitched or
+      // rolled body carries off to the side (hip_offset sin(tilt)).
+      const Eigen::Vector3d hip = body.pointToWorld(core_->model.hip_in_body);
+      xf += centerOfMass(world).head<2>() - hip.head<2>();
       const double limit = p.rest_length * std::sin(p.max_leg_angle * kDeg);
       if (xf.norm() > limit) xf *= limit / xf.norm();
       // Desired leg axis (from the foot up to the hip) in the world, then in the body's frame.
       const Eigen::Vector3d za_d =
           Eigen::Vector3d(-xf.x(), -xf.y(), std::sqrt(p.rest_length * p.rest_length - xf.squaredNorm())) /
           p.rest_length;
-      s.placement_x = za_d.dot(axisOf(body, 0));
-      s.placement_y = za_d.dot(axisOf(body, 1));
+      // The swing waits swing_delay after liftoff (the retracting foot clears the ground first;
+      // a leg swung forward at once sweeps its foot into the ground), then blends in over
+      // swing_delay more.
+      const double blend = hops_ == 0 ? 1.0 : std::clamp((now - liftoff_time_) / p.swing_delay - 1.0, 0.0, 1.0);
+      s.placement_x = (1.0 - blend) * liftoff_placement_.x() + blend * za_d.dot(axisOf(body, 0));
+      s.placement_y = (1.0 - blend) * liftoff_placement_.y() + blend * za_d.dot(axisOf(body, 1));
       break;
     }
     case HopperPhase::Loading:

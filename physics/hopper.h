@@ -97,6 +97,7 @@ class Hopper {
   double measuredStanceTime() const { return stance_time_; }
   double lastApex() const { return last_apex_; }         // m, body height at the last apex
   double thrust() const { return thrust_; }              // m, last thrust setpoint extension
+  Eigen::Vector2d desiredVelocity() const { return desired_velocity_; }  // m/s, slewed command
 
   LegState leg(const World& world) const { return legState(core_->model, world.bodies()); }
   Eigen::Vector3d footPoint(const World& world) const { return core_->contact->point(world); }
@@ -105,6 +106,7 @@ class Hopper {
   double tilt(const World& world) const;  // rad, body z from vertical
   // Total mass and centre-of-mass velocity of body + leg.
   double mass() const;
+  Eigen::Vector3d centerOfMass(const World& world) const;
   Eigen::Vector3d centerOfMassVelocity(const World& world) const;
   // Largest |C| of the knee's five rows, and of the hip's three (m).
   double kneeError(const World& world) const;
@@ -126,12 +128,17 @@ class Hopper {
   HopperPhase phase_ = HopperPhase::Flight;
   double last_time_ = -1.0;
   double touchdown_time_ = 0.0;
+  double liftoff_time_ = 0.0;
+  double liftoff_length_ = 1e300;
+  Eigen::Vector2d liftoff_placement_ = Eigen::Vector2d::Zero();
   double stance_time_ = 0.2;
   double flight_max_z_ = -1e300;
   double last_apex_ = 0.0;
   double thrust_ = 0.0;
   double height_trim_ = 0.0;
+  Eigen::Vector2d speed_trim_ = Eigen::Vector2d::Zero();  // m, integral part of the foot placement
   double heading_ = 0.0;  // rad, slewed heading setpoint
+  Eigen::Vector2d desired_velocity_ = Eigen::Vector2d::Zero();  // m/s, slewed velocity command
   int hops_ = 0;
   int touchdowns_ = 0;
 };

@@ -92,8 +92,11 @@ struct HopperParams {
 
   // Controller (Raibert's three parts; thresholds of the state machine).
   double speed_gain = 0.08;        // s, k_xdot in x_f = xdot T_s / 2 + k_xdot (xdot - xdot_d)
+  double max_acceleration = 0.5;   // m/s^2, desired velocity slews toward the command this fast
+  double speed_integral_gain = 0.02;  // s, per-hop integral of the speed error on x_f
   double stance_time = 0.2;        // s, T_s before the first stance is measured
   double max_leg_angle = 25.0;     // deg, largest foot placement angle from vertical
+  double swing_delay = 0.04;       // s, after liftoff before the leg swings (then as long to blend in)
   double height_gain = 0.3;        // m/m, thrust correction per metre of apex error (per hop)
   double load_depth = 0.02;        // m, LOADING -> COMPRESSION when r < rest_length - load_depth
   double unload_margin = 0.02;     // m, THRUST -> UNLOADING when r > r_set - unload_margin
@@ -147,8 +150,13 @@ struct HopperParams {
     v("yaw_damping", yaw_damping, {.unit = "N m s", .min = 0, .max = 1e4, .help = "Body heading damping (stance)"});
     v("max_yaw_rate", max_yaw_rate, {.unit = "deg/s", .min = 1, .max = 3600, .help = "Heading setpoint slew rate"});
     v("speed_gain", speed_gain, {.unit = "s", .min = 0, .max = 1, .help = "k_xdot of foot placement"});
+    v("max_acceleration", max_acceleration,
+      {.unit = "m/s^2", .min = 0.01, .max = 100, .help = "Slew rate of the desired velocity"});
+    v("speed_integral_gain", speed_integral_gain,
+      {.unit = "s", .min = 0, .max = 1, .help = "Per-hop integral of the speed error on foot placement"});
     v("stance_time", stance_time, {.unit = "s", .min = 0.01, .max = 2, .help = "Stance time before one is measured"});
     v("max_leg_angle", max_leg_angle, {.unit = "deg", .min = 0, .max = 60, .help = "Largest placement angle from vertical"});
+    v("swing_delay", swing_delay, {.unit = "s", .min = 1e-3, .max = 1, .help = "Wait after liftoff before the leg swings"});
     v("height_gain", height_gain, {.min = 0, .max = 5, .help = "Thrust correction per metre of apex error"});
     v("load_depth", load_depth, {.unit = "m", .min = 0, .max = 1, .help = "LOADING ends at this compression"});
     v("unload_margin", unload_margin, {.unit = "m", .min = 0, .max = 1, .help = "THRUST ends this short of the setpoint"});
