@@ -13,6 +13,7 @@
 #include <regex>
 
 #include "app/commands.h"
+#include "app/ui_headless.h"
 #include "engine/render_session.h"
 #include "app/scene_args.h"
 #include "engine/frame_writer.h"
@@ -111,7 +112,19 @@ int runRender(const RenderArgs& args) {
     throw SceneError("--video " + args.video + ": ffmpeg is not installed (apt-get install ffmpeg)");
   }
 
-  RenderSession session(scene, args.ui);  // builds the world, the GL context and the renderer
+  // --ui: the tuning panel beside the scene (the frame grows by the panel's width); the panel is
+  // driven headless (app/ui_headless.h), the physics is the same stepping to the same times.
+  std::unique_ptr<RenderSession> session;
+  std::unique_ptr<HeadlessUi> ui;
+  if (args.ui) {
+    ui = std::make_unique<HeadlessUi>(scene, scene.render.width, scene.render.height);
+  } else {
+    session = std::make_unique<RenderSession>(scene);  // builds the world, the GL context and the renderer
+  }
+  const int out_w = ui ? ui->width() : session->width();
+  const int out_h = ui ? ui->height() : session->height();
+  const auto simulateTo = [&](double t) { return ui ? ui->sim().advanceTo(t) : session->simulateTo(t); };
+  const auto status = [&]() { return ui ? ui->sim().stopMessage() : session->status(); };
   const int frames = scene.render.frames;
   const std::string staging = out + ".partial-" + std::to_string(getpid());
   fs::remove_all(staging, ec);
@@ -131,22 +144,28 @@ int runRender(const RenderArgs& args) {
   for (int i = 0; i < frames; ++i) {
     const double t = i / scene.render.fps;
     auto t0 = Clock::now();
-    const bool sim_ok = session.simulateTo(t);
+    const bool sim_ok = simulateTo(t);
     sim_ms += msSince(t0);
     if (!sim_ok) {
       writer.finish();
       fs::remove_all(staging, ec);
       std::fprintf(stderr, "\nponyhop render: the simulation stopped before frame %d: %s\n"
                            "  no frame was written; %s is untouched\n",
-                   i, session.status().c_str(), out.c_str());
+                   i, status().c_str(), out.c_str());
       return 1;
     }
     t0 = Clock::now();
     std::vector<uint8_t> rgba;
-    session.renderFrame(t, rgba);
+    if (ui) {
+      UiInput in;
+      in.dt = 1.0 / scene.render.fps;
+      ui->frame(in, &rgba, t);
+    } else {
+      session->renderFrame(t, rgba);
+    }
     render_ms += msSince(t0);
     t0 = Clock::now();
-    if (!writer.push(i, session.width(), session.height(), std::move(rgba), &err)) break;
+    if (!writer.push(i, out_w, out_h, std::move(rgba), &err)) break;
     wait_ms += msSince(t0);
     progress.update(i + 1, msSince(t_start) / (i + 1));
   }
@@ -176,7 +195,7 @@ int runRender(const RenderArgs& args) {
   std::fprintf(stderr,
                "render: %d frames %dx%d (%d samples) in %.2f s = %.1f ms/frame: simulate %.2f, render %.1f, "
                "encode %.1f on 2 worker threads (overlapped; the render loop waited %.1f ms/frame for it)\n",
-               frames, session.width(), session.height(), scene.render.samples, total_s, 1000.0 * total_s / frames,
+               frames, out_w, out_h, scene.render.samples, total_s, 1000.0 * total_s / frames,
                sim_ms / frames, render_ms / frames, writer.meanEncodeMs(), wait_ms / frames);
   std::fprintf(stderr, "render: frames in %s/\n", out.c_str());
   if (!args.video.empty()) std::fprintf(stderr, "render: video %s (%.1f s to encode)\n", args.video.c_str(), video_s);

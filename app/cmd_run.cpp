@@ -1,0 +1,51 @@
+// `ponyhop run SCENE [--frames N] [--screenshot PATH] [--size WxH] [--set key=value]...`: the
+// scene in a window with the tuning panel (docs/TUNING.md). Built with the window (PONYHOP_WINDOW).
+#ifdef PONYHOP_WINDOW
+
+#include <cstdio>
+
+#include "app/commands.h"
+#include "app/scene_args.h"
+#include "app/ui_window.h"
+#include "engine/scene_io.h"
+
+namespace ponyhop {
+
+void addRunCommand(CLI::App& app, int& exit_code) {
+  struct RunArgs {
+    SceneArgs scene;
+    WindowOptions window;
+    std::string size;
+    bool no_vsync = false;
+  };
+  auto args = std::make_shared<RunArgs>();
+  auto* cmd = app.add_subcommand("run", "Play a scene in a window with the tuning panel");
+  args->scene.add(cmd);
+  cmd->add_option("--frames", args->window.frames, "Close after N frames (default: run until closed)")
+      ->check(CLI::Range(1, 100000000));
+  cmd->add_option("--screenshot", args->window.screenshot, "Write the last frame to this PNG before closing");
+  cmd->add_option("--size", args->size, "Window size WIDTHxHEIGHT, scene view + panel (default 1280x720)");
+  cmd->add_flag("--no-vsync", args->no_vsync, "Do not wait for the display's refresh (frame-time measurements)");
+  cmd->callback([args, &exit_code] {
+    try {
+      const Scene scene = args->scene.load();
+      WindowOptions o = args->window;
+      o.vsync = !args->no_vsync;
+      if (!args->size.empty()) {
+        char tail = 0;
+        if (std::sscanf(args->size.c_str(), "%dx%d%c", &o.width, &o.height, &tail) != 2 || o.width < 320 ||
+            o.height < 200 || o.width > 16384 || o.height > 16384) {
+          throw SceneError("--size " + args->size + ": expected WIDTHxHEIGHT of at least 320x200, e.g. 1280x720");
+        }
+      }
+      exit_code = runWindow(scene, o);
+    } catch (const SceneError& e) {
+      std::fprintf(stderr, "ponyhop run: %s\n", e.what());
+      exit_code = 2;
+    }
+  });
+}
+
+}  // namespace ponyhop
+
+#endif  // PONYHOP_WINDOW

@@ -1,0 +1,67 @@
+#include "app/ui_gl.h"
+
+#include <glad/gl.h>
+#include <imgui.h>
+#include <imgui_impl_opengl3.h>
+
+#include <stdexcept>
+
+namespace ponyhop {
+
+UiGl::UiGl() {
+  if (!ImGui_ImplOpenGL3_Init("#version 330 core")) throw std::runtime_error("ImGui OpenGL 3 backend: init failed");
+}
+
+UiGl::~UiGl() { ImGui_ImplOpenGL3_Shutdown(); }
+
+void UiGl::newFrame() { ImGui_ImplOpenGL3_NewFrame(); }
+
+void UiGl::compose(const Renderer& renderer, unsigned fbo, int width, int height, int scene_width) {
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glViewport(0, 0, width, height);
+  glDisable(GL_SCISSOR_TEST);
+  glClearColor(0.11f, 0.12f, 0.14f, 1.0f);  // the panel's background, should ImGui leave a gap
+  glClear(GL_COLOR_BUFFER_BIT);
+  if (scene_width > 0 && renderer.width() > 0) renderer.blitTo(fbo, scene_width, height);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glViewport(0, 0, width, height);
+  if (ImDrawData* d = ImGui::GetDrawData()) ImGui_ImplOpenGL3_RenderDrawData(d);
+}
+
+OffscreenTarget::OffscreenTarget(int width, int height) : width_(width), height_(height) {
+  glGenFramebuffers(1, &fbo_);
+  glGenRenderbuffers(1, &color_);
+  glBindRenderbuffer(GL_RENDERBUFFER, color_);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, width, height);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color_);
+  const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (status != GL_FRAMEBUFFER_COMPLETE) throw std::runtime_error("panel frame: framebuffer incomplete");
+}
+
+OffscreenTarget::~OffscreenTarget() {
+  glDeleteFramebuffers(1, &fbo_);
+  glDeleteRenderbuffers(1, &color_);
+}
+
+void OffscreenTarget::readPixels(std::vector<uint8_t>& rgba) const {
+  const size_t row = size_t(width_) * 4;
+  rgba.resize(row * size_t(height_));
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
+  glReadBuffer(GL_COLOR_ATTACHMENT0);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  // GL rows run bottom-up; images top-down.
+  std::vector<uint8_t> tmp(row);
+  for (int y = 0; y < height_ / 2; ++y) {
+    uint8_t* a = rgba.data() + size_t(y) * row;
+    uint8_t* b = rgba.data() + size_t(height_ - 1 - y) * row;
+    std::copy(a, a + row, tmp.data());
+    std::copy(b, b + row, a);
+    std::copy(tmp.data(), tmp.data() + row, b);
+  }
+}
+
+}  // namespace ponyhop

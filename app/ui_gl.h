@@ -1,0 +1,50 @@
+// The GL side of the panel: ImGui's OpenGL 3 backend (compiled from Debian's example source with
+// our glad loader, app/CMakeLists.txt) and the compositor that puts the scene and the panel in one
+// frame. The same code serves the window (framebuffer 0) and headless frames (an offscreen target).
+//
+//   frame (W + P) x H:  [ scene, W x H, the Renderer's resolved image | panel, P x H ]
+//   the ImGui draw data covers the whole frame (the panel window and the view overlay).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "engine/renderer.h"
+
+namespace ponyhop {
+
+// ImGui_ImplOpenGL3 for the current ImGui context. Needs a current GL 3.3 context with GL loaded.
+class UiGl {
+ public:
+  UiGl();
+  ~UiGl();
+  UiGl(const UiGl&) = delete;
+  UiGl& operator=(const UiGl&) = delete;
+
+  void newFrame();  // before ImGui::NewFrame()
+  // Into framebuffer `fbo` (width x height): the renderer's last frame in the left scene_width
+  // pixels, then ImGui's draw data of the frame just ended (ImGui::Render()) over everything.
+  void compose(const Renderer& renderer, unsigned fbo, int width, int height, int scene_width);
+};
+
+// An RGBA8 framebuffer for headless frames with the panel.
+class OffscreenTarget {
+ public:
+  OffscreenTarget(int width, int height);
+  ~OffscreenTarget();
+  OffscreenTarget(const OffscreenTarget&) = delete;
+  OffscreenTarget& operator=(const OffscreenTarget&) = delete;
+
+  unsigned fbo() const { return fbo_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  // RGBA8 rows, top row first.
+  void readPixels(std::vector<uint8_t>& rgba) const;
+
+ private:
+  unsigned fbo_ = 0, color_ = 0;
+  int width_ = 0, height_ = 0;
+};
+
+}  // namespace ponyhop

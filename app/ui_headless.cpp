@@ -1,0 +1,67 @@
+#include "app/ui_headless.h"
+
+#include <imgui.h>
+
+#include <chrono>
+#include <stdexcept>
+
+namespace ponyhop {
+
+void renderSceneView(Renderer& renderer, LiveSim& sim, const Camera& camera, int width, int height) {
+  RenderParams rp = sim.applied().render;
+  rp.width = std::max(width, 1);
+  rp.height = std::max(height, 1);
+  renderer.beginFrame(camera, sim.applied().light, rp);
+  sim.draw(renderer);
+  renderer.endFrame();
+}
+
+HeadlessUi::HeadlessUi(const Scene& scene, int scene_width, int height, int panel_width) {
+  layout_.width = scene_width + panel_width;
+  layout_.height = height;
+  layout_.panel_width = panel_width;
+  sim_ = std::make_unique<LiveSim>(scene);  // a bad scene fails before any GL is made
+  std::string err;
+  context_ = HeadlessContext::create(layout_.width, layout_.height, &err);
+  if (!context_) throw std::runtime_error("cannot create the headless GL context: " + err);
+  renderer_ = std::make_unique<Renderer>();
+  if (!renderer_->init(&err)) throw std::runtime_error("renderer: " + err);
+  imgui_ = std::make_unique<PanelContext>();
+  gl_ = std::make_unique<UiGl>();
+  target_ = std::make_unique<OffscreenTarget>(layout_.width, layout_.height);
+  sim_->setStepBudgetMs(0.0);  // deterministic: every step is taken, however long it takes
+  panel_ = std::make_unique<Panel>(*sim_);
+}
+
+HeadlessUi::~HeadlessUi() {
+  if (context_) context_->makeCurrent();
+  // GL objects go while the context lives; the ImGui context after its backend.
+  panel_.reset();
+  gl_.reset();
+  target_.reset();
+  sim_.reset();
+  renderer_.reset();
+  imgui_.reset();
+}
+
+void HeadlessUi::frame(const UiInput& in_raw, std::vector<uint8_t>* rgba, std::optional<double> sim_time) {
+  using Clock = std::chrono::steady_clock;
+  UiInput in = in_raw;
+  in.width = float(layout_.width);
+  in.height = float(layout_.height);
+  if (sim_time) {
+    sim_->advanceTo(*sim_time);
+  }
+  gl_->newFrame();
+  feedInput(in);
+  ImGui::NewFrame();
+  panel_->build(layout_, !sim_time.has_value());
+  ImGui::Render();
+  const auto t0 = Clock::now();
+  renderSceneView(*renderer_, *sim_, panel_->camera(), layout_.sceneWidth(), layout_.height);
+  gl_->compose(*renderer_, target_->fbo(), layout_.width, layout_.height, layout_.sceneWidth());
+  if (rgba) target_->readPixels(*rgba);
+  panel_->setRenderMs(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+}
+
+}  // namespace ponyhop

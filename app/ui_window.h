@@ -1,0 +1,22 @@
+// `ponyhop run`: the scene playing in a GLFW window with the tuning panel beside it
+// (app/window_app.cpp, built with -DPONYHOP_WINDOW=ON).
+#pragma once
+
+#include <string>
+
+#include "engine/scene.h"
+
+namespace ponyhop {
+
+struct WindowOptions {
+  int width = 1280, height = 720;  // the window: scene view + panel
+  int frames = 0;                  // > 0: close after this many frames (tests, measurements)
+  std::string screenshot;          // PNG of the last frame, written before closing
+  bool vsync = true;               // swap interval 1 (off when measuring)
+};
+
+// Runs until the window is closed (or `frames` are shown). Returns the exit code; prints the
+// mean frame time and the per-stage times on stderr at the end.
+int runWindow(const Scene& scene, const WindowOptions& options);
+
+}  // namespace ponyhop

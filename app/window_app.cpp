@@ -1,0 +1,181 @@
+// The window of `ponyhop run`: GLFW + the same Renderer as the headless path + the tuning panel.
+// GL is loaded through glfwGetProcAddress (never -lGL, see engine/gl_context.h). Each frame:
+// events -> panel (edits, playback: the physics steps at its own dt up to the new simulated
+// time, within a wall-time budget) -> scene render -> compose (scene blit + ImGui) -> swap.
+#include <glad/gl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <imgui.h>
+#include <imgui_impl_glfw.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <vector>
+
+#include "app/panel.h"
+#include "app/ui_gl.h"
+#include "app/ui_headless.h"
+#include "app/ui_sim.h"
+#include "app/ui_window.h"
+#include "engine/frame_writer.h"
+#include "engine/gl_context.h"
+#include "engine/renderer.h"
+
+namespace ponyhop {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+void glfwError(int code, const char* what) { std::fprintf(stderr, "ponyhop run: GLFW error %d: %s\n", code, what); }
+
+// The panel keeps ~400 px; a narrow window gives it at most 60 % of its width.
+PanelLayout layoutFor(int w, int h) {
+  PanelLayout l;
+  l.width = std::max(w, 1);
+  l.height = std::max(h, 1);
+  l.panel_width = std::min(Panel::kDefaultWidth, int(0.6 * l.width));
+  return l;
+}
+
+bool screenshot(const std::string& path, int w, int h) {
+  std::vector<uint8_t> rgba(size_t(w) * size_t(h) * 4);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  glReadBuffer(GL_BACK);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  const size_t row = size_t(w) * 4;
+  std::vector<uint8_t> flipped(rgba.size());
+  for (int y = 0; y < h; ++y) std::copy_n(rgba.data() + size_t(h - 1 - y) * row, row, flipped.data() + size_t(y) * row);
+  for (size_t i = 3; i < flipped.size(); i += 4) flipped[i] = 255;  // the window's alpha means nothing
+  std::string err;
+  if (!writePngAtomic(path, w, h, flipped.data(), &err)) {
+    std::fprintf(stderr, "ponyhop run: screenshot: %s\n", err.c_str());
+    return false;
+  }
+  std::fprintf(stderr, "run: screenshot %s (%dx%d)\n", path.c_str(), w, h);
+  return true;
+}
+
+struct FrameStats {
+  std::vector<double> frame_ms;
+  double physics = 0, panel = 0, render = 0, compose = 0;
+  int n = 0;
+};
+
+}  // namespace
+
+int runWindow(const Scene& scene, const WindowOptions& o) {
+  glfwSetErrorCallback(glfwError);
+  if (!glfwInit()) {
+    std::fprintf(stderr, "ponyhop run: cannot open a window (no display? headless: xvfb-run -a ponyhop run ...)\n");
+    return 1;
+  }
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  const std::string title = "ponyhop - " + (scene.name.empty() ? scene.path : scene.name);
+  GLFWwindow* window = glfwCreateWindow(o.width, o.height, title.c_str(), nullptr, nullptr);
+  if (!window) {
+    std::fprintf(stderr, "ponyhop run: cannot create a GL 3.3 core window\n");
+    glfwTerminate();
+    return 1;
+  }
+  glfwMakeContextCurrent(window);
+  glfwSwapInterval(o.vsync ? 1 : 0);
+  int code = 0;
+  {
+    std::string err;
+    if (!loadGL(glfwGetProcAddress, &err)) {
+      std::fprintf(stderr, "ponyhop run: %s\n", err.c_str());
+      glfwDestroyWindow(window);
+      glfwTerminate();
+      return 1;
+    }
+    LiveSim sim(scene);
+    sim.setStepBudgetMs(25.0);  // a slow step never freezes the window: the rest is dropped, shown as "behind"
+    PanelContext imgui;
+    ImGui_ImplGlfw_InitForOpenGL(window, true);
+    {
+      UiGl gl;
+      Renderer renderer;
+      if (!renderer.init(&err)) {
+        std::fprintf(stderr, "ponyhop run: renderer: %s\n", err.c_str());
+        code = 1;
+      }
+      Panel panel(sim);
+      FrameStats stats;
+      int frame = 0;
+      while (code == 0 && !glfwWindowShouldClose(window)) {
+        const auto t_frame = Clock::now();
+        glfwPollEvents();
+        int win_w = 0, win_h = 0, fb_w = 0, fb_h = 0;
+        glfwGetWindowSize(window, &win_w, &win_h);
+        glfwGetFramebufferSize(window, &fb_w, &fb_h);
+        if (glfwGetWindowAttrib(window, GLFW_ICONIFIED) || fb_w <= 0 || fb_h <= 0 || win_w <= 0 || win_h <= 0) {
+          glfwWaitEventsTimeout(0.1);  // minimized: nothing to draw; time does not pile up (advance clamps)
+          continue;
+        }
+        const PanelLayout layout = layoutFor(win_w, win_h);
+        const double sx = double(fb_w) / win_w;
+        const int scene_fb_w = std::max(1, int(layout.sceneWidth() * sx));
+
+        auto t0 = Clock::now();
+        gl.newFrame();
+        ImGui_ImplGlfw_NewFrame();
+        ImGui::NewFrame();
+        panel.build(layout);  // edits, playback (physics), mouse
+        ImGui::Render();
+        const double build_ms = msSince(t0);
+
+        t0 = Clock::now();
+        renderSceneView(renderer, sim, panel.camera(), scene_fb_w, fb_h);
+        const double render_ms = msSince(t0);
+        panel.setRenderMs(render_ms);
+
+        t0 = Clock::now();
+        gl.compose(renderer, 0, fb_w, fb_h, scene_fb_w);
+        const bool last = o.frames > 0 && frame + 1 >= o.frames;
+        if (last && !o.screenshot.empty() && !screenshot(o.screenshot, fb_w, fb_h)) code = 1;
+        glfwSwapBuffers(window);
+        const double compose_ms = msSince(t0);
+
+        const double frame_ms = msSince(t_frame);
+        if (frame >= 5) {  // warm-up frames (font texture, shaders, first shadow map) are not typical
+          stats.frame_ms.push_back(frame_ms);
+          stats.physics += sim.readouts().physics_ms;
+          stats.panel += build_ms - sim.readouts().physics_ms;
+          stats.render += render_ms;
+          stats.compose += compose_ms;
+          ++stats.n;
+        }
+        ++frame;
+        if (last) break;
+      }
+      if (stats.n > 0) {
+        std::vector<double> v = stats.frame_ms;
+        std::sort(v.begin(), v.end());
+        double sum = 0;
+        for (double x : v) sum += x;
+        const double mean = sum / double(v.size());
+        int w = 0, h = 0;
+        glfwGetFramebufferSize(window, &w, &h);
+        std::fprintf(stderr,
+                     "run: %d frames at %dx%d: frame time mean %.1f ms (median %.1f, p95 %.1f) = %.1f fps; "
+                     "physics %.2f, panel %.2f, scene render %.2f, compose+swap %.2f ms\n",
+                     stats.n, w, h, mean, v[v.size() / 2], v[std::min(v.size() - 1, v.size() * 95 / 100)],
+                     1000.0 / mean, stats.physics / stats.n, stats.panel / stats.n, stats.render / stats.n,
+                     stats.compose / stats.n);
+      }
+      if (!sim.ok()) std::fprintf(stderr, "run: the simulation stopped: %s\n", sim.stopMessage().c_str());
+    }  // GL objects go while the context is current
+    ImGui_ImplGlfw_Shutdown();
+  }
+  glfwDestroyWindow(window);
+  glfwTerminate();
+  return code;
+}
+
+}  // namespace ponyhop
