@@ -145,8 +145,10 @@ TEST(PhysicsFeatherstone, RneaInvertsAbaAndCrbaAgrees) {
     EXPECT_LT((crba - udot).norm(), 1e-9 * (1.0 + udot.norm())) << "system " << which;
     // And H is the kinetic energy's matrix: 1/2 u^T H u = sum of the bodies' kinetic energies
     // (when the base does not move: system 0's anchor shakes).
-    if (which != 0) EXPECT_NEAR(0.5 * sys.velocities().dot(H * sys.velocities()), world.kineticEnergy(),
-                1e-12 * (1.0 + world.kineticEnergy()));
+    if (which != 0) {
+      EXPECT_NEAR(0.5 * sys.velocities().dot(H * sys.velocities()), world.kineticEnergy(),
+                  1e-12 * (1.0 + world.kineticEnergy()));
+    }
   }
 }
 
