@@ -8,10 +8,11 @@
 
 namespace ponyhop {
 
-enum class Integrator { SymplecticEuler, RK4 };
+// docs/STABILITY.md: what each is for, the default and why, measured stability limits.
+enum class Integrator { SymplecticEuler, RK4, Rattle, ImplicitEuler };
 template <>
 struct EnumNames<Integrator> {
-  static constexpr std::array<std::string_view, 2> names{"symplectic_euler", "rk4"};
+  static constexpr std::array<std::string_view, 4> names{"symplectic_euler", "rk4", "rattle", "implicit_euler"};
 };
 
 // docs/SOLVERS.md: dense (J M^-1 J^T, LDLT, O(m^3)), tree (Baraff's block LDL^T of the augmented
@@ -30,14 +31,25 @@ struct EnumNames<Stabilization> {
 
 struct PhysicsParams {
   double dt = 1.0 / 240.0;  // s, one physics step (independent of the frame rate)
-  int substeps = 1;         // steps per dt (the step actually taken is dt / substeps)
-  Integrator integrator = Integrator::RK4;
+  int substeps = 1;         // steps per dt at least (the step actually taken is dt / substeps or smaller)
+  // RATTLE (constrained Stormer-Verlet, symplectic): positions and velocities on the joints
+  // every step, bounded energy error; with max_step_rotation it holds the whipping chain at any
+  // dt from 1/60 to 1/1920 s (docs/STABILITY.md).
+  Integrator integrator = Integrator::Rattle;
   SolverKind solver = SolverKind::Dense;
   Stabilization stabilization = Stabilization::Projection;
   // Baumgarte: C'' + 2 alpha C' + beta^2 C = 0 (alpha in 1/s, beta in 1/s).
   double baumgarte_alpha = 10.0;  // 1/s
   double baumgarte_beta = 10.0;   // 1/s
   Eigen::Vector3d gravity{0.0, 0.0, -9.81};  // m/s^2, world frame (z up)
+  // Automatic substeps: a step in which a body turns more than twice this is split in two, and
+  // each dt starts with enough substeps that the fastest body turns at most this much per
+  // substep. 0 = off (exactly `substeps` per dt).
+  double max_step_rotation = 2.0;  // deg per substep (2: energy within 1 % through the whip)
+  // Accuracy instead of a step size: > 0 chooses the substeps of every dt by step doubling so
+  // that the estimated position error of each substep stays below it (World::lastSubsteps(),
+  // lastErrorEstimate()). 0 = off (then max_step_rotation applies).
+  double tolerance = 0.0;  // m
 
   template <class V>
   void reflect(V& v) {
@@ -51,6 +63,10 @@ struct PhysicsParams {
     v("baumgarte_beta", baumgarte_beta,
       {.unit = "1/s", .min = 0, .max = 1e4, .help = "Baumgarte position gain (C'' + 2aC' + b^2C = 0)"});
     v("gravity", gravity, {.unit = "m/s^2", .min = -1000, .max = 1000, .help = "Gravity, world frame (z up)"});
+    v("max_step_rotation", max_step_rotation,
+      {.unit = "deg", .min = 0, .max = 180, .help = "Split steps in which a body turns more than this (0 = off)"});
+    v("tolerance", tolerance,
+      {.unit = "m", .min = 0, .max = 1, .help = "Position error per substep; picks the substeps (0 = off)"});
   }
 };
 

@@ -1,9 +1,14 @@
 #include "physics/world.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <numbers>
 
 #include "physics/dense_solver.h"
+#include "physics/implicit_euler.h"
+#include "physics/rattle.h"
 #include "physics/rk4.h"
 #include "physics/solver_factory.h"
 #include "physics/stabilization.h"
@@ -14,7 +19,11 @@ namespace ponyhop {
 
 namespace {
 
+constexpr int kMaxSplits = 10;  // a substep is split in two at most this deep (1/1024 of it)
 constexpr double kHuge = 1e10;  // |x|, |v|, |w| beyond this: the run has diverged (cf. mj_checkPos)
+// A prescribed pose this far from its own prediction over one step is a jump (followTeleports).
+constexpr double kTeleportDistance = 1e-2;  // m
+constexpr double kTeleportAngle = 0.1;      // rad
 
 bool finiteAndBounded(const Eigen::Vector3d& v) { return v.allFinite() && v.lpNorm<Eigen::Infinity>() < kHuge; }
 
@@ -79,18 +88,181 @@ void World::step() {
     for (int i = 0; i < params_.substeps && ok(); ++i) reducedStep(params_.dt / params_.substeps);
     return;
   }
-  const double h = params_.dt / params_.substeps;
-  for (int i = 0; i < params_.substeps && ok(); ++i) substep(h);
+  last_substeps_ = 0;
+  last_error_ = 0.0;
+  if (params_.tolerance > 0.0) {
+    // Accuracy asked for: start from the last dt's count (coarser when it was well inside the
+    // tolerance: a second-order substep's error grows ~8x when h doubles), split by step doubling.
+    int n = std::max(params_.substeps, tolerance_substeps_);
+    const double h = params_.dt / n;
+    for (int i = 0; i < n && ok(); ++i) advanceToTolerance(h, 0);
+    const int coarse = std::max(1, last_substeps_ / 2);
+    tolerance_substeps_ = last_error_ < params_.tolerance / 16.0 ? std::max(1, coarse / 2) : coarse;
+    return;
+  }
+  // Enough substeps that the fastest body turns at most max_step_rotation per substep at the
+  // start of dt; substep() splits further when the motion speeds up within dt.
+  int n = params_.substeps;
+  const double theta = params_.max_step_rotation * std::numbers::pi / 180.0;
+  if (theta > 0.0) n = std::max(n, static_cast<int>(std::min(4096.0, std::ceil(params_.dt * maxAngularSpeed() / theta))));
+  const double h = params_.dt / n;
+  for (int i = 0; i < n && ok(); ++i) substep(h);
 }
 
-void World::substep(double h) {
+// One substep: stages 1-6, then contacts. When a stage asks for it (RATTLE's position solve did
+// not converge, or a body turned more than 2 max_step_rotation) the substep is undone and taken
+// as two half steps instead, up to kMaxSplits times.
+void World::substep(double h, int depth) {
+  const Snapshot start = snapshot();
+  if (!takeStep(h)) {
+    if (!ok()) return;
+    if (depth < kMaxSplits) {
+      restore(start);
+      substep(0.5 * h, depth + 1);
+      if (ok()) substep(0.5 * h, depth + 1);
+      return;
+    }
+    return stop("integrate", split_reason_ + " even with the step split " + std::to_string(kMaxSplits) + " times",
+                "the joints were pulled apart faster than any step can follow (a teleported kinematic parent, "
+                "an extreme mass ratio, NaN-free but runaway forces): check the prescribed motion and parameters");
+  }
+  resolveContacts();  // contact hook (the hopper's active set)
+  ++last_substeps_;
+}
+
+bool World::takeStep(double h) {
+  split_reason_.clear();
   updateKinematicBodies(time_);  // prescribed bodies: pose, velocity, acceleration at t
+  followTeleports(h);            // a prescribed body that jumps within the step carries its chain along
   applyExternalForces();         // gravity, joint damping, bending springs, air drag
   applyControllerForces();       // controller hook (empty for chains; the hopper adds one)
   solveJointForces();            // A lambda = b, F_c = J^T lambda, body accelerations
+  watchStability(h);             // explicit methods: stop when h is beyond the stability limit
   integrate(h);                  // t += h (RK4 re-runs the four stages above at its stage times)
   stabilize();                   // projection onto C = 0 and J v = -J_k v_k (when chosen)
-  resolveContacts();             // contact hook (none yet)
+  if (ok() && split_reason_.empty() && params_.max_step_rotation > 0.0 && params_.tolerance <= 0.0) {
+    const double turned = h * maxAngularSpeed();
+    if (turned > 2.0 * params_.max_step_rotation * std::numbers::pi / 180.0) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "a body turned %.3g deg in one step", turned * 180.0 / std::numbers::pi);
+      split_reason_ = buf;
+    }
+  }
+  return ok() && split_reason_.empty();
+}
+
+// Step doubling (Hairer, Norsett & Wanner I, II.4): one step of h and two of h/2 from the same
+// state; their difference estimates the error of the single step (the two half steps, which are
+// kept, are ~4x more accurate for a second-order method). Too large: both are undone and each half
+// is taken the same way. Contacts run only after an accepted pair (their state is not undone).
+void World::advanceToTolerance(double h, int depth) {
+  const Snapshot start = snapshot();
+  const bool coarse_ok = takeStep(h);
+  const State coarse = gatherState();
+  restore(start);
+  bool fine_ok = takeStep(0.5 * h);
+  if (fine_ok) fine_ok = takeStep(0.5 * h);
+  const double err = coarse_ok && fine_ok ? positionDistance(coarse, gatherState())
+                                          : std::numeric_limits<double>::infinity();
+  if (err > params_.tolerance && depth < kMaxSplits) {
+    restore(start);
+    advanceToTolerance(0.5 * h, depth + 1);
+    if (ok()) advanceToTolerance(0.5 * h, depth + 1);
+    return;
+  }
+  if (!fine_ok) {
+    if (ok()) {
+      stop("integrate", split_reason_ + " even with the step split " + std::to_string(kMaxSplits) + " times",
+           "the joints were pulled apart faster than any step can follow");
+    }
+    return;
+  }
+  last_error_ = std::max(last_error_, err);
+  resolveContacts();
+  last_substeps_ += 2;
+}
+
+// A kinematic body whose pose at t + h is far from what its own velocity and acceleration at t
+// predict (x + h v + h^2/2 a) was moved without a consistent velocity: a teleport. Integrating
+// through it would fling what hangs from it (the gap closed within one step is a velocity of
+// gap / h). Instead the dynamic bodies joined to it (through joints, not through other prescribed
+// bodies) are carried along by the same rigid jump, velocities rotated with it: a teleported head
+// takes its ponytail along. Smooth motions predict within O(h^3 jerk) and are left alone.
+void World::followTeleports(double h) {
+  if (!ok()) return;
+  for (size_t k = 0; k < bodies_.size(); ++k) {
+    const RigidBody& parent = bodies_[k];
+    if (parent.isDynamic() || !parent.motion) continue;
+    const KinematicState next = parent.motion(time_ + h);
+    const Eigen::Vector3d x_pred = parent.x + h * parent.v + 0.5 * h * h * parent.a;
+    const Eigen::Quaterniond q_pred = quaternionFromRotationVector(h * parent.w + 0.5 * h * h * parent.alpha) * parent.q;
+    const Eigen::Quaterniond jump = (next.q.normalized() * q_pred.conjugate()).normalized();
+    if (!next.x.allFinite() || !jump.coeffs().allFinite()) continue;  // the external-force check reports it
+    if ((next.x - x_pred).norm() < kTeleportDistance && rotationVector(jump).norm() < kTeleportAngle) continue;
+    // The dynamic bodies reachable from k through joints.
+    std::vector<char> carried(bodies_.size(), 0);
+    std::vector<int> todo{static_cast<int>(k)};
+    while (!todo.empty()) {
+      const int b = todo.back();
+      todo.pop_back();
+      for (const auto& j : joints_) {
+        const int other = j->bodyA() == b ? j->bodyB() : j->bodyB() == b ? j->bodyA() : kWorldBody;
+        if (other == kWorldBody || carried[other] || !bodies_[other].isDynamic()) continue;
+        carried[other] = 1;
+        todo.push_back(other);
+      }
+    }
+    for (size_t i = 0; i < bodies_.size(); ++i) {
+      if (!carried[i]) continue;
+      RigidBody& b = bodies_[i];
+      b.x = next.x + jump * (b.x - x_pred);
+      b.q = (jump * b.q).normalized();
+      b.v = jump * b.v;
+      b.w = jump * b.w;
+    }
+  }
+}
+
+void World::restore(const Snapshot& s) {
+  scatterState(s.state);
+  time_ = s.time;
+  stage_time_ = s.time;
+  monitor_ = s.monitor;
+  split_reason_.clear();
+  status_.clear();  // only called on a world that was running when the snapshot was taken
+}
+
+double World::positionDistance(const State& a, const State& b) const {
+  // Centre distance plus the turn times the radius of gyration: how far points of the body
+  // (at a typical distance from its centre) moved apart, in metres.
+  double d = 0.0;
+  for (size_t k = 0; k < dynamic_.size(); ++k) {
+    const RigidBody& body = bodies_[dynamic_[k]];
+    const double radius = std::sqrt(body.inertia.maxCoeff() / body.mass);
+    d = std::max(d, (a[k].x - b[k].x).norm() + radius * rotationVector(a[k].q * b[k].q.conjugate()).norm());
+  }
+  return d;
+}
+
+double World::maxAngularSpeed() const {
+  double w = 0.0;
+  for (int i : dynamic_) w = std::max(w, bodies_[i].w.norm());
+  return std::isfinite(w) ? w : 0.0;
+}
+
+void World::watchStability(double h) {
+  if (!ok() || params_.integrator == Integrator::ImplicitEuler) return;
+  const double limit = params_.integrator == Integrator::RK4 ? 2.83 : 2.0;
+  if (!monitor_.observe(h, gatherState(), gatherAccelerations(), limit)) return;
+  char what[160];
+  std::snprintf(what, sizeof what,
+                "the step is unstable: h rho = %.3g > %.3g (stiffness estimate rho = %.3g 1/s) and the state "
+                "increments grew %.3gx per step",
+                monitor_.hRho(), limit, monitor_.hRho() / h, monitor_.growth());
+  std::string cause = "an explicit integrator (" + std::string(enumName(params_.integrator)) +
+                      ") on forces too stiff for the step (stiff springs, servos, stops or damping): reduce dt, raise "
+                      "substeps, or use integrator = implicit_euler";
+  stop("integrate", what, cause.c_str());
 }
 
 void World::updateKinematicBodies(double t) {
@@ -148,6 +320,28 @@ void World::solveJointForces() {
 void World::integrate(double h) {
   const auto timed = clock_.time(Stage::Integrate);
   if (!ok()) return;
+  if (params_.integrator == Integrator::Rattle || params_.integrator == Integrator::ImplicitEuler) {
+    ConstrainedStep cs{bodies_, joints_, system_, *solver_,
+                       [this](double t) {
+                         updateKinematicBodies(t);
+                         applyExternalForces();
+                         applyControllerForces();
+                         return ok();
+                       },
+                       [this](double t) { updateKinematicBodies(t); }};
+    const ConstrainedStepResult r = params_.integrator == Integrator::Rattle
+                                        ? rattleStep(time_, h, solver_->lambda(), cs)
+                                        : linearlyImplicitEulerStep(time_, h, cs);
+    if (!ok()) return;
+    if (r.failed) {
+      split_reason_ = r.problem;  // substep() undoes the step and tries two halves
+      return;
+    }
+    time_ += h;
+    stage_time_ = time_;
+    checkBodies("integrate", false);
+    return;
+  }
   State state = gatherState();
   switch (params_.integrator) {
     case Integrator::SymplecticEuler:
@@ -156,6 +350,8 @@ void World::integrate(double h) {
     case Integrator::RK4:
       rk4Step(time_, h, gatherAccelerations(),
               [this](double t, const State& s, Accelerations& out) { accelerationsAt(t, s, out); }, state);
+      break;
+    default:
       break;
   }
   if (!ok()) return;  // a stage evaluation stopped the world
@@ -167,14 +363,17 @@ void World::integrate(double h) {
 
 void World::stabilize() {
   const auto timed = clock_.time(Stage::Stabilize);
-  if (!ok() || params_.stabilization != Stabilization::Projection || joints_.empty()) return;
+  // RATTLE keeps positions and velocities on the joints by construction.
+  if (!ok() || !split_reason_.empty() || params_.integrator == Integrator::Rattle) return;
+  if (params_.stabilization != Stabilization::Projection || joints_.empty()) return;
   updateKinematicBodies(time_);
   const ProjectionResult r = projectPositions(bodies_, joints_, system_, *solver_);
   if (!r.problem.empty() || !(r.error < 1e-6)) {
     char buf[96];
     std::snprintf(buf, sizeof buf, " (joint error %.3g m after %d iterations)", r.error, r.iterations);
     return stop("stabilize", (r.problem.empty() ? std::string("position projection failed") : r.problem) + buf,
-                "the joints were pulled far apart within one step: reduce dt or raise substeps");
+                "the joints were pulled far apart within one step (a step too large for stiff springs or a "
+                "fast whip): reduce dt or raise substeps, or use integrator = implicit_euler for stiff springs");
   }
   if (std::string e = ponyhop::projectVelocities(bodies_, joints_, system_, *solver_); !e.empty()) {
     return stop("stabilize", e, "redundant or duplicate joints");
@@ -189,6 +388,7 @@ void World::resolveContacts() {
   checkBodies("contact", false);
 }
 
+// ---------------------------------------------------------------------------------------------
 // Featherstone (physics.solver = featherstone; physics/featherstone.h, docs/SOLVERS.md). The
 // state lives in joint coordinates; one reduced step replaces the joint-force, integrate and
 // stabilize stages (joints hold by construction: stabilization has nothing to do) and reuses the
@@ -196,6 +396,8 @@ void World::resolveContacts() {
 // h = 0: evaluate only (ABA at the current state). params.substeps equal steps per dt.
 
 void World::reducedStep(double h) {
+  // ABA and the joint-space integration: one stage, charged to joint forces.
+  const auto timed = clock_.time(Stage::JointForces);
   const ReducedHooks hooks{[this](double t) { updateKinematicBodies(t); }, [this] {
                              applyExternalForces();
                              applyControllerForces();

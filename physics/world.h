@@ -17,6 +17,7 @@
 #include "physics/physics_params.h"
 #include "physics/rigid_body.h"
 #include "physics/stage_times.h"
+#include "physics/stability_monitor.h"
 
 namespace ponyhop {
 
@@ -43,8 +44,13 @@ class World {
   // Stops the world with a message (builders: invalid parameters).
   void fail(std::string message);
 
-  // Advance by params().dt in params().substeps equal steps. Does nothing once !ok().
+  // Advance by params().dt in params().substeps equal steps or more (max_step_rotation,
+  // tolerance: docs/STABILITY.md). Does nothing once !ok().
   void step();
+  // Substeps the last step() took (after automatic splitting / error control), and the largest
+  // estimated position error of one of them (m; tolerance mode only, else 0).
+  int lastSubsteps() const { return last_substeps_; }
+  double lastErrorEstimate() const { return last_error_; }
 
   // The force stages at the current state and time, without stepping: fills every dynamic
   // body's a, alpha and constraint force/torque, and lambda(). For tests and drawing forces.
@@ -93,7 +99,20 @@ class World {
   void resolveContacts();
   void reducedStep(double h);  // featherstone: replaces joint forces + integrate + stabilize
 
-  void substep(double h);
+  void substep(double h, int depth = 0);
+  void advanceToTolerance(double h, int depth);
+  bool takeStep(double h);  // stages 1-6 of one substep; false: split it (or stopped)
+  void watchStability(double h);
+  void followTeleports(double h);
+  double maxAngularSpeed() const;
+  struct Snapshot {
+    State state;
+    double time = 0.0;
+    StabilityMonitor monitor;
+  };
+  Snapshot snapshot() const { return {gatherState(), time_, monitor_}; }
+  void restore(const Snapshot& s);
+  double positionDistance(const State& a, const State& b) const;
   void accelerationsAt(double t, const State& state, Accelerations& out);
   State gatherState() const;
   void scatterState(const State& state);
@@ -116,6 +135,12 @@ class World {
   double potential_reference_ = 0.0;
   std::string status_;
   StageClock clock_;  // per-stage timing (stageTimes())
+  // Step control (docs/STABILITY.md).
+  StabilityMonitor monitor_;
+  std::string split_reason_;  // set by a stage that wants the substep split ("" = fine)
+  int last_substeps_ = 0;
+  double last_error_ = 0.0;
+  int tolerance_substeps_ = 0;  // tolerance mode: substeps to start the next dt with
 };
 
 }  // namespace ponyhop

@@ -19,6 +19,7 @@ ChainWorld chainWorld(Integrator integrator, Stabilization stabilization, double
   pp.dt = dt;
   pp.integrator = integrator;
   pp.stabilization = stabilization;
+  pp.max_step_rotation = 0.0;  // exactly dt per step (these tests measure the fixed-step methods)
   ChainParams cp;
   cp.links = links;
   ChainWorld cw = makeChainWorld(pp, cp, anchor);

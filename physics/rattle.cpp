@@ -1,0 +1,139 @@
+#include "physics/rattle.h"
+
+#include <cmath>
+#include <cstdio>
+
+#include "physics/stabilization.h"
+
+namespace ponyhop {
+
+Eigen::Quaterniond freeRotation(const Eigen::Quaterniond& q_in, const Eigen::Vector3d& inertia,
+                                const Eigen::Vector3d& L, double h) {
+  const double c1 = 1.0 / inertia(1) - 1.0 / inertia(0);
+  const double c2 = 1.0 / inertia(2) - 1.0 / inertia(0);
+  // A(tau): rotate about the world vector L by tau |L| / I_0 (flow of |Pi|^2 / (2 I_0)).
+  const auto about_l = [&](const Eigen::Quaterniond& q, double tau) {
+    return quaternionFromRotationVector(tau / inertia(0) * L) * q;
+  };
+  // B, C(tau): rotate about body axis i by tau c_i Pi_i (flow of c_i Pi_i^2 / 2, Pi = R^T L).
+  const auto about_axis = [&](const Eigen::Quaterniond& q, int i, double c, double tau) {
+    const double pi_i = (q.conjugate() * L)(i);
+    return q * quaternionFromRotationVector(tau * c * pi_i * Eigen::Vector3d::Unit(i));
+  };
+  Eigen::Quaterniond q = about_l(q_in, 0.5 * h);
+  if (c1 != 0.0) q = about_axis(q, 1, c1, 0.5 * h);
+  if (c2 != 0.0) q = about_axis(q, 2, c2, h);
+  if (c1 != 0.0) q = about_axis(q, 1, c1, 0.5 * h);
+  return about_l(q, 0.5 * h).normalized();
+}
+
+namespace {
+
+struct Start {
+  Eigen::Vector3d x, p, l;  // position, momentum + h/2 F, angular momentum + h/2 torque
+  Eigen::Quaterniond q;
+};
+
+std::string number(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", x);
+  return buf;
+}
+
+}  // namespace
+
+ConstrainedStepResult rattleStep(double t, double h, const Eigen::VectorXd& lambda_guess, ConstrainedStep& s,
+                                 double tolerance, int max_iterations) {
+  ConstrainedStepResult result;
+  std::vector<RigidBody>& bodies = s.bodies;
+  const size_t n = bodies.size();
+
+  // First kick, known part: forces at (t, q_n, v_n).
+  if (!s.forces(t)) return result;
+  std::vector<Start> start(n);
+  for (size_t i = 0; i < n; ++i) {
+    const RigidBody& b = bodies[i];
+    if (!b.isDynamic()) continue;
+    start[i] = {b.x, b.mass * b.v + 0.5 * h * b.force, b.worldInertia() * b.w + 0.5 * h * b.torque, b.q};
+  }
+  // J(q_n): the constraint impulse of the first kick acts along the start's Jacobian (SHAKE).
+  s.system.evaluate(bodies, s.joints);
+  const ConstraintSystem jn = s.system;
+  const int rows = jn.rows();
+  Eigen::VectorXd mu = lambda_guess.size() == rows ? lambda_guess : Eigen::VectorXd::Zero(rows);
+
+  // Positions at t + h for multipliers mu: the first kick with J^T mu, then the drift.
+  std::vector<Vector6d> fc(n);
+  const auto drift = [&](const Eigen::VectorXd& m) {
+    std::fill(fc.begin(), fc.end(), Vector6d::Zero());
+    if (rows > 0) jn.addTransposeTimes(m, bodies, fc);
+    for (size_t i = 0; i < n; ++i) {
+      RigidBody& b = bodies[i];
+      if (!b.isDynamic()) continue;
+      const Eigen::Vector3d p = start[i].p + 0.5 * h * fc[i].head<3>();
+      const Eigen::Vector3d l = start[i].l + 0.5 * h * fc[i].tail<3>();
+      b.x = start[i].x + h / b.mass * p;
+      b.q = freeRotation(start[i].q, b.inertia, l, h);
+      b.v = p / b.mass;                      // predicted velocity (the second kick's forces)
+      b.w = b.worldInverseInertia() * l;
+    }
+  };
+
+  // Position multipliers: chord iteration on C(q'(mu)) = 0 (kinematic bodies at t + h).
+  s.kinematicAt(t + h);
+  const double scale = 2.0 / (h * h);
+  double previous = 0.0;
+  bool factored = false;
+  for (int k = 0;; ++k) {
+    drift(mu);
+    s.system.evaluate(bodies, s.joints);
+    const double err = s.system.maxError();
+    result.iterations = k;
+    result.joint_error = err;
+    if (!std::isfinite(err)) {
+      result.failed = true;
+      result.problem = "RATTLE position solve produced a non-finite joint error";
+      return result;
+    }
+    if (err <= tolerance) break;
+    // Round-off floor: no more progress below 1e-11 m is as good as it gets.
+    if (k > 0 && err > 0.5 * previous && err < 1e-11) break;
+    if (k >= max_iterations || (k > 3 && err > 0.9 * previous)) {
+      result.failed = true;
+      result.problem = "RATTLE position solve did not converge (joint error " + number(err) + " m after " +
+                       std::to_string(k) + " iterations)";
+      return result;
+    }
+    // Refactor at the latest iterate unless the last chord step contracted by 4x or better.
+    if (!factored || err > 0.25 * previous) {
+      if (!s.solver.factor(bodies, s.system)) {
+        result.failed = true;
+        result.problem = "the constraint matrix J M^-1 J^T is singular";
+        return result;
+      }
+      factored = true;
+    }
+    mu += scale * s.solver.solve(-s.system.C());
+    previous = err;
+  }
+
+  // Second kick at (t + h, q_{n+1}) with the forces at the predicted velocity.
+  if (!s.forces(t + h)) return result;
+  for (size_t i = 0; i < n; ++i) {
+    RigidBody& b = bodies[i];
+    if (!b.isDynamic()) continue;
+    const Eigen::Vector3d p = start[i].p + 0.5 * h * fc[i].head<3>() + 0.5 * h * b.force;
+    const Eigen::Vector3d l = start[i].l + 0.5 * h * fc[i].tail<3>() + 0.5 * h * b.torque;
+    b.v = p / b.mass;
+    b.w = b.worldInverseInertia() * l;
+  }
+  // Velocity multipliers: J(q') v' = -J_k v_k, the mass-metric projection (the impulse
+  // h/2 J^T nu changes p and L by exactly that correction).
+  if (std::string e = projectVelocities(bodies, s.joints, s.system, s.solver); !e.empty()) {
+    result.failed = true;
+    result.problem = "RATTLE velocity solve: " + e;
+  }
+  return result;
+}
+
+}  // namespace ponyhop
