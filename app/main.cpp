@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   ponyhop::addSceneDocCommand(app, exit_code);
   ponyhop::addRenderCommand(app, exit_code);
   ponyhop::addSimCommand(app, exit_code);
+  ponyhop::addBenchCommand(app, exit_code);
 #ifdef PONYHOP_WINDOW
   ponyhop::addRunCommand(app, exit_code);
 #endif

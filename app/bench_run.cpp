@@ -1,0 +1,245 @@
+#include "app/bench_run.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+
+#include "engine/scene_runtime.h"
+
+namespace ponyhop {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr double kDriftSample = 1.0 / 240.0;  // s, how often the long run samples energy, joints, speed
+
+double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+long stepsFor(double duration, double dt) { return std::lround(duration / dt); }
+
+std::unique_ptr<SceneRuntime> build(const BenchCase& c, const Method& m, double dt) {
+  std::vector<Override> o = c.overrides;
+  for (Override& x : methodOverrides(m, dt)) o.push_back(std::move(x));
+  return std::make_unique<SceneRuntime>(loadScene(c.scene, o));
+}
+
+// The point whose trajectory is compared: the chain's free end, else the hopper's body centre.
+Eigen::Vector3d trackedPoint(const SceneRuntime& rt) {
+  if (const Chain* c = rt.chain()) return c->tip(rt.world());
+  if (const Hopper* h = rt.hopper()) return rt.world().body(h->model().body).x;
+  return Eigen::Vector3d::Zero();
+}
+
+Eigen::Vector3d trackedVelocity(const SceneRuntime& rt) {
+  if (const Chain* c = rt.chain()) {
+    const RigidBody& b = rt.world().body(c->links.back());
+    return b.v + b.w.cross(c->tip(rt.world()) - b.x);
+  }
+  if (const Hopper* h = rt.hopper()) return rt.world().body(h->model().body).v;
+  return Eigen::Vector3d::Zero();
+}
+
+// Samples of a run with step dt: every step when dt >= kBenchGrid, else every kBenchGrid.
+long sampleEvery(double dt) { return std::max(1L, std::lround(kBenchGrid / dt)); }
+
+}  // namespace
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::vector<Override> methodOverrides(const Method& m, double dt) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", dt);
+  return {{"physics.solver", m.solver},          {"physics.integrator", m.integrator},
+          {"physics.stabilization", m.stabilization}, {"physics.dt", buf},
+          {"physics.substeps", "1"},             {"physics.max_step_rotation", "0"},
+          {"physics.tolerance", "0"}};
+}
+
+Trajectory simulateTrajectory(const BenchCase& c, const Method& m, double dt, double duration) {
+  Trajectory t;
+  const long every = sampleEvery(dt);
+  t.stride = every * dt;
+  auto rt = build(c, m, dt);
+  if (!rt->ok()) {
+    t.status = rt->status();
+    return t;
+  }
+  t.p.push_back(trackedPoint(*rt));
+  const long n = stepsFor(duration, dt);
+  for (long i = 1; i <= n; ++i) {
+    if (!rt->step()) {
+      t.status = rt->status();
+      return t;
+    }
+    if (i % every == 0) t.p.push_back(trackedPoint(*rt));
+  }
+  return t;
+}
+
+std::array<double, 2> trajectoryError(const Trajectory& run, const Trajectory& ref, double horizon) {
+  const long ratio = std::max(1L, std::lround(run.stride / kBenchGrid));
+  double sum = 0.0, worst = 0.0;
+  long count = 0;
+  for (size_t k = 0; k < run.p.size() && k * run.stride <= horizon + 1e-9; ++k) {
+    const size_t r = k * ratio;
+    if (r >= ref.p.size()) break;
+    const double e = (run.p[k] - ref.p[r]).norm();
+    sum += e * e;
+    worst = std::max(worst, e);
+    ++count;
+  }
+  return {count ? std::sqrt(sum / count) : 0.0, worst};
+}
+
+RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizon, int repeats,
+                   const Trajectory& reference) {
+  RunResult r;
+  const long n = stepsFor(horizon, dt);
+  const long every = sampleEvery(dt);
+  r.steps = n;
+  std::unique_ptr<SceneRuntime> first;
+  Trajectory traj;
+  traj.stride = every * dt;
+  std::vector<double> per_step;
+  std::vector<StageTimes> stages;
+  std::vector<double> substeps;
+  for (int rep = 0; rep < std::max(1, repeats); ++rep) {
+    auto rt = build(c, m, dt);
+    if (!rt->ok()) {
+      r.status = "failed";
+      r.reason = rt->status();
+      return r;
+    }
+    if (rep == 0) traj.p.push_back(trackedPoint(*rt));
+    rt->world().resetStageTimes();
+    Clock::duration total{};
+    long taken = 0, substep_sum = 0;
+    for (long i = 1; i <= n; ++i) {
+      const auto t0 = Clock::now();
+      const bool ok = rt->step();
+      total += Clock::now() - t0;
+      ++taken;
+      substep_sum += std::max(1, rt->world().lastSubsteps());
+      if (!ok) break;
+      if (rep == 0 && i % every == 0) traj.p.push_back(trackedPoint(*rt));
+    }
+    per_step.push_back(seconds(total) / static_cast<double>(std::max(1L, taken)));
+    stages.push_back(rt->world().stageTimes());
+    substeps.push_back(static_cast<double>(substep_sum) / std::max(1L, taken));
+    if (!rt->ok()) {  // deterministic: every repeat would stop the same way
+      r.status = "failed";
+      r.reason = rt->status();
+      r.steps = taken;
+      break;
+    }
+    if (rep == 0) first = std::move(rt);
+  }
+  // Cost: the median repeat, its stages per step.
+  const double med = median(per_step);
+  size_t pick = 0;
+  for (size_t i = 0; i < per_step.size(); ++i) {
+    if (std::abs(per_step[i] - med) < std::abs(per_step[pick] - med)) pick = i;
+  }
+  r.us_per_step = 1e6 * med;
+  r.us_per_sim_second = r.us_per_step / dt;
+  r.substeps = substeps[pick];
+  double staged = 0.0;
+  for (int s = 0; s < StageTimes::kCount; ++s) {
+    r.stage_us[s] = 1e6 * stages[pick].seconds[s] / std::max(1L, r.steps);
+    staged += r.stage_us[s];
+  }
+  r.other_us = std::max(0.0, 1e6 * per_step[pick] - staged);
+  if (r.status != "ok") return r;
+  const auto err = trajectoryError(traj, reference, horizon);
+  r.err_rms = err[0];
+  r.err_max = err[1];
+
+  // Long run: the first repeat continued (untimed) to the long duration.
+  SceneRuntime& rt = *first;
+  const long total_steps = stepsFor(c.long_duration, dt);
+  const long sample = std::max(1L, std::lround(kDriftSample / dt));
+  const double e0 = rt.chainEnergy();  // after the horizon: equal to the start's up to the drift so far
+  auto fresh = build(c, m, dt);
+  const double e_start = fresh->chainEnergy();
+  fresh.reset();
+  double drift = std::abs(e0 - e_start);
+  const auto observe = [&] {
+    r.joint_drift = std::max(r.joint_drift, rt.maxJointError());
+    r.max_speed = std::max(r.max_speed, trackedVelocity(rt).norm());
+    if (c.conservative) drift = std::max(drift, std::abs(rt.chainEnergy() - e_start));
+  };
+  observe();
+  for (long i = n + 1; i <= total_steps; ++i) {
+    if (!rt.step()) break;
+    if (i % sample == 0) observe();
+  }
+  observe();
+  r.long_reached = rt.time();
+  if (c.conservative) {
+    r.energy_drift = drift;
+    r.energy_rel = std::abs(e_start) > 0.0 ? drift / std::abs(e_start) : drift;
+  }
+  if (!rt.ok()) {
+    r.long_status = "stopped";
+    r.long_reason = rt.status();
+    return r;
+  }
+  // Bounded: joints held to a centimetre, the tracked point slower than 100 m/s (the released
+  // chain's tip peaks at 13-17 m/s), energy within its own size (conservative), the hopper's
+  // body between 0.2 m and 5 m high.
+  char why[160] = "";
+  if (r.joint_drift > 1e-2) std::snprintf(why, sizeof why, "joint error %.3g m > 1 cm", r.joint_drift);
+  else if (r.max_speed > 100.0) std::snprintf(why, sizeof why, "speed %.3g m/s > 100 m/s", r.max_speed);
+  else if (c.conservative && r.energy_rel > 1.0) std::snprintf(why, sizeof why, "energy drift %.3g x E0", r.energy_rel);
+  else if (rt.hopper() && !(trackedPoint(rt).z() > 0.2 && trackedPoint(rt).z() < 5.0)) {
+    std::snprintf(why, sizeof why, "hopper body at z = %.3g m (fell or flew off)", trackedPoint(rt).z());
+  }
+  if (why[0]) {
+    r.long_status = "unbounded";
+    r.long_reason = why;
+  }
+  return r;
+}
+
+ScalingResult benchScaling(const std::string& scene, const std::string& solver, int links, double budget) {
+  ScalingResult s;
+  BenchCase c;
+  c.scene = scene;
+  c.overrides = {{"chain.links", std::to_string(links)}, {"anchor.motion", "fixed"}};
+  const Method m{solver, "symplectic_euler", "none"};
+  auto rt = build(c, m, kBenchGrid);
+  if (!rt->ok()) {
+    s.status = "failed";
+    s.reason = rt->status();
+    return s;
+  }
+  // One untimed-for-the-result step: warms caches and estimates the cost.
+  auto t0 = Clock::now();
+  rt->step();
+  const double estimate = std::max(1e-7, seconds(Clock::now() - t0));
+  const int blocks = 5;
+  const long per_block = std::clamp(std::lround(budget / blocks / estimate), 1L, 2000L);
+  std::vector<double> times;
+  rt->world().resetStageTimes();
+  for (int b = 0; b < blocks && rt->ok(); ++b) {
+    if (b > 0 && estimate * per_block * b > budget) break;  // slow: fewer blocks
+    t0 = Clock::now();
+    for (long i = 0; i < per_block && rt->step(); ++i) ++s.steps;
+    times.push_back(seconds(Clock::now() - t0) / per_block);
+  }
+  if (!rt->ok()) {
+    s.status = "failed";
+    s.reason = rt->status();
+  }
+  s.us_per_step = 1e6 * median(times);
+  s.joint_forces_us = 1e6 * rt->world().stageTimes()[Stage::JointForces] / std::max(1, s.steps);
+  return s;
+}
+
+}  // namespace ponyhop

@@ -1,0 +1,96 @@
+// The bench's measurements of one run (`ponyhop bench`, docs/bench/README.md): a scene file with
+// overrides, stepped by SceneRuntime exactly as `ponyhop sim` steps it, timed step by step, its
+// tracked point (the chain's tip, the hopper's body centre) sampled on a fixed time grid.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "engine/scene_io.h"
+#include "physics/stage_times.h"
+
+namespace ponyhop {
+
+// The time grid every trajectory is sampled on: 1/1920 s, the finest dt of the sweep, so that
+// every dt of the sweep (1/60 ... 1/1920 s) and every reference step lands on it.
+constexpr double kBenchGrid = 1.0 / 1920.0;
+
+// One scene set-up of the bench: "chain N = 8, fixed anchor", "hopper".
+struct BenchCase {
+  std::string id;     // file-name safe: chain8_fixed
+  std::string title;  // for tables: chain N=8 fixed
+  std::string scene;  // scene file
+  std::vector<Override> overrides;
+  int links = 0;               // chain: links; hopper: 0
+  std::string anchor;          // chain: fixed | shake; hopper: ""
+  bool conservative = false;   // energy is conserved (fixed anchor, no damping): its drift is measured
+  double long_duration = 0.0;  // s, the long run (drift, boundedness)
+};
+
+// A position sampled every `stride` seconds from t = 0 (p[k] at k stride): every step of the run,
+// or every kBenchGrid seconds when its steps are finer than that.
+struct Trajectory {
+  double stride = kBenchGrid;
+  std::vector<Eigen::Vector3d> p;
+  std::string status;  // "" when the run reached its end, else the World's message
+  double duration() const { return p.empty() ? 0.0 : (p.size() - 1) * stride; }
+};
+
+// A scene's physics settings for one run.
+struct Method {
+  std::string solver, integrator, stabilization;
+  std::string name() const { return solver + "/" + integrator + "/" + stabilization; }
+};
+
+// The overrides that make a run use `method` at step dt, in fixed steps (exactly one step of dt
+// per World::step(): no automatic substeps, no error control), so that dt means dt.
+std::vector<Override> methodOverrides(const Method& method, double dt);
+
+// Runs the case with the method at dt for `duration` seconds and samples the tracked point.
+Trajectory simulateTrajectory(const BenchCase& c, const Method& method, double dt, double duration);
+
+// RMS and max distance of `run` from `reference` (sampled every kBenchGrid) over run's samples
+// in [0, horizon]. Returns {rms, max}.
+std::array<double, 2> trajectoryError(const Trajectory& run, const Trajectory& reference, double horizon);
+
+struct RunResult {
+  std::string status = "ok";  // ok | failed | cannot_run
+  std::string reason;         // the World's status message or why it cannot run
+  long steps = 0;             // steps in the timed horizon run
+  double us_per_step = 0.0;   // median over repeats
+  double us_per_sim_second = 0.0;
+  std::array<double, StageTimes::kCount> stage_us{};  // per step, the median repeat
+  double other_us = 0.0;                              // per step: step() minus the stages
+  double substeps = 1.0;                              // mean World::lastSubsteps()
+  double err_rms = 0.0, err_max = 0.0;                // m, against the reference over the horizon
+  // Long run (continues the first repeat to BenchCase::long_duration).
+  std::string long_status = "ok";  // ok | stopped | unbounded | skipped
+  std::string long_reason;
+  double long_reached = 0.0;    // s, simulated before it stopped
+  double energy_drift = -1.0;   // J, max |E - E0| (conservative cases), -1: not applicable
+  double energy_rel = -1.0;     // energy_drift / |E0| (E0 against the hanging reference)
+  double joint_drift = 0.0;     // m, max joint error sampled every 1/240 s
+  double max_speed = 0.0;       // m/s, the tracked point's largest speed (sampled every 1/240 s)
+};
+
+// The timed run: `repeats` runs of [0, horizon] (cost = median), the error against the
+// reference, then the first repeat continued to the case's long duration.
+RunResult benchRun(const BenchCase& c, const Method& method, double dt, double horizon, int repeats,
+                   const Trajectory& reference);
+
+// Cost per step of a chain of `links` links with `solver` (symplectic Euler, no stabilization,
+// fixed anchor, dt 1/1920 s: one solve per step), median of blocks of steps within ~budget seconds.
+struct ScalingResult {
+  std::string status = "ok";
+  std::string reason;
+  double us_per_step = 0.0;
+  double joint_forces_us = 0.0;  // the joint-force stage's share per step
+  int steps = 0;
+};
+ScalingResult benchScaling(const std::string& scene, const std::string& solver, int links, double budget);
+
+double median(std::vector<double> v);
+
+}  // namespace ponyhop

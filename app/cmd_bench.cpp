@@ -1,0 +1,471 @@
+// `ponyhop bench [--quick] [--out DIR]`: speed against accuracy (docs/bench/README.md).
+//
+// For the canonical chain (N = 8 and 32, fixed and shaking anchor) and the hopper, every
+// solver x integrator x stabilization (from EnumNames, so new ones appear by themselves) x dt:
+//   accuracy: RMS and max distance of the tracked point (chain tip, hopper body) from a reference
+//             the bench computes itself: reduced coordinates (featherstone) with RK4 at a step
+//             halved until the trajectories at h and h/2 agree within 1e-7 m over the horizon;
+//             the released chain is chaotic, so the horizon is where that holds (found, stated);
+//   long runs: energy drift (fixed anchor), joint drift, whether the motion stays bounded;
+//   cost:     microseconds per step and per simulated second (median of repeats), per stage.
+// Scaling: cost per step for N = 2 ... 1024 per solver. MuJoCo's Euler and RK4 run beside them
+// when it was found at configure time. Writes CSV, Markdown and gnuplot PNGs.
+#include <sys/utsname.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <thread>
+
+#include "app/bench_mujoco.h"
+#include "app/bench_report.h"
+#include "app/bench_run.h"
+#include "app/commands.h"
+#include "engine/scene_runtime.h"
+#include "physics/physics_params.h"
+
+namespace ponyhop {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr double kConverged = 1e-7;  // m: reference at h and h/2 agree within this
+
+struct BenchArgs {
+  std::string out = "docs/bench";
+  bool quick = false;
+  std::string chain_scene = "assets/scenes/chain.json";
+  std::string hopper_scene = "assets/scenes/hopper.json";
+  bool hopper = true;
+  bool mujoco = true;
+  double long_fixed = -1.0, long_shake = -1.0, long_hopper = -1.0;  // s, < 0: the mode's default
+  int repeats = -1;
+  std::string command_line;
+};
+
+struct Config {
+  std::vector<int> links;
+  std::vector<std::string> anchors{"fixed", "shake"};
+  std::vector<int> dt_denominators;  // dt = 1 / d
+  double horizon_cap = 0.0;          // s, at most this much of the converged horizon is used
+  double reference_span = 0.0;       // s, how far the reference runs (looking for its horizon)
+  double reference_h0 = 0.0;         // s, the reference's first step
+  double reference_h_min = 0.0;
+  double long_fixed = 0.0, long_shake = 0.0, long_hopper = 0.0;  // s
+  int repeats = 1;
+  std::vector<int> scaling_links;
+  double scaling_budget = 0.0;  // s of stepping per (solver, N)
+};
+
+Config makeConfig(bool quick) {
+  Config c;
+  if (quick) {
+    c.links = {8};
+    c.dt_denominators = {120, 480};
+    c.horizon_cap = 0.25;
+    c.reference_span = 0.3;
+    c.reference_h0 = 1.0 / 3840.0;
+    c.reference_h_min = 1.0 / 15360.0;
+    c.long_fixed = c.long_shake = c.long_hopper = 0.5;
+    c.repeats = 1;
+    c.scaling_links = {2, 4, 8, 16, 32};
+    c.scaling_budget = 0.02;
+  } else {
+    c.links = {8, 32};
+    c.dt_denominators = {60, 120, 240, 480, 960, 1920};
+    c.horizon_cap = 1.0;
+    c.reference_span = 2.5;
+    c.reference_h0 = 1.0 / 7680.0;
+    c.reference_h_min = 1.0 / 61440.0;
+    c.long_fixed = 60.0;
+    c.long_shake = 10.0;
+    c.long_hopper = 10.0;
+    c.repeats = 3;
+    for (int n = 2; n <= 1024; n *= 2) c.scaling_links.push_back(n);
+    c.scaling_budget = 0.5;
+  }
+  return c;
+}
+
+std::vector<Method> allMethods() {
+  std::vector<Method> m;
+  for (auto s : EnumNames<SolverKind>::names) {
+    for (auto i : EnumNames<Integrator>::names) {
+      for (auto st : EnumNames<Stabilization>::names) m.push_back({std::string(s), std::string(i), std::string(st)});
+    }
+  }
+  return m;
+}
+
+// What cannot run at all (not tried): reduced coordinates hold the joints by construction.
+std::string cannotRun(const Method& m) {
+  if (m.solver == "featherstone" && m.stabilization != "none") {
+    return "solver 'featherstone' works in joint coordinates: the joints hold by construction and there is no "
+           "drift for stabilization '" +
+           m.stabilization + "' to correct (run it with stabilization = none)";
+  }
+  return "";
+}
+
+struct Reference {
+  Method method;
+  Trajectory trajectory;
+  double h = 0.0;
+  double horizon = 0.0;  // s, where h and h/2 agree within kConverged
+  std::string note;
+};
+
+// Halves the reference step from h0 until the runs at h and h/2 agree within kConverged over at
+// least `target` seconds (or h reaches h_min). The finer run is the reference.
+Reference computeReference(const BenchCase& c, const Config& cfg, double target, std::vector<ReferenceCheck>& checks) {
+  Reference ref;
+  ref.method = {"featherstone", "rk4", "none"};
+  Trajectory a = simulateTrajectory(c, ref.method, cfg.reference_h0, cfg.reference_span);
+  if (a.p.size() < 2) {  // featherstone cannot express this scene (the hopper's contact)
+    ref.note = "reduced coordinates cannot run this scene (" + a.status +
+               "); the reference is maximal-coordinate dense/rk4/projection, converged the same way";
+    ref.method = {"dense", "rk4", "projection"};
+    a = simulateTrajectory(c, ref.method, cfg.reference_h0, cfg.reference_span);
+  }
+  double h = cfg.reference_h0;
+  while (true) {
+    std::fprintf(stderr, "bench: %s reference %s at h = 1/%.0f s\n", c.id.c_str(), ref.method.name().c_str(),
+                 0.5 / h);
+    Trajectory b = simulateTrajectory(c, ref.method, 0.5 * h, cfg.reference_span);
+    const size_t n = std::min(a.p.size(), b.p.size());
+    double horizon = 0.0, max_diff = 0.0;
+    const double check_time = std::min(target, cfg.reference_span);
+    bool within = true;
+    for (size_t k = 0; k < n; ++k) {
+      const double d = (a.p[k] - b.p[k]).norm();
+      if (k * kBenchGrid <= check_time + 1e-9) max_diff = std::max(max_diff, d);
+      if (within && d <= kConverged) horizon = k * kBenchGrid;
+      else within = false;
+    }
+    std::string status = a.status.empty() ? b.status : a.status;
+    checks.push_back({c.id, ref.method.name(), h, max_diff, check_time, horizon, status});
+    ref.trajectory = std::move(b);
+    ref.h = 0.5 * h;
+    ref.horizon = horizon;
+    if (horizon >= target - 1e-9 || 0.5 * h <= cfg.reference_h_min * 1.0001) break;
+    a = std::move(ref.trajectory);
+    h *= 0.5;
+  }
+  return ref;
+}
+
+MujocoChain mujocoChainOf(const BenchCase& c) {
+  SceneRuntime rt(loadScene(c.scene, c.overrides));
+  MujocoChain m;
+  const Chain& ch = *rt.chain();
+  m.anchor = ch.anchor(rt.world());
+  m.length = ch.length;
+  m.gravity = rt.world().params().gravity;
+  for (size_t i = 0; i < ch.links.size(); ++i) {
+    const RigidBody& b = rt.world().body(ch.links[i]);
+    m.mass.push_back(b.mass);
+    m.inertia.push_back(b.inertia);
+    m.q.push_back(b.q);
+    m.radius.push_back(ch.radii[i]);
+  }
+  return m;
+}
+
+std::string dtName(double dt) { return "1/" + fmt(1.0 / dt, "%.0f"); }
+
+std::string loadAverage() {
+  std::ifstream f("/proc/loadavg");
+  std::string a, b, c;
+  f >> a >> b >> c;
+  return a.empty() ? "unknown" : a + " " + b + " " + c;
+}
+
+// Markdown: one table of methods at a dt, the Pareto front, per-stage costs.
+void writeMarkdown(const std::string& path, const BenchArgs& args, const Config& cfg,
+                   const std::vector<std::unique_ptr<BenchCase>>& cases, const std::vector<BenchRow>& rows,
+                   const std::vector<Reference>& refs, const std::vector<ReferenceCheck>& checks,
+                   const std::vector<ScalingRow>& scaling, const std::vector<std::string>& notes,
+                   const std::string& load_before, const std::string& load_after, double wall) {
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error(path + ": cannot write the file");
+  utsname u{};
+  uname(&u);
+  f << "# Bench: speed against accuracy\n\n"
+    << "Made by `" << args.command_line << "` (" << (args.quick ? "quick mode" : "full") << ", " << fmt(wall, "%.0f")
+    << " s wall) on " << u.nodename << " (" << u.machine << ", " << std::thread::hardware_concurrency()
+    << " hardware threads); load average before " << load_before << ", after " << load_after
+    << ". Timings on a shared, loaded machine are noisy upper bounds; compare methods within one run.\n\n"
+    << "Files: `bench.csv` (every run, failed ones with the World's message), `reference.csv` (the "
+       "reference's convergence check), `scaling.csv`, `error_vs_cost_*.png`, `scaling.png`.\n\n"
+    << "Every run uses fixed steps (`physics.substeps = 1`, `max_step_rotation = 0`, `tolerance = 0`): dt "
+       "means dt. Error: RMS and max distance of the tracked point (chain: the free end; hopper: the body "
+       "centre) from the reference at the run's own steps over the converged horizon. Long runs continue the "
+       "first run untimed: energy drift max|E - E0| (fixed anchor, conservative), joint drift (max |C| sampled "
+       "every 1/240 s) and bounded (joints within 1 cm, speed below 100 m/s, energy drift below E0, the hopper "
+       "between 0.2 and 5 m high).\n\n";
+  for (const auto& n : notes) f << "- " << n << '\n';
+  if (!notes.empty()) f << '\n';
+
+  f << "## Reference and its horizon\n\n"
+    << "| case | reference | h | h/2 | max tip difference over the check span | check span (s) | horizon within "
+       "1e-7 m (s) |\n|---|---|---|---|---|---|---|\n";
+  for (const auto& c : checks) {
+    f << "| " << c.case_id << " | " << c.method << " | " << dtName(c.h) << " | " << dtName(0.5 * c.h) << " | "
+      << fmt(c.max_diff) << " | " << fmt(c.check_time) << " | " << fmt(c.horizon) << " |\n";
+  }
+  f << "\nHorizon used for the error columns (the converged horizon, cut to a multiple of 1/60 s and at most "
+    << fmt(cfg.horizon_cap) << " s):\n\n";
+  for (size_t i = 0; i < refs.size(); ++i) {
+    f << "- " << cases[i]->title << ": reference " << refs[i].method.name() << " at h = " << dtName(refs[i].h)
+      << " s, converged for " << fmt(refs[i].horizon) << " s; error measured over ";
+    double used = 0.0;
+    for (const auto& r : rows) {
+      if (r.bench_case == cases[i].get()) used = r.horizon;
+    }
+    f << fmt(used) << " s." << (refs[i].note.empty() ? "" : " " + refs[i].note) << '\n';
+  }
+
+  for (size_t ci = 0; ci < refs.size(); ++ci) {
+    const BenchCase& c = *cases[ci];
+    f << "\n## " << c.title << "\n\n![error against cost](error_vs_cost_" << c.id << ".png)\n\n";
+    const double pick = args.quick ? 1.0 / 480.0 : 1.0 / 240.0;
+    f << "### All methods at dt = " << dtName(pick) << " s\n\n"
+      << "| method | status | us/step | ms per sim. s | RMS err (m) | max err (m) | energy drift (J) | joint drift (m) "
+         "| long run (" << fmt(c.long_duration) << " s) |\n|---|---|---|---|---|---|---|---|---|\n";
+    for (const auto& row : rows) {
+      if (row.bench_case != &c || std::abs(row.dt - pick) > 1e-12) continue;
+      const RunResult& r = row.r;
+      const bool ok = r.status == "ok";
+      std::string why = r.reason;
+      if (why.size() > 140) why = why.substr(0, 137) + "...";
+      f << "| " << row.method << " | " << r.status << (why.empty() ? "" : ": " + why) << " | "
+        << (r.status == "cannot_run" ? "" : fmt(r.us_per_step)) << " | "
+        << (r.status == "cannot_run" ? "" : fmt(r.us_per_sim_second * 1e-3)) << " | " << (ok ? fmt(r.err_rms) : "")
+        << " | " << (ok ? fmt(r.err_max) : "") << " | " << (ok && r.energy_drift >= 0 ? fmt(r.energy_drift) : "")
+        << " | " << (ok ? fmt(r.joint_drift) : "") << " | "
+        << (ok ? r.long_status + (r.long_status == "ok" ? "" : " at t = " + fmt(r.long_reached) + " s") : "")
+        << " |\n";
+    }
+    f << "\n### Pareto front (no other run is both cheaper and more accurate)\n\n"
+      << "| method | dt (s) | ms per sim. s | RMS err (m) | max err (m) |\n|---|---|---|---|---|\n";
+    for (size_t i : paretoFront(rows, c.id)) {
+      const auto& row = rows[i];
+      f << "| " << row.method << " | " << dtName(row.dt) << " | " << fmt(row.r.us_per_sim_second * 1e-3) << " | "
+        << fmt(row.r.err_rms) << " | " << fmt(row.r.err_max) << " |\n";
+    }
+    f << "\n### Cost of each stage (us per step, dt = " << dtName(pick) << " s, completed runs)\n\n| method |";
+    for (auto n : StageTimes::names) f << ' ' << n << " |";
+    f << " other |\n|---|";
+    for (int s = 0; s <= StageTimes::kCount; ++s) f << "---|";
+    f << '\n';
+    for (const auto& row : rows) {
+      if (row.bench_case != &c || std::abs(row.dt - pick) > 1e-12 || row.r.status != "ok") continue;
+      if (row.solver == "mujoco") continue;
+      f << "| " << row.method << " |";
+      for (double v : row.r.stage_us) f << ' ' << fmt(v) << " |";
+      f << ' ' << fmt(row.r.other_us) << " |\n";
+    }
+  }
+
+  f << "\n## Scaling\n\n![cost against N](scaling.png)\n\n"
+    << "Symplectic Euler, no stabilization, fixed anchor, dt = 1/1920 s (one solve per step), median of blocks "
+       "of steps.\n\n| N |";
+  std::vector<std::string> solvers;
+  for (const auto& s : scaling) {
+    if (std::find(solvers.begin(), solvers.end(), s.solver) == solvers.end()) solvers.push_back(s.solver);
+  }
+  for (const auto& s : solvers) f << ' ' << s << " us/step |";
+  f << "\n|---|";
+  for (size_t i = 0; i < solvers.size(); ++i) f << "---|";
+  f << '\n';
+  for (int n : cfg.scaling_links) {
+    f << "| " << n << " |";
+    for (const auto& s : solvers) {
+      for (const auto& r : scaling) {
+        if (r.solver == s && r.links == n) f << ' ' << (r.r.status == "ok" ? fmt(r.r.us_per_step) : r.r.status) << " |";
+      }
+    }
+    f << '\n';
+  }
+}
+
+int runBench(BenchArgs& args) {
+  const auto start = Clock::now();
+  const std::string load_before = loadAverage();
+  Config cfg = makeConfig(args.quick);
+  if (args.long_fixed >= 0.0) cfg.long_fixed = args.long_fixed;
+  if (args.long_shake >= 0.0) cfg.long_shake = args.long_shake;
+  if (args.long_hopper >= 0.0) cfg.long_hopper = args.long_hopper;
+  if (args.repeats > 0) cfg.repeats = args.repeats;
+  std::filesystem::create_directories(args.out);
+  std::vector<std::string> notes;
+  notes.push_back("Methods from EnumNames: solvers " + std::to_string(EnumNames<SolverKind>::names.size()) +
+                  ", integrators " + std::to_string(EnumNames<Integrator>::names.size()) + ", stabilizations " +
+                  std::to_string(EnumNames<Stabilization>::names.size()) + ".");
+
+  std::vector<std::unique_ptr<BenchCase>> cases;
+  for (int n : cfg.links) {
+    for (const auto& a : cfg.anchors) {
+      auto c = std::make_unique<BenchCase>();
+      c->id = "chain" + std::to_string(n) + "_" + a;
+      c->title = "chain N=" + std::to_string(n) + " " + a;
+      c->scene = args.chain_scene;
+      c->overrides = {{"chain.links", std::to_string(n)}, {"anchor.motion", a}};
+      c->links = n;
+      c->anchor = a;
+      c->conservative = a == "fixed";
+      c->long_duration = a == "fixed" ? cfg.long_fixed : cfg.long_shake;
+      cases.push_back(std::move(c));
+    }
+  }
+  if (args.hopper) {
+    auto c = std::make_unique<BenchCase>();
+    c->id = "hopper";
+    c->title = "hopper";
+    c->scene = args.hopper_scene;
+    c->long_duration = cfg.long_hopper;
+    cases.push_back(std::move(c));
+  }
+  // Small cases first (the hopper right after N = 8): a stopped long bench keeps the cheap ones.
+  std::stable_sort(cases.begin(), cases.end(), [](const auto& a, const auto& b) {
+    return (a->links == 0 ? 8.5 : a->links) < (b->links == 0 ? 8.5 : b->links);
+  });
+
+  const bool with_mujoco =
+#ifdef PONYHOP_HAVE_MUJOCO
+      args.mujoco;
+  notes.push_back(args.mujoco ? "MuJoCo " + mujocoVersion() +
+                                    " runs the fixed-anchor chains (Euler = its semi-implicit Euler, RK4) in the "
+                                    "same process: ball joints, exact masses and inertias, no contact, damping or armature."
+                              : "MuJoCo found but disabled (--no-mujoco).");
+#else
+      false;
+  notes.push_back("MuJoCo was not found at configure time (optional: libmujoco-dev): no MuJoCo rows.");
+#endif
+  (void)with_mujoco;
+
+  // Scaling first (short), then the cases; the files are rewritten after each case so that a
+  // long run that is stopped early still leaves what it measured.
+  std::vector<ScalingRow> scaling;
+  for (auto s : EnumNames<SolverKind>::names) {
+    for (int n : cfg.scaling_links) {
+      ScalingRow r{std::string(s), n, benchScaling(args.chain_scene, std::string(s), n, cfg.scaling_budget)};
+      std::fprintf(stderr, "bench: scaling %-14s N = %-5d %10.1f us/step %s\n", r.solver.c_str(), n, r.r.us_per_step,
+                   r.r.status.c_str());
+      scaling.push_back(std::move(r));
+    }
+  }
+
+  std::vector<BenchRow> rows;
+  std::vector<Reference> refs;
+  std::vector<ReferenceCheck> checks;
+  const std::vector<Method> methods = allMethods();
+  const auto writeAll = [&](size_t done) {
+    std::vector<std::string> out_notes = notes;
+    if (done < cases.size()) out_notes.push_back("Partial: " + std::to_string(done) + " of " + std::to_string(cases.size()) + " cases so far.");
+    writeBenchCsv(args.out + "/bench.csv", rows);
+    writeReferenceCsv(args.out + "/reference.csv", checks);
+    writeScalingCsv(args.out + "/scaling.csv", scaling);
+    for (size_t ci = 0; ci < done; ++ci) {
+      const auto& c = cases[ci];
+      if (std::string e = plotErrorVsCost(args.out, rows, *c); !e.empty()) out_notes.push_back("plot " + c->id + ": " + e);
+    }
+    if (std::string e = plotScaling(args.out, scaling); !e.empty()) out_notes.push_back("scaling plot: " + e);
+    for (const auto& n : out_notes) {
+      if (n.rfind("plot", 0) == 0 || n.rfind("scaling plot", 0) == 0) std::fprintf(stderr, "bench: %s\n", n.c_str());
+    }
+    const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+    writeMarkdown(args.out + "/README.md", args, cfg, cases, rows, refs, checks, scaling, out_notes, load_before,
+                  loadAverage(), wall);
+    std::fprintf(stderr, "bench: %zu runs, %.0f s -> %s/README.md\n", rows.size(), wall, args.out.c_str());
+  };
+  for (const auto& cp : cases) {
+    const BenchCase& c = *cp;
+    Reference ref = computeReference(c, cfg, std::min(cfg.horizon_cap, 1.0), checks);
+    double horizon = std::floor(std::min(ref.horizon, cfg.horizon_cap) * 60.0 + 1e-9) / 60.0;
+    if (horizon < 1.0 / 60.0) {
+      notes.push_back(c.title + ": the reference converged for only " + fmt(ref.horizon) +
+                      " s; errors are measured over 1/60 s and are not meaningful beyond it");
+      horizon = 1.0 / 60.0;
+    }
+    for (int d : cfg.dt_denominators) {
+      const double dt = 1.0 / d;
+      for (const Method& m : methods) {
+        BenchRow row{&c, m.name(), m.solver, m.integrator, m.stabilization, dt, horizon, {}};
+        if (std::string why = cannotRun(m); !why.empty()) {
+          row.r.status = "cannot_run";
+          row.r.reason = why;
+        } else {
+          row.r = benchRun(c, m, dt, horizon, cfg.repeats, ref.trajectory);
+        }
+        std::fprintf(stderr, "bench: %-14s %-40s dt 1/%-4d %-10s %9.1f us/step  err %.3g m%s%s\n", c.id.c_str(),
+                     row.method.c_str(), d, row.r.status.c_str(), row.r.us_per_step, row.r.err_rms,
+                     row.r.status == "ok" && row.r.long_status != "ok" ? "  long run: " : "",
+                     row.r.status == "ok" && row.r.long_status != "ok" ? row.r.long_status.c_str() : "");
+        rows.push_back(std::move(row));
+      }
+#ifdef PONYHOP_HAVE_MUJOCO
+      if (with_mujoco && c.links > 0 && c.anchor == "fixed") {
+        const MujocoChain mc = mujocoChainOf(c);
+        SceneRuntime rt(loadScene(c.scene, c.overrides));
+        for (const char* integ : {"Euler", "RK4"}) {
+          BenchRow row{&c, std::string("mujoco/") + integ, "mujoco", integ, "-", dt, horizon, {}};
+          row.r = benchMujocoRun(mc, integ, dt, horizon, cfg.repeats, c.long_duration, ref.trajectory, rt.chainEnergy());
+          std::fprintf(stderr, "bench: %-14s %-40s dt 1/%-4d %-10s %9.1f us/step  err %.3g m\n", c.id.c_str(),
+                       row.method.c_str(), d, row.r.status.c_str(), row.r.us_per_step, row.r.err_rms);
+          rows.push_back(std::move(row));
+        }
+      }
+#endif
+    }
+    refs.push_back(std::move(ref));
+    writeAll(refs.size());
+  }
+
+  return 0;
+}
+
+}  // namespace
+
+void addBenchCommand(CLI::App& app, int& exit_code) {
+  auto args = std::make_shared<BenchArgs>();
+  auto* cmd = app.add_subcommand("bench", "Speed against accuracy of every solver, integrator, stabilization and dt");
+  cmd->add_option("--out", args->out, "Output folder (CSV, README.md, PNG plots)");
+  cmd->add_flag("--quick", args->quick, "Smoke run: N = 8, two dts, short horizons, short scaling sweep (< 1 min)");
+  cmd->add_option("--chain-scene", args->chain_scene, "The chain scene");
+  cmd->add_option("--hopper-scene", args->hopper_scene, "The hopper scene");
+  cmd->add_flag("!--no-hopper", args->hopper, "Leave out the hopper");
+  cmd->add_flag("!--no-mujoco", args->mujoco, "Leave out MuJoCo (when it was found at configure time)");
+  cmd->add_option("--long-fixed", args->long_fixed, "Long run of the fixed-anchor chains, s (default 60; quick 0.5)")
+      ->check(CLI::Range(0.0, 3600.0));
+  cmd->add_option("--long-shake", args->long_shake, "Long run of the shaking-anchor chains, s (default 10; quick 0.5)")
+      ->check(CLI::Range(0.0, 3600.0));
+  cmd->add_option("--long-hopper", args->long_hopper, "Long run of the hopper, s (default 10; quick 0.5)")
+      ->check(CLI::Range(0.0, 3600.0));
+  cmd->add_option("--repeats", args->repeats, "Timed repeats per run, the median is kept (default 3; quick 1)")
+      ->check(CLI::Range(1, 100));
+  cmd->callback([args, &exit_code] {
+    args->command_line = "ponyhop bench";
+    if (args->quick) args->command_line += " --quick";
+    args->command_line += " --out " + args->out;
+    if (!args->hopper) args->command_line += " --no-hopper";
+    if (!args->mujoco) args->command_line += " --no-mujoco";
+    if (args->long_fixed >= 0.0) args->command_line += " --long-fixed " + fmt(args->long_fixed, "%g");
+    if (args->long_shake >= 0.0) args->command_line += " --long-shake " + fmt(args->long_shake, "%g");
+    if (args->long_hopper >= 0.0) args->command_line += " --long-hopper " + fmt(args->long_hopper, "%g");
+    if (args->repeats > 0) args->command_line += " --repeats " + std::to_string(args->repeats);
+    try {
+      exit_code = runBench(*args);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "ponyhop bench: %s\n", e.what());
+      exit_code = 2;
+    }
+  });
+}
+
+}  // namespace ponyhop

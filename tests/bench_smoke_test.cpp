@@ -1,0 +1,161 @@
+// Smoke test of `ponyhop bench --quick`: the real executable runs headless and writes its CSV and
+// Markdown; every number in them is finite, or its row says it failed and why.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// RFC 4180 fields: quoted fields may hold commas and doubled quotes.
+std::vector<std::string> splitCsv(const std::string& line) {
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        out.back() += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        out.back() += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      out.emplace_back();
+    } else {
+      out.back() += c;
+    }
+  }
+  return out;
+}
+
+struct Csv {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+  int column(const std::string& name) const {
+    for (size_t i = 0; i < header.size(); ++i) {
+      if (header[i] == name) return static_cast<int>(i);
+    }
+    return -1;
+  }
+};
+
+Csv readCsv(const fs::path& p) {
+  Csv csv;
+  std::ifstream f(p);
+  std::string line;
+  if (std::getline(f, line)) csv.header = splitCsv(line);
+  while (std::getline(f, line)) {
+    if (!line.empty()) csv.rows.push_back(splitCsv(line));
+  }
+  return csv;
+}
+
+// A field that is not text: empty (not applicable) or a finite number.
+bool finiteOrEmpty(const std::string& s) {
+  if (s.empty()) return true;
+  char* end = nullptr;
+  const double v = std::strtod(s.c_str(), &end);
+  return end && *end == '\0' && std::isfinite(v);
+}
+
+bool isNumber(const std::string& s) { return !s.empty() && finiteOrEmpty(s); }
+
+const std::set<std::string> kText{"case",   "anchor", "method",      "solver",      "integrator", "stabilization",
+                                  "status", "reason", "long_status", "long_reason", "reference"};
+
+class BenchSmoke : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    out_ = fs::path(PONYHOP_TEST_OUT) / "bench";
+    fs::remove_all(out_);
+    fs::create_directories(out_);
+    const std::string cmd = std::string(PONYHOP_EXE) + " bench --quick --out " + out_.string() + " 2>" +
+                            (out_ / "stderr.txt").string();
+    rc_ = std::system(cmd.c_str());
+  }
+  static fs::path out_;
+  static int rc_;
+};
+fs::path BenchSmoke::out_;
+int BenchSmoke::rc_ = -1;
+
+TEST_F(BenchSmoke, RunsAndWritesItsFiles) {
+  ASSERT_EQ(rc_, 0) << "see " << (out_ / "stderr.txt");
+  for (const char* f : {"bench.csv", "reference.csv", "scaling.csv", "README.md"}) {
+    EXPECT_TRUE(fs::exists(out_ / f)) << f;
+    EXPECT_GT(fs::file_size(out_ / f), 50u) << f;
+  }
+  std::ifstream md(out_ / "README.md");
+  std::stringstream text;
+  text << md.rdbuf();
+  EXPECT_NE(text.str().find("| method |"), std::string::npos) << "no table in README.md";
+  EXPECT_NE(text.str().find("ponyhop bench --quick"), std::string::npos) << "README.md does not name its command";
+}
+
+TEST_F(BenchSmoke, EveryNumberIsFiniteOrTheRowSaysWhyItFailed) {
+  ASSERT_EQ(rc_, 0);
+  const Csv csv = readCsv(out_ / "bench.csv");
+  ASSERT_FALSE(csv.rows.empty());
+  const int status = csv.column("status"), reason = csv.column("reason");
+  const int cost = csv.column("us_per_step"), err = csv.column("err_rms"), err_max = csv.column("err_max");
+  ASSERT_GE(status, 0);
+  ASSERT_GE(reason, 0);
+  ASSERT_GE(cost, 0);
+  ASSERT_GE(err, 0);
+  int ok = 0;
+  std::set<std::string> methods;
+  for (const auto& row : csv.rows) {
+    ASSERT_EQ(row.size(), csv.header.size()) << "ragged row: " << row[0];
+    methods.insert(row[csv.column("method")]);
+    for (size_t i = 0; i < row.size(); ++i) {
+      if (kText.count(csv.header[i])) continue;
+      EXPECT_TRUE(finiteOrEmpty(row[i])) << csv.header[i] << " = '" << row[i] << "' in " << row[0] << " "
+                                         << row[csv.column("method")];
+    }
+    if (row[status] == "ok") {
+      ++ok;
+      EXPECT_TRUE(isNumber(row[cost]) && std::strtod(row[cost].c_str(), nullptr) > 0.0) << row[csv.column("method")];
+      EXPECT_TRUE(isNumber(row[err]) && isNumber(row[err_max])) << row[csv.column("method")];
+    } else {
+      EXPECT_TRUE(row[status] == "failed" || row[status] == "cannot_run") << row[status];
+      EXPECT_FALSE(row[reason].empty()) << row[csv.column("method")] << " is " << row[status] << " without a reason";
+    }
+  }
+  EXPECT_GT(ok, 0) << "no run completed";
+  // Every solver x integrator x stabilization appears (iterated from EnumNames).
+  EXPECT_GE(methods.size(), 3u * 2u * 3u);
+}
+
+TEST_F(BenchSmoke, ReferenceAndScalingAreFinite) {
+  ASSERT_EQ(rc_, 0);
+  for (const char* name : {"reference.csv", "scaling.csv"}) {
+    const Csv csv = readCsv(out_ / name);
+    ASSERT_FALSE(csv.rows.empty()) << name;
+    for (const auto& row : csv.rows) {
+      ASSERT_EQ(row.size(), csv.header.size()) << name;
+      const bool failed = csv.column("status") >= 0 && row[csv.column("status")] != "ok";
+      for (size_t i = 0; i < row.size(); ++i) {
+        if (kText.count(csv.header[i])) continue;
+        EXPECT_TRUE(finiteOrEmpty(row[i])) << name << ": " << csv.header[i] << " = " << row[i];
+        if (!failed && (csv.header[i] == "us_per_step" || csv.header[i] == "max_tip_difference")) {
+          EXPECT_TRUE(isNumber(row[i])) << name << ": " << csv.header[i];
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
