@@ -37,7 +37,8 @@ struct EnumNames;
 
 template <class E>
 constexpr std::string_view enumName(E e) {
-  return EnumNames<E>::names[static_cast<size_t>(e)];
+  const auto i = static_cast<size_t>(e);
+  return i < EnumNames<E>::names.size() ? EnumNames<E>::names[i] : std::string_view("(invalid)");
 }
 
 // True when `name` is one of E's names; writes the value.
