@@ -196,7 +196,7 @@ std::string plotScaling(const std::string& dir, const std::vector<ScalingRow>& r
   std::ofstream g = open(script);
   g << "set terminal pngcairo size 1000,700 font ',10'\n"
     << "set output '" << dir << "/scaling.png'\n"
-    << "set title 'Cost per step against chain length (symplectic Euler, no stabilization, dt = 1/1920 s)'\n"
+    << "set title 'Cost per step against chain length (symplectic Euler, no stabilization, hanging chain, dt = 1/1920 s)'\n"
     << "set logscale xy\nset xlabel 'links N'\nset ylabel 'microseconds per step'\nset key left top\nset grid\n"
     << "plot ";
   for (size_t i = 0; i < solvers.size(); ++i) {

@@ -81,7 +81,7 @@ RunResult benchRun(const BenchCase& c, const Method& method, double dt, double h
                    const Trajectory& reference);
 
 // Cost per step of a chain of `links` links with `solver` (symplectic Euler, no stabilization,
-// fixed anchor, dt 1/1920 s: one solve per step), median of blocks of steps within ~budget seconds.
+// fixed anchor, chain hanging at rest, dt 1/1920 s: one solve per step), median of blocks of steps within ~budget seconds.
 struct ScalingResult {
   std::string status = "ok";
   std::string reason;
