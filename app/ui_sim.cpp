@@ -223,7 +223,10 @@ void LiveSim::releaseMeshes() {
 ApplyKind LiveSim::applyEdits() {
   edited_.path = applied_.path;  // relative mesh/clip paths resolve against the same file
   const ApplyKind kind = classify(applied_, edited_);
-  if (kind == ApplyKind::None) return ApplyKind::None;
+  if (kind == ApplyKind::None) {
+    error_.clear();  // nothing pending: an earlier bad value was put back
+    return ApplyKind::None;
+  }
   try {
     validateScene(edited_, "panel");
   } catch (const SceneError& e) {
@@ -300,7 +303,8 @@ bool LiveSim::advanceTo(double t) {
 void LiveSim::advance(double wall_dt) {
   // A very slow frame (a stall, a debugger, a minimized window) is not caught up on: at most
   // 0.1 s of wall time counts, the rest is dropped.
-  wall_dt = std::clamp(std::isfinite(wall_dt) ? wall_dt : 0.0, 0.0, 0.1);
+  const double wall_raw = std::isfinite(wall_dt) ? std::max(wall_dt, 0.0) : 0.0;
+  wall_dt = std::min(wall_raw, 0.1);
   const auto t_start = Clock::now();
   if (!running_ || !runtime_->ok()) {
     target_time_ = simTime();
@@ -324,7 +328,8 @@ void LiveSim::advance(double wall_dt) {
   if (out_of_time) target_time_ = simTime();  // behind: drop the backlog instead of spiralling
   const double physics_ms = msSince(t_start);
   readouts_.physics_ms = smooth(readouts_.physics_ms, physics_ms);
-  record(simTime() - t_before, wall_dt, steps ? 1000.0 * physics_ms / steps : readouts_.step_us.last());
+  // The real-time factor is measured against the true wall time, so slow frames show as "behind".
+  record(simTime() - t_before, wall_raw, steps ? 1000.0 * physics_ms / steps : readouts_.step_us.last());
   if (!runtime_->ok()) {
     running_ = false;
     paused_by_stop_ = true;
