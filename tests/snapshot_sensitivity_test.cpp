@@ -9,6 +9,7 @@
 #include "engine/image_diff.h"
 #include "engine/render_session.h"
 #include "engine/scene_io.h"
+#include "app/ui_headless.h"
 
 namespace ponyhop {
 namespace {
@@ -96,6 +97,29 @@ TEST_F(SnapshotSensitivity, MissingLinkFails) {
   Scene s = baseScene();
   s.chain->links -= 1;
   const DiffResult r = compare(*base_, render(s, kT));
+  EXPECT_FALSE(r.pass) << r.message;
+}
+
+// The panel beside the scene: the same frame with one parameter changed (a value printed in a
+// slider) must fail.
+Image renderPanel(const Scene& scene) {
+  HeadlessUi ui(scene, 320, 360);
+  UiInput in;
+  ui.frame(in, nullptr, 0.0);
+  Image img;
+  img.width = ui.width();
+  img.height = ui.height();
+  ui.frame(in, &img.rgba, 0.5);
+  return img;
+}
+
+TEST(SnapshotSensitivityPanel, PanelWithADifferentValueFails) {
+  const Scene a = baseScene();
+  Scene b = a;
+  b.chain->drag *= 1.5;  // a value shown in the panel; the motion it causes is tiny at t = 0.5 s
+  const Image pa = renderPanel(a);
+  EXPECT_TRUE(compare(pa, renderPanel(a)).pass) << "the panel frame is not repeatable";
+  const DiffResult r = compare(pa, renderPanel(b));
   EXPECT_FALSE(r.pass) << r.message;
 }
 

@@ -18,6 +18,7 @@
 #include "engine/render_session.h"
 #include "engine/scene_io.h"
 #include "engine/scene_runtime.h"
+#include "app/ui_headless.h"
 
 namespace ponyhop {
 namespace {
@@ -47,6 +48,10 @@ struct Shot {
   const char* scene;
   double t;  // s
   std::vector<std::string> sets;
+  // Hopper shots: from t on, step to the first moment in stance at the bottom of the bounce (1) or
+  // in flight just past the apex (0). -1: render at t.
+  int contact = -1;
+  bool panel = false;  // draw the tuning panel beside the scene (render --ui)
 };
 
 std::ostream& operator<<(std::ostream& os, const Shot& s) { return os << s.name; }
@@ -62,9 +67,22 @@ Scene shotScene(const Shot& shot) {
   return scene;
 }
 
-Image renderShot(const Scene& scene, double t, std::string* renderer = nullptr) {
+Image renderShot(const Scene& scene, double t, std::string* renderer = nullptr, int contact = -1) {
   RenderSession session(scene);
   EXPECT_TRUE(session.simulateTo(t)) << session.status();
+  if (contact >= 0) {
+    SceneRuntime& rt = session.runtime();
+    const Hopper* h = rt.hopper();
+    EXPECT_TRUE(h != nullptr);
+    auto reached = [&] {
+      const double vz = h->centerOfMassVelocity(rt.world()).z();
+      return contact == 1 ? h->inContact() && vz >= 0.0 : !h->inContact() && vz <= 0.0;
+    };
+    const double limit = t + 3.0;
+    while (h && rt.ok() && rt.time() < limit && !reached()) rt.step();
+    EXPECT_TRUE(h && reached()) << "no " << (contact ? "stance" : "flight") << " moment within 3 s of t = " << t;
+    t = rt.time();
+  }
   Image img;
   img.width = session.width();
   img.height = session.height();
@@ -79,7 +97,20 @@ TEST_P(Snapshot, MatchesGolden) {
   const Shot& shot = GetParam();
   if (!fs::exists(shot.scene)) GTEST_SKIP() << shot.scene << " is not in this tree";
   std::string renderer;
-  const Image actual = renderShot(shotScene(shot), shot.t, &renderer);
+  Image actual;
+  if (shot.panel) {
+    // The panel beside the scene, as `ponyhop render --ui` draws it.
+    Scene scene = shotScene(shot);
+    HeadlessUi ui(scene, 320, 360);
+    UiInput in;
+    ui.frame(in, nullptr, 0.0);  // lay the widgets out once
+    actual.width = ui.width();
+    actual.height = ui.height();
+    ui.frame(in, &actual.rgba, shot.t);
+    renderer = glRendererName() + " / " + glVersionString();
+  } else {
+    actual = renderShot(shotScene(shot), shot.t, &renderer, shot.contact);
+  }
   const std::string golden = kGoldenDir + "/" + shot.name + ".png";
 
   if (updating()) {
@@ -117,6 +148,10 @@ const Shot kShots[] = {
     {"ponytail_rest", "assets/scenes/ponytail.json", 0.0, {}},
     {"ponytail_swing", "assets/scenes/ponytail.json", 1.6, {}},
     {"chain_swing", "assets/scenes/chain.json", 0.45, {}},
+    {"hopper_flight", "assets/scenes/hopper.json", 2.0, {}, 0},
+    {"hopper_stance", "assets/scenes/hopper.json", 2.0, {}, 1},
+    {"ponytail_hopper", "assets/scenes/ponytail_hopper.json", 2.5, {}},
+    {"panel", "assets/scenes/ponytail.json", 1.0, {}, -1, true},
 };
 
 INSTANTIATE_TEST_SUITE_P(Scenes, Snapshot, ::testing::ValuesIn(kShots),
