@@ -424,6 +424,13 @@ class SectionVisitor {
     drawn = true;
     if (!panel_.sectionHeader(title_, open_)) return;
     ImGui::PushID(title_);
+    FindPad pad;  // a velocity command section (the hopper's) gets its 2D pad on top
+    section.reflect(pad);
+    if (pad.vx && pad.vy) {
+      const double range = std::isfinite(pad.meta.max) ? std::min(pad.meta.max, 3.0) : 2.0;
+      velocityPad("pad", *pad.vx, *pad.vy, range);
+      panel_.remember(prefix_ + name + ".pad");
+    }
     FieldWidgets w(panel_, prefix_ + name + ".", only_, skip_);
     section.reflect(w);
     ImGui::PopID();

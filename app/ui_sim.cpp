@@ -296,6 +296,7 @@ bool LiveSim::advanceTo(double t) {
     ++steps;
   }
   target_time_ = simTime();
+  readouts_.physics_ms = smooth(readouts_.physics_ms, msSince(t0));
   record(0.0, 0.0, steps ? 1000.0 * msSince(t0) / steps : readouts_.step_us.last());
   return runtime_->ok();
 }
