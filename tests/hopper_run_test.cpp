@@ -15,12 +15,12 @@ namespace {
 
 constexpr double kRad = 180.0 / std::numbers::pi;
 
-struct Run {
+struct HopRun {
   std::unique_ptr<World> world;
   std::unique_ptr<Hopper> hopper;
   double max_tilt = 0.0;
 
-  explicit Run(const HopperParams& hp) {
+  explicit HopRun(const HopperParams& hp) {
     PhysicsParams pp;
     pp.dt = 1e-3;
     pp.integrator = Integrator::RK4;
@@ -54,7 +54,7 @@ TEST(HopperRun, RunsAlongXThenYThenDiagonallyThenStops) {
   HopperParams hp;
   const double d = std::sqrt(0.5);
   hp.script = {key(0.0, 0.0, 0.0), key(2.0, 1.0, 0.0), key(16.0, 0.0, 1.0), key(30.0, d, d), key(44.0, 0.0, 0.0)};
-  Run run(hp);
+  HopRun run(hp);
   struct Leg {
     const char* name;
     double t0, t1;
@@ -82,7 +82,7 @@ TEST(HopperRun, RunsAlongXThenYThenDiagonallyThenStops) {
 TEST(HopperRun, HeadingFollowsItsCommand) {
   HopperParams hp;
   hp.script = {key(0.0, 0.0, 0.0, 0.0), key(2.0, 0.0, 0.0, 90.0), key(8.0, 0.5, 0.0, -45.0)};
-  Run run(hp);
+  HopRun run(hp);
   run.until(7.5);
   ASSERT_TRUE(run.world->ok()) << run.world->status();
   const double yaw1 = run.hopper->attitude(*run.world)[2] * kRad;
@@ -106,7 +106,7 @@ TEST(HopperRun, SpeedRangeThatTracksWithinTenPercent) {
   for (double s : speeds) {
     HopperParams hp;
     hp.command.vx = s;
-    Run run(hp);
+    HopRun run(hp);
     const Eigen::Vector2d v = run.meanVelocity(8.0, 14.0);
     const bool ok = run.world->ok() && run.max_tilt * kRad < 15.0;
     const double error = ok ? std::abs(v.x() - s) / s : 1e9;
