@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -79,7 +81,10 @@ const std::set<std::string> kText{"case",   "anchor", "method",      "solver",  
 class BenchSmoke : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    out_ = fs::path(PONYHOP_TEST_OUT) / "bench";
+    // ctest runs each TEST in its own process, in parallel: each process gets its own folder.
+    const auto* info = ::testing::UnitTest::GetInstance();
+    out_ = fs::path(PONYHOP_TEST_OUT) / ("bench-" + std::to_string(info->random_seed()) + "-" +
+                                         std::to_string(static_cast<long>(::getpid())));
     fs::remove_all(out_);
     fs::create_directories(out_);
     const std::string cmd = std::string(PONYHOP_EXE) + " bench --quick --out " + out_.string() + " 2>" +
