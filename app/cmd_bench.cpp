@@ -159,6 +159,7 @@ Reference computeReference(const BenchCase& c, const Config& cfg, double target,
   return ref;
 }
 
+#ifdef PONYHOP_HAVE_MUJOCO
 MujocoChain mujocoChainOf(const BenchCase& c) {
   SceneRuntime rt(loadScene(c.scene, c.overrides));
   MujocoChain m;
@@ -175,6 +176,7 @@ MujocoChain mujocoChainOf(const BenchCase& c) {
   }
   return m;
 }
+#endif
 
 std::string dtName(double dt) { return "1/" + fmt(1.0 / dt, "%.0f"); }
 
