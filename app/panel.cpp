@@ -18,23 +18,6 @@ namespace {
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
-template <class T>
-struct IsOptional : std::false_type {};
-template <class T>
-struct IsOptional<std::optional<T>> : std::true_type {};
-template <class T>
-struct IsVector : std::false_type {};
-template <class T>
-struct IsVector<std::vector<T>> : std::true_type {};
-
-// Any struct with a reflect(V&) member is drawn as a group of its fields.
-struct ProbeVisitor {
-  template <class T>
-  void operator()(const char*, T&, const FieldMeta&) {}
-};
-template <class T>
-concept Reflectable = requires(T& t, ProbeVisitor& v) { t.reflect(v); };
-
 // Sets every optional section, so that sceneToJson lists every field's default.
 struct EmplaceAll {
   template <class T>

@@ -17,15 +17,6 @@ namespace {
 using nlohmann::json;
 namespace fs = std::filesystem;
 
-template <class T>
-struct IsOptional : std::false_type {};
-template <class T>
-struct IsOptional<std::optional<T>> : std::true_type {};
-template <class T>
-struct IsVector : std::false_type {};
-template <class T>
-struct IsVector<std::vector<T>> : std::true_type {};
-
 std::string formatNumber(double x) {
   char buf[64];
   std::snprintf(buf, sizeof(buf), "%.10g", x);

@@ -16,7 +16,10 @@
 
 #include <array>
 #include <limits>
+#include <optional>
 #include <string_view>
+#include <type_traits>
+#include <vector>
 
 namespace ponyhop {
 
@@ -52,5 +55,23 @@ constexpr bool enumFromName(std::string_view name, E& out) {
   }
   return false;
 }
+
+// Type tests for visitors that walk the field types listed above.
+template <class T>
+struct IsOptional : std::false_type {};
+template <class T>
+struct IsOptional<std::optional<T>> : std::true_type {};
+template <class T>
+struct IsVector : std::false_type {};
+template <class T>
+struct IsVector<std::vector<T>> : std::true_type {};
+
+// Any struct with a reflect(V&) member: a visitor descends into it as a group of fields.
+struct ReflectProbe {
+  template <class T>
+  void operator()(const char*, T&, const FieldMeta&) {}
+};
+template <class T>
+concept Reflectable = requires(T& t, ReflectProbe& v) { t.reflect(v); };
 
 }  // namespace ponyhop
