@@ -6,6 +6,8 @@
 
 #include <stdexcept>
 
+#include "engine/gl_context.h"
+
 namespace ponyhop {
 
 UiGl::UiGl() {
@@ -46,22 +48,7 @@ OffscreenTarget::~OffscreenTarget() {
 }
 
 void OffscreenTarget::readPixels(std::vector<uint8_t>& rgba) const {
-  const size_t row = size_t(width_) * 4;
-  rgba.resize(row * size_t(height_));
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
-  glReadBuffer(GL_COLOR_ATTACHMENT0);
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
-  // GL rows run bottom-up; images top-down.
-  std::vector<uint8_t> tmp(row);
-  for (int y = 0; y < height_ / 2; ++y) {
-    uint8_t* a = rgba.data() + size_t(y) * row;
-    uint8_t* b = rgba.data() + size_t(height_ - 1 - y) * row;
-    std::copy(a, a + row, tmp.data());
-    std::copy(b, b + row, a);
-    std::copy(tmp.data(), tmp.data() + row, b);
-  }
+  readFramebufferRGBA(fbo_, width_, height_, rgba);
 }
 
 }  // namespace ponyhop

@@ -1,5 +1,7 @@
 #include "engine/gl_context.h"
 
+#include <cstring>
+
 // glad first: it defines __gl_h_, so the <GL/gl.h> that osmesa.h includes is skipped and every
 // GL symbol stays glad's pointer.
 #include <glad/gl.h>
@@ -34,6 +36,25 @@ static std::string glString(GLenum name) {
 
 std::string glRendererName() { return glString(GL_RENDERER); }
 std::string glVersionString() { return glString(GL_VERSION); }
+
+void readFramebufferRGBA(unsigned fbo, int width, int height, std::vector<uint8_t>& rgba) {
+  const size_t row = size_t(width) * 4;
+  rgba.resize(row * size_t(height));
+  if (rgba.empty()) return;
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo);
+  glReadBuffer(GL_COLOR_ATTACHMENT0);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  std::vector<uint8_t> tmp(row);
+  for (int y = 0; y < height / 2; ++y) {
+    uint8_t* a = rgba.data() + size_t(y) * row;
+    uint8_t* b = rgba.data() + size_t(height - 1 - y) * row;
+    std::memcpy(tmp.data(), a, row);
+    std::memcpy(a, b, row);
+    std::memcpy(b, tmp.data(), row);
+  }
+}
 
 std::unique_ptr<HeadlessContext> HeadlessContext::create(int width, int height, std::string* err) {
   if (width < 1 || height < 1 || width > 16384 || height > 16384) {

@@ -5,8 +5,10 @@
 // call goes through glad's function pointers.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace ponyhop {
 
@@ -23,6 +25,10 @@ bool loadGL(GLProcLoader get_proc_address, std::string* err);
 // "GL_RENDERER / GL_VERSION" of the current context (recorded beside golden images).
 std::string glRendererName();
 std::string glVersionString();
+
+// Reads colour attachment 0 of framebuffer `fbo` (width x height RGBA8) into `rgba`, top row first
+// (GL's rows run bottom-up, images top-down). Leaves GL_READ_FRAMEBUFFER bound to 0.
+void readFramebufferRGBA(unsigned fbo, int width, int height, std::vector<uint8_t>& rgba);
 
 // An offscreen OSMesa context (llvmpipe), GL 3.3+ core profile, no X. Creating it makes it current
 // and loads GL. The context's own colour buffer (the "default framebuffer") is width x height RGBA8;

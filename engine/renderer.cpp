@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "engine/gl_context.h"
 #include "engine/primitives.h"
 #include "engine/shaders.h"
 
@@ -654,23 +655,7 @@ void Renderer::endFrame() {
 
 void Renderer::readPixels(std::vector<uint8_t>& rgba) {
   const auto t0 = Clock::now();
-  const size_t row = size_t(width_) * 4;
-  rgba.resize(row * size_t(height_));
-  if (rgba.empty()) return;
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, impl_->resolve_fbo);
-  glReadBuffer(GL_COLOR_ATTACHMENT0);
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
-  // GL's rows run bottom-up; images top-down.
-  std::vector<uint8_t> tmp(row);
-  for (int y = 0; y < height_ / 2; ++y) {
-    uint8_t* a = rgba.data() + size_t(y) * row;
-    uint8_t* b = rgba.data() + size_t(height_ - 1 - y) * row;
-    std::memcpy(tmp.data(), a, row);
-    std::memcpy(a, b, row);
-    std::memcpy(b, tmp.data(), row);
-  }
+  readFramebufferRGBA(impl_->resolve_fbo, width_, height_, rgba);
   stats_.readback_ms = msSince(t0);
 }
 
