@@ -9,6 +9,7 @@
 #include "physics/prismatic_joint.h"
 #include "physics/soft_constraint.h"
 #include "physics/spherical_joint.h"
+#include "physics/validate.h"
 
 namespace ponyhop {
 
@@ -22,45 +23,12 @@ std::string number(double x) {
   return buf;
 }
 
-// Range check through reflect() (the same ranges the scene loader enforces).
-struct HopperRangeCheck {
-  std::string prefix;
-  std::string error;
-
-  void check(const std::string& name, double value, const FieldMeta& m) {
-    if (!error.empty() || (std::isfinite(value) && value >= m.min && value <= m.max)) return;
-    error = prefix + "." + name + " = " + number(value) + ": must be a finite number in [" + number(m.min) + ", " +
-            number(m.max) + "]" + (*m.unit ? std::string(" ") + m.unit : "") + " (" + m.help + ")";
-  }
-  template <class T>
-  void operator()(const char* name, T& field, const FieldMeta& m) {
-    if constexpr (std::is_same_v<T, double>) {
-      check(name, field, m);
-    } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
-      for (int i = 0; i < 3; ++i) check(std::string(name) + "[" + std::to_string(i) + "]", field[i], m);
-    } else if constexpr (std::is_same_v<T, HopperCommand>) {
-      HopperRangeCheck c{prefix + "." + name, ""};
-      field.reflect(c);
-      if (error.empty()) error = c.error;
-    } else if constexpr (std::is_same_v<T, std::vector<HopperCommandKey>>) {
-      for (size_t i = 0; i < field.size(); ++i) {
-        HopperRangeCheck c{prefix + "." + name + "." + std::to_string(i), ""};
-        field[i].reflect(c);
-        if (error.empty()) error = c.error;
-      }
-    }
-  }
-};
-
 Eigen::Vector3d axisOf(const RigidBody& b, int i) { return b.q * Eigen::Vector3d::Unit(i); }
 
 }  // namespace
 
-std::string validate(const HopperParams& p_in, const std::string& prefix) {
-  HopperParams p = p_in;
-  HopperRangeCheck check{prefix, ""};
-  p.reflect(check);
-  if (!check.error.empty()) return check.error;
+std::string validate(const HopperParams& p, const std::string& prefix) {
+  if (std::string e = checkRanges(p, prefix); !e.empty()) return e;
   if (!(p.body_mass > 0.0) || !(p.upper_mass > 0.0) || !(p.foot_mass > 0.0)) {
     return prefix + ": body_mass, upper_mass and foot_mass must be positive";
   }
