@@ -9,9 +9,14 @@
 
 #include "physics/chain.h"
 #include "physics/spherical_joint.h"
+#include "physics_test_util.h"
 
 namespace ponyhop {
 namespace {
+
+using testing::linkPositions;
+using testing::maxDistance;
+using testing::runFor;
 
 ChainWorld chainWorld(Integrator integrator, Stabilization stabilization, double dt, int links = 8,
                       AnchorParams anchor = {}) {
@@ -25,24 +30,6 @@ ChainWorld chainWorld(Integrator integrator, Stabilization stabilization, double
   ChainWorld cw = makeChainWorld(pp, cp, anchor);
   EXPECT_TRUE(cw.world.ok()) << cw.world.status();
   return cw;
-}
-
-void runFor(World& world, double seconds) {
-  const int steps = static_cast<int>(std::lround(seconds / world.params().dt));
-  for (int i = 0; i < steps && world.ok(); ++i) world.step();
-  EXPECT_TRUE(world.ok()) << world.status();
-}
-
-std::vector<Eigen::Vector3d> linkPositions(const ChainWorld& cw) {
-  std::vector<Eigen::Vector3d> out;
-  for (int id : cw.chain.links) out.push_back(cw.world.body(id).x);
-  return out;
-}
-
-double maxDistance(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
-  double d = 0.0;
-  for (size_t i = 0; i < a.size(); ++i) d = std::max(d, (a[i] - b[i]).norm());
-  return d;
 }
 
 TEST(PhysicsChain, ReleasedChainStartsWithPositiveEnergyAndHangingChainHasNone) {

@@ -11,18 +11,12 @@
 #include "physics/featherstone.h"
 #include "physics/prismatic_joint.h"
 #include "physics/spherical_joint.h"
+#include "physics_test_util.h"
 
 namespace ponyhop {
 namespace {
 
-PhysicsParams physics(SolverKind solver, double dt = 1.0 / 960.0) {
-  PhysicsParams pp;
-  pp.dt = dt;
-  pp.integrator = Integrator::RK4;
-  pp.solver = solver;
-  pp.stabilization = Stabilization::Projection;
-  return pp;
-}
+PhysicsParams physics(SolverKind solver, double dt = 1.0 / 960.0) { return testing::exactPhysics(solver, dt); }
 
 AnchorParams anchor(AnchorMotion m) {
   AnchorParams a;

@@ -13,18 +13,16 @@
 #include "physics/hopper.h"
 #include "physics/spherical_joint.h"
 #include "physics/tree_solver.h"
+#include "physics_test_util.h"
 
 namespace ponyhop {
 namespace {
 
-PhysicsParams physics(SolverKind solver, double dt = 1.0 / 960.0) {
-  PhysicsParams pp;
-  pp.dt = dt;
-  pp.integrator = Integrator::RK4;
-  pp.solver = solver;
-  pp.stabilization = Stabilization::Projection;
-  return pp;
-}
+using testing::linkPositions;
+using testing::maxDistance;
+using testing::runFor;
+
+PhysicsParams physics(SolverKind solver, double dt = 1.0 / 960.0) { return testing::exactPhysics(solver, dt); }
 
 AnchorParams shake() {
   AnchorParams a;
@@ -38,12 +36,6 @@ ChainWorld chainWorld(SolverKind solver, int links, AnchorParams anchor = {}, do
   ChainWorld cw = makeChainWorld(physics(solver, dt), cp, anchor);
   EXPECT_TRUE(cw.world.ok()) << cw.world.status();
   return cw;
-}
-
-void runFor(World& world, double seconds) {
-  const int steps = static_cast<int>(std::lround(seconds / world.params().dt));
-  for (int i = 0; i < steps && world.ok(); ++i) world.step();
-  EXPECT_TRUE(world.ok()) << world.status();
 }
 
 // Both solvers on the same bodies and rows (forces as the last evaluation left them), with
@@ -99,17 +91,23 @@ void joinTips(World& world, const Chain& a, const Chain& b) {
                                                   tb.q.conjugate() * (mid - tb.x)));
 }
 
-// A Y: a body hanging from the world, two chains from two points of it, and a third from the
-// end of the first (a branch below a branch), plus a V of two chains from the world joined at
-// their tips (joints to the world are leaves of the graph: a path through the world is no loop).
-TEST(PhysicsSolver, TreeLambdaMatchesDenseOnBranchedTrees) {
-  World world(physics(SolverKind::Dense));
+// A dynamic body hanging from the world by a spherical joint 5 cm above its centre.
+int addHub(World& world) {
   RigidBody hub;
   hub.name = "hub";
   hub.mass = 0.3;
   hub.inertia = Eigen::Vector3d(1e-3, 2e-3, 1.5e-3);
   const int h = world.addDynamicBody(hub);
   world.addJoint(std::make_unique<SphericalJoint>(kWorldBody, Eigen::Vector3d(0, 0, 0.05), h, Eigen::Vector3d(0, 0, 0.05)));
+  return h;
+}
+
+// A Y: a body hanging from the world, two chains from two points of it, and a third from the
+// end of the first (a branch below a branch), plus a V of two chains from the world joined at
+// their tips (joints to the world are leaves of the graph: a path through the world is no loop).
+TEST(PhysicsSolver, TreeLambdaMatchesDenseOnBranchedTrees) {
+  World world(physics(SolverKind::Dense));
+  const int h = addHub(world);
   ChainParams cp;
   cp.links = 5;
   cp.direction = Eigen::Vector3d(1, 0, -1);
@@ -139,12 +137,7 @@ TEST(PhysicsSolver, TreeLambdaMatchesDenseOnBranchedTrees) {
 TEST(PhysicsSolver, TreeSolverHandlesALoopAsExtraRows) {
   for (SolverKind kind : {SolverKind::Dense, SolverKind::Tree}) {
     World world(physics(kind));
-    RigidBody hub;
-    hub.name = "hub";
-    hub.mass = 0.3;
-    hub.inertia = Eigen::Vector3d(1e-3, 2e-3, 1.5e-3);
-    const int h = world.addDynamicBody(hub);
-    world.addJoint(std::make_unique<SphericalJoint>(kWorldBody, Eigen::Vector3d(0, 0, 0.05), h, Eigen::Vector3d(0, 0, 0.05)));
+    const int h = addHub(world);
     ChainParams cp;
     cp.links = 6;
     cp.direction = Eigen::Vector3d(1, 0, -1);
@@ -191,18 +184,6 @@ TEST(PhysicsSolver, TreeLambdaMatchesDenseOnTheHopperWithAPonytail) {
   EXPECT_GT(in_contact, 0);  // some states had the contact rows in the tree
 }
 
-std::vector<Eigen::Vector3d> positions(const ChainWorld& cw) {
-  std::vector<Eigen::Vector3d> out;
-  for (int id : cw.chain.links) out.push_back(cw.world.body(id).x);
-  return out;
-}
-
-double maxDistance(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
-  double d = 0.0;
-  for (size_t i = 0; i < a.size(); ++i) d = std::max(d, (a[i] - b[i]).norm());
-  return d;
-}
-
 // Dense and tree are the same equations solved two ways (round-off apart); featherstone is a
 // different discretisation (RK4 in joint space, no projection), so it agrees to RK4's error at
 // dt = 1/960 s over 0.3 s (the released chain is chaotic: compare early). Measured: dense-tree
@@ -217,8 +198,8 @@ TEST(PhysicsSolver, DenseTreeAndFeatherstoneRunTheSameChain) {
       runFor(dense.world, 0.05);
       runFor(tree.world, 0.05);
       runFor(feather.world, 0.05);
-      tree_gap = std::max(tree_gap, maxDistance(positions(dense), positions(tree)));
-      feather_gap = std::max(feather_gap, maxDistance(positions(dense), positions(feather)));
+      tree_gap = std::max(tree_gap, maxDistance(linkPositions(dense), linkPositions(tree)));
+      feather_gap = std::max(feather_gap, maxDistance(linkPositions(dense), linkPositions(feather)));
     }
     std::printf("anchor %s: max |x_dense - x_tree| = %.2e m, |x_dense - x_featherstone| = %.2e m\n",
                 enumName(anchor.motion).data(), tree_gap, feather_gap);

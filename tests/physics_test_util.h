@@ -1,0 +1,47 @@
+// Helpers shared by the physics tests: the exact methods' parameters, running a world for a while,
+// and comparing chain poses.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "physics/chain.h"
+
+namespace ponyhop::testing {
+
+// RK4 with projection: the exact multiplier method the solver tests compare (fixed dt unless
+// max_step_rotation is left at its default).
+inline PhysicsParams exactPhysics(SolverKind solver, double dt) {
+  PhysicsParams pp;
+  pp.dt = dt;
+  pp.integrator = Integrator::RK4;
+  pp.solver = solver;
+  pp.stabilization = Stabilization::Projection;
+  return pp;
+}
+
+// Steps `world` for `seconds` (to the nearest step); expects it to stay healthy.
+inline void runFor(World& world, double seconds) {
+  const int steps = static_cast<int>(std::lround(seconds / world.params().dt));
+  for (int i = 0; i < steps && world.ok(); ++i) world.step();
+  EXPECT_TRUE(world.ok()) << world.status();
+}
+
+// Centres of the chain's links, root first.
+inline std::vector<Eigen::Vector3d> linkPositions(const ChainWorld& cw) {
+  std::vector<Eigen::Vector3d> out;
+  for (int id : cw.chain.links) out.push_back(cw.world.body(id).x);
+  return out;
+}
+
+// Largest distance between corresponding points.
+inline double maxDistance(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
+  double d = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) d = std::max(d, (a[i] - b[i]).norm());
+  return d;
+}
+
+}  // namespace ponyhop::testing
