@@ -84,10 +84,6 @@ int World::addForceElement(std::unique_ptr<ForceElement> element) {
 
 void World::step() {
   if (!ok()) return;
-  if (reduced_) {  // featherstone: joint-space steps replace the maximal-coordinate stages
-    for (int i = 0; i < params_.substeps && ok(); ++i) reducedStep(params_.dt / params_.substeps);
-    return;
-  }
   last_substeps_ = 0;
   last_error_ = 0.0;
   if (params_.tolerance > 0.0) {
@@ -132,14 +128,18 @@ void World::substep(double h, int depth) {
 
 bool World::takeStep(double h) {
   split_reason_.clear();
-  updateKinematicBodies(time_);  // prescribed bodies: pose, velocity, acceleration at t
-  followTeleports(h);            // a prescribed body that jumps within the step carries its chain along
-  applyExternalForces();         // gravity, joint damping, bending springs, air drag
-  applyControllerForces();       // controller hook (empty for chains; the hopper adds one)
-  solveJointForces();            // A lambda = b, F_c = J^T lambda, body accelerations
-  watchStability(h);             // explicit methods: stop when h is beyond the stability limit
-  integrate(h);                  // t += h (RK4 re-runs the four stages above at its stage times)
-  stabilize();                   // projection onto C = 0 and J v = -J_k v_k (when chosen)
+  if (reduced_) {
+    reducedStep(h);  // featherstone: one joint-space step replaces the stages below
+  } else {
+    updateKinematicBodies(time_);  // prescribed bodies: pose, velocity, acceleration at t
+    followTeleports(h);            // a prescribed body that jumps within the step carries its chain along
+    applyExternalForces();         // gravity, joint damping, bending springs, air drag
+    applyControllerForces();       // controller hook (empty for chains; the hopper adds one)
+    solveJointForces();            // A lambda = b, F_c = J^T lambda, body accelerations
+    watchStability(h);             // explicit methods: stop when h is beyond the stability limit
+    integrate(h);                  // t += h (RK4 re-runs the four stages above at its stage times)
+    stabilize();                   // projection onto C = 0 and J v = -J_k v_k (when chosen)
+  }
   if (ok() && split_reason_.empty() && params_.max_step_rotation > 0.0 && params_.tolerance <= 0.0) {
     const double turned = h * maxAngularSpeed();
     if (turned > 2.0 * params_.max_step_rotation * std::numbers::pi / 180.0) {
@@ -392,8 +392,9 @@ void World::resolveContacts() {
 // Featherstone (physics.solver = featherstone; physics/featherstone.h, docs/SOLVERS.md). The
 // state lives in joint coordinates; one reduced step replaces the joint-force, integrate and
 // stabilize stages (joints hold by construction: stabilization has nothing to do) and reuses the
-// kinematic, external and controller force stages at every evaluation; then the contact hook.
-// h = 0: evaluate only (ABA at the current state). params.substeps equal steps per dt.
+// kinematic, external and controller force stages at every evaluation. It is taken by
+// takeStep(), so substeps, max_step_rotation and tolerance choose h as for the other solvers.
+// h = 0: evaluate only (ABA at the current state).
 
 void World::reducedStep(double h) {
   // ABA and the joint-space integration: one stage, charged to joint forces.
@@ -413,7 +414,7 @@ void World::reducedStep(double h) {
   if (!ok() || h == 0.0) return;
   time_ += h;
   stage_time_ = time_;
-  if (checkBodies("reduced step", false)) resolveContacts();
+  checkBodies("reduced step", false);
 }
 
 // ---------------------------------------------------------------------------------------------
