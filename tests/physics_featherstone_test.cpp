@@ -260,5 +260,41 @@ TEST(PhysicsFeatherstone, SaysPlainlyWhenAJointTypeIsUnknown) {
   EXPECT_NE(world.status().find("featherstone"), std::string::npos) << world.status();
 }
 
+// The step-size knobs apply to reduced coordinates as to the multiplier solvers: at dt = 1/60 s
+// (the whipping tip turns far more than a radian per frame) max_step_rotation (2 deg) takes many
+// substeps and keeps the energy within 1 % over 2 s; tolerance chooses substeps by step doubling
+// and keeps its estimate below the request.
+TEST(PhysicsFeatherstone, AutomaticSubstepsAndToleranceChooseItsStep) {
+  ChainParams cp;
+  cp.links = 8;
+  PhysicsParams pp = physics(SolverKind::Featherstone, 1.0 / 60.0);
+  ASSERT_GT(pp.max_step_rotation, 0.0);
+  ChainWorld cw = makeChainWorld(pp, cp, anchor(AnchorMotion::Fixed));
+  const double e0 = cw.world.energy();
+  int most = 0;
+  double drift = 0.0;
+  for (int i = 0; i < 120 && cw.world.ok(); ++i) {
+    cw.world.step();
+    most = std::max(most, cw.world.lastSubsteps());
+    drift = std::max(drift, std::abs(cw.world.energy() - e0));
+  }
+  ASSERT_TRUE(cw.world.ok()) << cw.world.status();
+  EXPECT_GT(most, 20);
+  EXPECT_LT(drift, 0.01 * e0);
+  EXPECT_LT(cw.world.maxJointError(), 1e-12);
+
+  pp.max_step_rotation = 0.0;
+  pp.tolerance = 1e-6;
+  ChainWorld tol = makeChainWorld(pp, cp, anchor(AnchorMotion::Fixed));
+  int substeps = 0;
+  for (int i = 0; i < 30 && tol.world.ok(); ++i) {
+    tol.world.step();
+    substeps = std::max(substeps, tol.world.lastSubsteps());
+    EXPECT_LE(tol.world.lastErrorEstimate(), 1e-6) << "step " << i;
+  }
+  ASSERT_TRUE(tol.world.ok()) << tol.world.status();
+  EXPECT_GT(substeps, 2);
+}
+
 }  // namespace
 }  // namespace ponyhop
