@@ -25,7 +25,10 @@ double deg(double d) { return d * kPi / 180.0; }
 // "wiggle": rotation about +y (glTF up) of 0, 20, 0, -20, 0 deg at 0, 0.5, 1, 1.5, 2 s and
 // translation (0,0,0), (0.1, 0.2, 0.3), (0,0,0) m at 0, 1, 2 s.
 std::string writeTinyGltf(const std::string& name, bool animated) {
-  const std::filesystem::path dir = std::filesystem::path(PONYHOP_TEST_OUT) / "animation_import";
+  // One folder per test: ctest runs the tests of this file as parallel processes, and two of them
+  // writing the same wiggle.bin raced (one read it while another rewrote it).
+  const std::filesystem::path dir = std::filesystem::path(PONYHOP_TEST_OUT) / "animation_import" /
+                                    ::testing::UnitTest::GetInstance()->current_test_info()->name();
   std::filesystem::create_directories(dir);
   std::vector<float> data{0, 0, 0, 1, 0, 0, 0, 1, 0};  // positions (36 bytes)
   const float rt[5] = {0, 0.5f, 1, 1.5f, 2};
