@@ -235,11 +235,12 @@ ApplyKind LiveSim::applyEdits() {
   }
   ApplyKind done = kind;
   if (kind == ApplyKind::KeepState && onlyHopperCommand(applied_, edited_) && runtime_->hopper() && runtime_->ok()) {
-    // The hopper reads its command from its own params at every Think; writing it there makes a
-    // command (the velocity pad, height, heading) live without resetting the controller's state
-    // machine, which a rebuild would do at every tick of a drag. Hopper offers no setter, and the
-    // object itself is not const (SceneRuntime owns it through a unique_ptr), so this is defined.
-    const_cast<HopperParams&>(runtime_->hopper()->params()).command = edited_.hopper->command;
+    // A command (the velocity pad, height, heading) goes live without resetting the controller's
+    // state machine, which a rebuild would do at every tick of a drag.
+    if (std::string e = runtime_->hopper()->setCommand(edited_.hopper->command); !e.empty()) {
+      error_ = e;
+      return ApplyKind::None;
+    }
     done = ApplyKind::Live;
   } else if (kind != ApplyKind::Live) {
     const auto t0 = Clock::now();

@@ -42,6 +42,7 @@ class SceneRuntime {
   const Chain* chain() const { return chain_ ? &*chain_ : nullptr; }
   int headBody() const { return head_body_; }
   const Hopper* hopper() const { return hopper_.get(); }
+  Hopper* hopper() { return hopper_.get(); }
 
   // Energy of the chain (kinetic + gravity, against the chain's hanging-at-rest reference) and
   // the largest joint separation (m).

@@ -215,6 +215,12 @@ Hopper::Hopper(World& world, const HopperParams& params) : params_(params) {
   world.setContactHandler([core, w](double, std::vector<RigidBody>&) { core->contact->update(*w); });
 }
 
+std::string Hopper::setCommand(const HopperCommand& command) {
+  if (std::string e = checkRanges(command, "hopper.command"); !e.empty()) return e;
+  params_.command = command;
+  return "";
+}
+
 HopperCommand Hopper::commandAt(double t) const {
   HopperCommand c = params_.command;
   for (const HopperCommandKey& k : params_.script) {

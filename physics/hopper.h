@@ -92,6 +92,10 @@ class Hopper {
   const char* phaseName() const { return enumName(phase_).data(); }
   // The command in force at time t (the script's last key with key.t <= t, else params.command).
   HopperCommand commandAt(double t) const;
+  // Replaces params().command while it runs (the panel's velocity pad, height and heading): the
+  // state machine keeps its phase, the next think() reads it. Returns "" or the range error
+  // ("hopper.command.height = 9: must be ..."), leaving the command unchanged.
+  std::string setCommand(const HopperCommand& command);
   bool inContact() const { return core_->contact->inContact(); }
   int hops() const { return hops_; }                     // liftoffs so far
   double measuredStanceTime() const { return stance_time_; }

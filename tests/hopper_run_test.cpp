@@ -128,5 +128,27 @@ TEST(HopperRun, SpeedRangeThatTracksWithinTenPercent) {
   EXPECT_TRUE(contiguous);
 }
 
+// The command changes while the hopper runs (the panel's velocity pad): setCommand keeps the state
+// machine and its hop count, refuses an out-of-range command with the field named (and keeps the
+// old one), and the new velocity is tracked.
+TEST(HopperRun, SetCommandWhileRunning) {
+  HopRun run{HopperParams{}};
+  run.until(3.0);
+  const int hops = run.hopper->hops();
+  ASSERT_GT(hops, 0);
+  HopperCommand bad = run.hopper->params().command;
+  bad.height = 99.0;
+  const std::string e = run.hopper->setCommand(bad);
+  EXPECT_NE(e.find("hopper.command.height"), std::string::npos) << e;
+  EXPECT_DOUBLE_EQ(run.hopper->params().command.height, HopperParams{}.command.height);
+  HopperCommand go = run.hopper->params().command;
+  go.vx = 0.8;
+  EXPECT_EQ(run.hopper->setCommand(go), "");
+  EXPECT_EQ(run.hopper->hops(), hops);  // nothing was rebuilt
+  const Eigen::Vector2d v = run.meanVelocity(10.0, 14.0);
+  EXPECT_NEAR(v.x(), 0.8, 0.08);
+  EXPECT_NEAR(v.y(), 0.0, 0.08);
+}
+
 }  // namespace
 }  // namespace ponyhop
