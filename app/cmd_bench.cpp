@@ -102,12 +102,17 @@ std::vector<Method> allMethods() {
   return m;
 }
 
-// What cannot run at all (not tried): reduced coordinates hold the joints by construction.
+// What cannot run at all (not tried): reduced coordinates hold the joints by construction and
+// take only the joint-space integrators.
 std::string cannotRun(const Method& m) {
   if (m.solver == "featherstone" && m.stabilization != "none") {
     return "solver 'featherstone' works in joint coordinates: the joints hold by construction and there is no "
            "drift for stabilization '" +
            m.stabilization + "' to correct (run it with stabilization = none)";
+  }
+  if (m.solver == "featherstone" && m.integrator != "rk4" && m.integrator != "symplectic_euler") {
+    return "solver 'featherstone' integrates in joint space with rk4 or symplectic_euler; '" + m.integrator +
+           "' belongs to the multiplier formulation";
   }
   return "";
 }
