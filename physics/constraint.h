@@ -48,6 +48,17 @@ class Constraint {
   virtual void evaluate(const RigidBody& a, const RigidBody& b, ConstraintRows& out) const = 0;
   // The joint's error for reports: |C| (metres for position rows).
   virtual double error(const ConstraintRows& rows) const { return rows.C.norm(); }
+  // evaluate() into rows sized by dimension(): for reports and tests (the solvers reuse theirs).
+  ConstraintRows rowsAt(const RigidBody& a, const RigidBody& b) const {
+    ConstraintRows r;
+    const int m = dimension();
+    r.C.resize(m);
+    r.ja.resize(m, 6);
+    r.jb.resize(m, 6);
+    r.bias.resize(m);
+    evaluate(a, b, r);
+    return r;
+  }
 
   int bodyA() const { return body_a_; }
   int bodyB() const { return body_b_; }

@@ -430,14 +430,8 @@ namespace {
 double jointError(const World& world, int joint) {
   const Constraint& c = *world.joints()[joint];
   const auto bodyOf = [&](int i) -> const RigidBody& { return i == kWorldBody ? worldBody() : world.body(i); };
-  ConstraintRows rows;
-  const int n = c.dimension();
-  rows.C.resize(n);
-  rows.ja.resize(n, 6);
-  rows.jb.resize(n, 6);
-  rows.bias.resize(n);
-  c.evaluate(bodyOf(c.bodyA()), bodyOf(c.bodyB()), rows);
-  return n ? rows.C.cwiseAbs().maxCoeff() : 0.0;
+  const ConstraintRows rows = c.rowsAt(bodyOf(c.bodyA()), bodyOf(c.bodyB()));
+  return rows.C.size() ? rows.C.cwiseAbs().maxCoeff() : 0.0;
 }
 }  // namespace
 

@@ -32,22 +32,11 @@ RigidBody randomBody(std::mt19937& rng, const Eigen::Vector3d& around) {
   return b;
 }
 
-ConstraintRows rowsOf(const Constraint& c, const RigidBody& a, const RigidBody& b) {
-  ConstraintRows r;
-  const int n = c.dimension();
-  r.C.resize(n);
-  r.ja.resize(n, 6);
-  r.jb.resize(n, 6);
-  r.bias.resize(n);
-  c.evaluate(a, b, r);
-  return r;
-}
-
 // C' = J q' and C'' = J'q' (zero accelerations) by central differences; returns the largest
 // relative mismatch.
 void expectDerivativesMatch(const Constraint& c, const RigidBody& a, const RigidBody& b, bool b_is_world) {
   const double h = 1e-4;
-  const auto at = [&](double t) { return rowsOf(c, advanced(a, t), b_is_world ? b : advanced(b, t)); };
+  const auto at = [&](double t) { return c.rowsAt(advanced(a, t), b_is_world ? b : advanced(b, t)); };
   const ConstraintRows r0 = at(0.0), rp = at(h), rm = at(-h);
   Vector6d qa, qb;
   qa << a.v, a.w;

@@ -229,13 +229,7 @@ TEST(PhysicsChain, SphericalJointDerivativesMatchFiniteDifferences) {
       at_b.x += t * b.v;
       at_a.q = quaternionFromRotationVector(t * a.w) * a.q;
       at_b.q = quaternionFromRotationVector(t * b.w) * b.q;
-      ConstraintRows r;
-      r.C.resize(3);
-      r.ja.resize(3, 6);
-      r.jb.resize(3, 6);
-      r.bias.resize(3);
-      joint.evaluate(at_a, at_b, r);
-      return r;
+      return joint.rowsAt(at_a, at_b);
     };
     const ConstraintRows r0 = at(0.0);
     const double h = 1e-4;
