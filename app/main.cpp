@@ -20,7 +20,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // CLI11 prints the message; its own codes (105 for a value out of range, 106 for a missing
+    // option...) become the one usage-error code every command documents: 2 (0 for --help).
+    return app.exit(e) == 0 ? 0 : 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ponyhop: %s\n", e.what());
     return 1;

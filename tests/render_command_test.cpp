@@ -148,7 +148,7 @@ TEST(RenderCommand, BadInputLeavesExistingOutputUntouched) {
   int n = 0;
   for (const auto& c : cases) {
     const auto r = runPonyhop("render " + c.args + " --frames 2 --out " + out, "bad" + std::to_string(n++));
-    EXPECT_NE(r.code, 0) << c.args;
+    EXPECT_EQ(r.code, 2) << c.args;
     EXPECT_NE(r.out.find(c.expect), std::string::npos) << c.args << " said:\n" << r.out;
     EXPECT_EQ(readFile(out + "/frame_00000.png"), "precious") << c.args;
     EXPECT_FALSE(fs::exists(out + "/frame_00001.png")) << c.args;
