@@ -60,7 +60,7 @@ std::string csvField(const std::string& s) {
 
 void writeBenchCsv(const std::string& path, const std::vector<BenchRow>& rows) {
   std::ofstream f = open(path);
-  f << "case,links,anchor,method,solver,integrator,stabilization,dt,status,reason,steps,us_per_step,"
+  f << "case,links,anchor,method,solver,integrator,stabilization,step,dt,status,reason,steps,us_per_step,"
        "us_per_sim_second,horizon,err_rms,err_max,substeps";
   for (auto n : StageTimes::names) f << ",us_" << n;
   f << ",us_other,long_status,long_reason,long_duration,long_reached,energy_drift,energy_drift_rel,joint_drift,"
@@ -71,7 +71,7 @@ void writeBenchCsv(const std::string& path, const std::vector<BenchRow>& rows) {
     const bool ran = r.status != "cannot_run";
     const bool ok = r.status == "ok";
     f << c.id << ',' << c.links << ',' << c.anchor << ',' << row.method << ',' << row.solver << ','
-      << row.integrator << ',' << row.stabilization << ',' << fmt(row.dt, "%.9g") << ',' << r.status << ','
+      << row.integrator << ',' << row.stabilization << ',' << row.step << ',' << fmt(row.dt, "%.9g") << ',' << r.status << ','
       << csvField(r.reason) << ',' << (ran ? std::to_string(r.steps) : "") << ',' << (ran ? num(r.us_per_step) : "")
       << ',' << (ran ? num(r.us_per_sim_second) : "") << ',' << fmt(row.horizon, "%.6g") << ','
       << (ok ? num(r.err_rms) : "") << ',' << (ok ? num(r.err_max) : "") << ',' << (ran ? num(r.substeps) : "");

@@ -15,6 +15,7 @@ struct BenchRow {
   const BenchCase* bench_case = nullptr;
   std::string method;  // solver/integrator/stabilization, or mujoco/RK4
   std::string solver, integrator, stabilization;
+  std::string step = "fixed";  // fixed | auto | tol (bench_run.h, StepControl)
   double dt = 0.0;
   double horizon = 0.0;
   RunResult r;

@@ -55,10 +55,15 @@ double median(std::vector<double> v) {
 std::vector<Override> methodOverrides(const Method& m, double dt) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.17g", dt);
-  return {{"physics.solver", m.solver},          {"physics.integrator", m.integrator},
-          {"physics.stabilization", m.stabilization}, {"physics.dt", buf},
-          {"physics.substeps", "1"},             {"physics.max_step_rotation", "0"},
-          {"physics.tolerance", "0"}};
+  char tol[32];
+  std::snprintf(tol, sizeof tol, "%.17g", kBenchTolerance);
+  return {{"physics.solver", m.solver},
+          {"physics.integrator", m.integrator},
+          {"physics.stabilization", m.stabilization},
+          {"physics.dt", buf},
+          {"physics.substeps", "1"},
+          {"physics.max_step_rotation", m.step == StepControl::Auto ? "2" : "0"},
+          {"physics.tolerance", m.step == StepControl::Tol ? tol : "0"}};
 }
 
 Trajectory simulateTrajectory(const BenchCase& c, const Method& m, double dt, double duration) {

@@ -38,14 +38,25 @@ struct Trajectory {
   double duration() const { return p.empty() ? 0.0 : (p.size() - 1) * stride; }
 };
 
+// How a run chooses its step within each dt.
+//   fixed: exactly one step of dt per World::step() (no automatic substeps, no error control)
+//   auto:  ponyhop's default: substeps so that no body turns more than max_step_rotation = 2 deg
+//   tol:   error control: step doubling keeps the per-step estimate below kBenchTolerance
+enum class StepControl { Fixed, Auto, Tol };
+constexpr double kBenchTolerance = 1e-5;  // m
+
 // A scene's physics settings for one run.
 struct Method {
   std::string solver, integrator, stabilization;
-  std::string name() const { return solver + "/" + integrator + "/" + stabilization; }
+  StepControl step = StepControl::Fixed;
+  std::string stepName() const { return step == StepControl::Fixed ? "fixed" : step == StepControl::Auto ? "auto" : "tol"; }
+  std::string name() const {
+    return solver + "/" + integrator + "/" + stabilization + (step == StepControl::Fixed ? "" : "+" + stepName());
+  }
 };
 
-// The overrides that make a run use `method` at step dt, in fixed steps (exactly one step of dt
-// per World::step(): no automatic substeps, no error control), so that dt means dt.
+// The overrides that make a run use `method` at step dt: fixed steps (dt means dt), or dt split
+// by the method's step control.
 std::vector<Override> methodOverrides(const Method& method, double dt);
 
 // Runs the case with the method at dt for `duration` seconds and samples the tracked point.

@@ -21,6 +21,8 @@
 #include <memory>
 #include <sstream>
 #include <thread>
+#include <type_traits>
+#include <vector>
 
 #include "app/bench_mujoco.h"
 #include "app/bench_report.h"
@@ -45,6 +47,9 @@ struct BenchArgs {
   bool mujoco = true;
   double long_fixed = -1.0, long_shake = -1.0, long_hopper = -1.0;  // s, < 0: the mode's default
   int repeats = -1;
+  std::vector<int> links, dts;       // empty: the mode's set
+  std::vector<std::string> anchors;  // empty: fixed and shake
+  bool scaling = true;
   std::string command_line;
 };
 
@@ -99,6 +104,12 @@ std::vector<Method> allMethods() {
       for (auto st : EnumNames<Stabilization>::names) m.push_back({std::string(s), std::string(i), std::string(st)});
     }
   }
+  // The step-control knobs on the defaults: ponyhop's default (RATTLE, 2 deg per substep) on both
+  // multiplier solvers, reduced coordinates with the same rule, and error control.
+  m.push_back({"dense", "rattle", "none", StepControl::Auto});
+  m.push_back({"tree", "rattle", "none", StepControl::Auto});
+  m.push_back({"featherstone", "rk4", "none", StepControl::Auto});
+  m.push_back({"tree", "rattle", "none", StepControl::Tol});
   return m;
 }
 
@@ -210,7 +221,9 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
     << "Files: `bench.csv` (every run, failed ones with the World's message), `reference.csv` (the "
        "reference's convergence check), `scaling.csv`, `error_vs_cost_*.png`, `scaling.png`.\n\n"
     << "Every run uses fixed steps (`physics.substeps = 1`, `max_step_rotation = 0`, `tolerance = 0`): dt "
-       "means dt. Error: RMS and max distance of the tracked point (chain: the free end; hopper: the body "
+       "means dt; except the rows marked `+auto` (`max_step_rotation = 2` deg: ponyhop's default step control) and "
+       "`+tol` (`tolerance = " << fmt(kBenchTolerance, "%g") << "` m, step doubling), whose cost per step includes "
+       "their substeps (the substeps column: mean per dt). Error: RMS and max distance of the tracked point (chain: the free end; hopper: the body "
        "centre) from the reference at the run's own steps over the converged horizon. Long runs continue the "
        "first run untimed: energy drift max|E - E0| (fixed anchor, conservative), joint drift (max |C| sampled "
        "every 1/240 s) and bounded (joints within 1 cm, speed below 100 m/s, energy drift below E0, the hopper "
@@ -242,8 +255,8 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
     f << "\n## " << c.title << "\n\n![error against cost](error_vs_cost_" << c.id << ".png)\n\n";
     const double pick = args.quick ? 1.0 / 480.0 : 1.0 / 240.0;
     f << "### All methods at dt = " << dtName(pick) << " s\n\n"
-      << "| method | status | us/step | ms per sim. s | RMS err (m) | max err (m) | energy drift (J) | joint drift (m) "
-         "| long run (" << fmt(c.long_duration) << " s) |\n|---|---|---|---|---|---|---|---|---|\n";
+      << "| method | status | substeps | us/step | ms per sim. s | RMS err (m) | max err (m) | energy drift (J) | joint drift (m) "
+         "| long run (" << fmt(c.long_duration) << " s) |\n|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& row : rows) {
       if (row.bench_case != &c || std::abs(row.dt - pick) > 1e-12) continue;
       const RunResult& r = row.r;
@@ -251,6 +264,7 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
       std::string why = r.reason;
       if (why.size() > 140) why = why.substr(0, 137) + "...";
       f << "| " << row.method << " | " << r.status << (why.empty() ? "" : ": " + why) << " | "
+        << (r.status == "cannot_run" ? "" : fmt(r.substeps, "%.3g")) << " | "
         << (r.status == "cannot_run" ? "" : fmt(r.us_per_step)) << " | "
         << (r.status == "cannot_run" ? "" : fmt(r.us_per_sim_second * 1e-3)) << " | " << (ok ? fmt(r.err_rms) : "")
         << " | " << (ok ? fmt(r.err_max) : "") << " | " << (ok && r.energy_drift >= 0 ? fmt(r.energy_drift) : "")
@@ -279,6 +293,7 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
     }
   }
 
+  if (scaling.empty()) return;
   f << "\n## Scaling\n\n![cost against N](scaling.png)\n\n"
     << "Symplectic Euler, no stabilization, chain hanging at rest from a fixed anchor, dt = 1/1920 s (one solve "
        "per step), median of blocks of steps.\n\n| N |";
@@ -309,6 +324,10 @@ int runBench(BenchArgs& args) {
   if (args.long_shake >= 0.0) cfg.long_shake = args.long_shake;
   if (args.long_hopper >= 0.0) cfg.long_hopper = args.long_hopper;
   if (args.repeats > 0) cfg.repeats = args.repeats;
+  if (!args.links.empty()) cfg.links = args.links;
+  if (!args.anchors.empty()) cfg.anchors = args.anchors;
+  if (!args.dts.empty()) cfg.dt_denominators = args.dts;
+  if (!args.scaling) cfg.scaling_links.clear();
   std::filesystem::create_directories(args.out);
   std::vector<std::string> notes;
   notes.push_back("Methods from EnumNames: solvers " + std::to_string(EnumNames<SolverKind>::names.size()) +
@@ -382,7 +401,9 @@ int runBench(BenchArgs& args) {
       const auto& c = cases[ci];
       if (std::string e = plotErrorVsCost(args.out, rows, *c); !e.empty()) out_notes.push_back("plot " + c->id + ": " + e);
     }
-    if (std::string e = plotScaling(args.out, scaling); !e.empty()) out_notes.push_back("scaling plot: " + e);
+    if (std::string e = scaling.empty() ? "" : plotScaling(args.out, scaling); !e.empty()) {
+      out_notes.push_back("scaling plot: " + e);
+    }
     for (const auto& n : out_notes) {
       if (n.rfind("plot", 0) == 0 || n.rfind("scaling plot", 0) == 0) std::fprintf(stderr, "bench: %s\n", n.c_str());
     }
@@ -403,7 +424,7 @@ int runBench(BenchArgs& args) {
     for (int d : cfg.dt_denominators) {
       const double dt = 1.0 / d;
       for (const Method& m : methods) {
-        BenchRow row{&c, m.name(), m.solver, m.integrator, m.stabilization, dt, horizon, {}};
+        BenchRow row{&c, m.name(), m.solver, m.integrator, m.stabilization, m.stepName(), dt, horizon, {}};
         if (std::string why = cannotRun(m); !why.empty()) {
           row.r.status = "cannot_run";
           row.r.reason = why;
@@ -421,7 +442,7 @@ int runBench(BenchArgs& args) {
         const MujocoChain mc = mujocoChainOf(c);
         SceneRuntime rt(loadScene(c.scene, c.overrides));
         for (const char* integ : {"Euler", "RK4"}) {
-          BenchRow row{&c, std::string("mujoco/") + integ, "mujoco", integ, "-", dt, horizon, {}};
+          BenchRow row{&c, std::string("mujoco/") + integ, "mujoco", integ, "-", "fixed", dt, horizon, {}};
           row.r = benchMujocoRun(mc, integ, dt, horizon, cfg.repeats, c.long_duration, ref.trajectory, rt.chainEnergy());
           std::fprintf(stderr, "bench: %-14s %-40s dt 1/%-4d %-10s %9.1f us/step  err %.3g m\n", c.id.c_str(),
                        row.method.c_str(), d, row.r.status.c_str(), row.r.us_per_step, row.r.err_rms);
@@ -456,7 +477,26 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(0.0, 3600.0));
   cmd->add_option("--repeats", args->repeats, "Timed repeats per run, the median is kept (default 3; quick 1)")
       ->check(CLI::Range(1, 100));
+  cmd->add_option("--links", args->links, "Chain lengths to run, e.g. 8,32 (default 8,32; quick 8)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 4096));
+  cmd->add_option("--anchors", args->anchors, "Anchor modes to run (default fixed,shake)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"fixed", "shake"}));
+  cmd->add_option("--dts", args->dts, "Steps as 1/dt, e.g. 240,960 (default 60,120,240,480,960,1920; quick 120,480)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 100000));
+  cmd->add_flag("!--no-scaling", args->scaling, "Leave out the cost-against-N sweep");
   cmd->callback([args, &exit_code] {
+    const auto list = [](const auto& v) {
+      std::string s;
+      for (const auto& x : v) {
+        if (!s.empty()) s += ",";
+        if constexpr (std::is_same_v<std::decay_t<decltype(x)>, std::string>) s += x;
+        else s += std::to_string(x);
+      }
+      return s;
+    };
     args->command_line = "ponyhop bench";
     if (args->quick) args->command_line += " --quick";
     args->command_line += " --out " + args->out;
@@ -466,6 +506,10 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
     if (args->long_shake >= 0.0) args->command_line += " --long-shake " + fmt(args->long_shake, "%g");
     if (args->long_hopper >= 0.0) args->command_line += " --long-hopper " + fmt(args->long_hopper, "%g");
     if (args->repeats > 0) args->command_line += " --repeats " + std::to_string(args->repeats);
+    if (!args->links.empty()) args->command_line += " --links " + list(args->links);
+    if (!args->anchors.empty()) args->command_line += " --anchors " + list(args->anchors);
+    if (!args->dts.empty()) args->command_line += " --dts " + list(args->dts);
+    if (!args->scaling) args->command_line += " --no-scaling";
     try {
       exit_code = runBench(*args);
     } catch (const std::exception& e) {

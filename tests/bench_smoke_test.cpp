@@ -76,7 +76,7 @@ bool finiteOrEmpty(const std::string& s) {
 bool isNumber(const std::string& s) { return !s.empty() && finiteOrEmpty(s); }
 
 const std::set<std::string> kText{"case",   "anchor", "method",      "solver",      "integrator", "stabilization",
-                                  "status", "reason", "long_status", "long_reason", "reference"};
+                                  "step",   "status", "reason",      "long_status", "long_reason", "reference"};
 
 class BenchSmoke : public ::testing::Test {
  protected:
@@ -142,6 +142,32 @@ TEST_F(BenchSmoke, EveryNumberIsFiniteOrTheRowSaysWhyItFailed) {
   EXPECT_GT(ok, 0) << "no run completed";
   // Every solver x integrator x stabilization appears (iterated from EnumNames).
   EXPECT_GE(methods.size(), 3u * 2u * 3u);
+}
+
+// The step-control rows: ponyhop's default (RATTLE with 2 deg per substep) completes and splits the
+// whipping chain's steps (more than one substep per dt on average at 1/120 s); error control too.
+TEST_F(BenchSmoke, StepControlRowsTakeSubsteps) {
+  ASSERT_EQ(rc_, 0);
+  const Csv csv = readCsv(out_ / "bench.csv");
+  const int method = csv.column("method"), step = csv.column("step"), dt = csv.column("dt");
+  const int status = csv.column("status"), substeps = csv.column("substeps");
+  ASSERT_GE(step, 0);
+  int seen = 0;
+  for (const auto& row : csv.rows) {
+    if (row[csv.column("case")] != "chain8_fixed" || std::abs(std::strtod(row[dt].c_str(), nullptr) - 1.0 / 120) > 1e-9) {
+      continue;
+    }
+    if (row[method] == "tree/rattle/none+auto" || row[method] == "tree/rattle/none+tol") {
+      ++seen;
+      EXPECT_EQ(row[step], row[method] == "tree/rattle/none+auto" ? "auto" : "tol");
+      EXPECT_EQ(row[status], "ok") << row[method] << ": " << row[csv.column("reason")];
+      EXPECT_GT(std::strtod(row[substeps].c_str(), nullptr), 1.5) << row[method];
+    } else if (row[method] == "tree/rattle/none") {
+      EXPECT_EQ(row[step], "fixed");
+      EXPECT_DOUBLE_EQ(std::strtod(row[substeps].c_str(), nullptr), 1.0);
+    }
+  }
+  EXPECT_EQ(seen, 2);
 }
 
 TEST_F(BenchSmoke, ReferenceAndScalingAreFinite) {
