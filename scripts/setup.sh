@@ -14,7 +14,7 @@ PACKAGES=(
   libglfw3-dev                         # the window of `ponyhop run`
   nlohmann-json3-dev                   # scene files
   libcli11-dev                         # command line
-  libgtest-dev libbenchmark-dev        # tests and micro-benchmarks
+  libgtest-dev                         # tests (speed is measured by `ponyhop bench`)
   ffmpeg                               # --video: H.264 encoding
   gnuplot-nox                          # bench plots
   xvfb xauth                           # window tests without a display
