@@ -6,9 +6,11 @@
 #include <Eigen/Core>
 #include <array>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "engine/scene_io.h"
+#include "physics/reflect.h"
 #include "physics/stage_times.h"
 
 namespace ponyhop {
@@ -44,12 +46,16 @@ struct Trajectory {
 //   tol:   error control: step doubling keeps the per-step estimate below kBenchTolerance
 enum class StepControl { Fixed, Auto, Tol };
 constexpr double kBenchTolerance = 1e-5;  // m
+template <>
+struct EnumNames<StepControl> {
+  static constexpr std::array<std::string_view, 3> names{"fixed", "auto", "tol"};
+};
 
 // A scene's physics settings for one run.
 struct Method {
   std::string solver, integrator, stabilization;
   StepControl step = StepControl::Fixed;
-  std::string stepName() const { return step == StepControl::Fixed ? "fixed" : step == StepControl::Auto ? "auto" : "tol"; }
+  std::string stepName() const { return std::string(enumName(step)); }
   std::string name() const {
     return solver + "/" + integrator + "/" + stabilization + (step == StepControl::Fixed ? "" : "+" + stepName());
   }
