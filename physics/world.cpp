@@ -110,7 +110,14 @@ void World::step() {
 // as two half steps instead, up to kMaxSplits times.
 void World::substep(double h, int depth) {
   const Snapshot start = snapshot();
-  if (!takeStep(h)) {
+  const bool stepped = takeStep(h);
+  if (stepped && impact_ && depth < kMaxSplits && impact_(bodies_)) {
+    restore(start);  // an impact inside the substep: bisect towards it
+    substep(0.5 * h, depth + 1);
+    if (ok()) substep(0.5 * h, depth + 1);
+    return;
+  }
+  if (!stepped) {
     if (!ok()) return;
     if (depth < kMaxSplits) {
       restore(start);

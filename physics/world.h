@@ -39,6 +39,11 @@ class World {
   int addForceElement(std::unique_ptr<ForceElement> element);
   void setController(Controller controller) { controller_ = std::move(controller); }
   void setContactHandler(ContactHandler handler) { contact_ = std::move(handler); }
+  // Locates impacts within the step: called after each substep before the contact handler; true
+  // means a contact began inside the substep and is already deeper than its tolerance, so the
+  // substep is undone and taken as two halves (as deep as the step-splitting rule allows).
+  using ImpactCheck = std::function<bool(const std::vector<RigidBody>& bodies)>;
+  void setImpactCheck(ImpactCheck check) { impact_ = std::move(check); }
   // Potential energy reported = gravity + springs - reference (builders set the zero).
   void addPotentialReference(double joules) { potential_reference_ += joules; }
   // Stops the world with a message (builders: invalid parameters).
@@ -127,6 +132,7 @@ class World {
   ForceElements forces_;
   Controller controller_;
   ContactHandler contact_;
+  ImpactCheck impact_;
   std::unique_ptr<ConstraintSolver> solver_;
   std::unique_ptr<ArticulatedSystem> reduced_;  // featherstone only
   ConstraintSystem system_;

@@ -1,0 +1,336 @@
+#include "physics/collisions.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "physics/solver_factory.h"
+#include "physics/stabilization.h"
+#include "physics/world.h"
+
+namespace ponyhop {
+
+namespace {
+
+constexpr double kActiveSlop = 1e-6;  // m: a contact this close after the stage persists
+constexpr int kMaxSweeps = 5000;      // projected Gauss-Seidel sweeps at most
+constexpr int kPositionPasses = 4;    // push-out and joint re-projection rounds at most
+
+const RigidBody& bodyOf(const std::vector<RigidBody>& bodies, int i) {
+  return i == kWorldBody ? worldBody() : bodies[i];
+}
+bool dynamicBody(const std::vector<RigidBody>& bodies, int i) { return i != kWorldBody && bodies[i].isDynamic(); }
+
+Vector6d velocityOf(const RigidBody& b) {
+  Vector6d v;
+  v << b.v, b.w;
+  return v;
+}
+
+// Projected Gauss-Seidel on  P >= 0 (normal rows), |P_t| <= mu P_n (tangent pairs after their
+// normal), with velocity u = u0 + D P and targets: normal u_n >= target_n with complementarity,
+// tangents u_t = 0 inside the disc. `blocks` lists each constraint's first row and row count.
+int projectedGaussSeidel(const Eigen::MatrixXd& d, const Eigen::VectorXd& u0, const Eigen::VectorXd& target,
+                         const std::vector<std::pair<int, int>>& blocks, const std::vector<double>& mu,
+                         Eigen::VectorXd& p) {
+  const int m = static_cast<int>(u0.size());
+  p = Eigen::VectorXd::Zero(m);
+  Eigen::VectorXd u = u0;
+  double scale = 1e-300;
+  for (int i = 0; i < m; ++i) scale = std::max(scale, std::abs(u0(i) - target(i)) / std::max(d(i, i), 1e-300));
+  const auto update = [&](int i, double value) {
+    const double delta = value - p(i);
+    if (delta == 0.0) return 0.0;
+    p(i) = value;
+    u += d.col(i) * delta;
+    return std::abs(delta);
+  };
+  int sweep = 0;
+  for (; sweep < kMaxSweeps; ++sweep) {
+    double change = 0.0;
+    for (size_t c = 0; c < blocks.size(); ++c) {
+      const int n = blocks[c].first;
+      if (d(n, n) > 1e-300) change = std::max(change, update(n, std::max(0.0, p(n) + (target(n) - u(n)) / d(n, n))));
+      if (blocks[c].second == 3) {
+        for (int t = n + 1; t <= n + 2; ++t)
+          if (d(t, t) > 1e-300) update(t, p(t) - u(t) / d(t, t));
+        const double limit = mu[c] * p(n);
+        const double len = std::hypot(p(n + 1), p(n + 2));
+        if (len > limit) {
+          const double s = len > 0.0 ? limit / len : 0.0;
+          const double p1 = p(n + 1) * s, p2 = p(n + 2) * s;
+          change = std::max(change, update(n + 1, p1));
+          change = std::max(change, update(n + 2, p2));
+        }
+        // The tangents' change counts too (sticking).
+      }
+    }
+    double tangent_residual = 0.0;
+    for (size_t c = 0; c < blocks.size(); ++c) {
+      if (blocks[c].second != 3) continue;
+      const int n = blocks[c].first;
+      const bool inside = std::hypot(p(n + 1), p(n + 2)) < mu[c] * p(n) * (1.0 - 1e-12);
+      if (inside) tangent_residual = std::max(tangent_residual, std::hypot(u(n + 1), u(n + 2)) / std::max(d(n + 1, n + 1), 1e-300));
+    }
+    if (change <= 1e-13 * scale && tangent_residual <= 1e-12 * scale) break;
+  }
+  return sweep + 1;
+}
+
+}  // namespace
+
+Collisions::Collisions(const CollisionParams& params, SolverKind solver)
+    : params_(params), solver_(makeConstraintSolver(solver)) {}
+
+int Collisions::addShape(int body, Shape shape) {
+  shapes_.push_back(std::move(shape));
+  owners_.push_back(body);
+  return static_cast<int>(shapes_.size()) - 1;
+}
+
+void Collisions::addPair(int shape_a, int shape_b, double friction, double restitution) {
+  pairs_.push_back({shape_a, shape_b, friction, restitution});
+}
+
+void Collisions::addConeLimit(int parent, const Eigen::Vector3d& parent_axis, int child,
+                              const Eigen::Vector3d& child_axis, double max_angle) {
+  limits_.push_back({false, parent, child, parent_axis.normalized(), child_axis.normalized(),
+                     Eigen::Quaterniond::Identity(), max_angle});
+}
+
+void Collisions::addTwistLimit(int parent, int child, const Eigen::Vector3d& child_axis, double max_angle,
+                               const std::vector<RigidBody>& bodies) {
+  const Eigen::Quaterniond rest = bodyOf(bodies, parent).q.conjugate() * bodyOf(bodies, child).q;
+  limits_.push_back({true, parent, child, Eigen::Vector3d::Zero(), child_axis.normalized(), rest.normalized(),
+                     max_angle});
+}
+
+void Collisions::attach(World& world) {
+  if (world.reduced()) {
+    world.fail("collisions: physics.solver = featherstone does not take contact or limit rows (reduced coordinates); "
+               "use solver = tree or dense");
+    return;
+  }
+  world.setContactHandler([this, &world](double, std::vector<RigidBody>& bodies) {
+    if (std::string e = resolve(bodies, world.joints()); !e.empty()) world.fail("collisions: " + e);
+  });
+  world.setImpactCheck([this](const std::vector<RigidBody>& bodies) { return impactInside(bodies); });
+}
+
+std::vector<Collisions::Row> Collisions::detect(const std::vector<RigidBody>& bodies, double reach) const {
+  std::vector<Row> rows;
+  std::vector<ContactPoint> points;
+  for (size_t k = 0; k < pairs_.size(); ++k) {
+    const Pair& pr = pairs_[k];
+    const int ba = owners_[pr.a], bb = owners_[pr.b];
+    if (!dynamicBody(bodies, ba) && !dynamicBody(bodies, bb)) continue;
+    const RigidBody& A = bodyOf(bodies, ba);
+    const RigidBody& B = bodyOf(bodies, bb);
+    points.clear();
+    collide(place(shapes_[pr.a], A.x, A.q), place(shapes_[pr.b], B.x, B.q), reach + params_.margin, points);
+    for (size_t i = 0; i < points.size(); ++i) {
+      Row r;
+      r.a = ba;
+      r.b = bb;
+      r.point = points[i].point;
+      r.normal = points[i].normal;
+      r.gap = points[i].gap - params_.margin;
+      r.mu = pr.mu >= 0.0 ? pr.mu : params_.friction;
+      r.e = pr.e >= 0.0 ? pr.e : params_.restitution;
+      r.key0 = static_cast<int>(k);
+      r.key1 = static_cast<int>(i);
+      rows.push_back(r);
+    }
+  }
+  for (size_t k = 0; k < limits_.size(); ++k) {
+    const Limit& l = limits_[k];
+    const RigidBody& P = bodyOf(bodies, l.parent);
+    const RigidBody& C = bodyOf(bodies, l.child);
+    const Eigen::Vector3d zc = C.q * l.child_axis;
+    Row r;
+    r.a = l.child;
+    r.b = l.parent;
+    r.angular = true;
+    r.key0 = -1 - static_cast<int>(k);
+    if (!l.twist) {
+      const Eigen::Vector3d zp = P.q * l.parent_axis;
+      const Eigen::Vector3d k_axis = zp.cross(zc);
+      const double theta = std::atan2(k_axis.norm(), zp.dot(zc));
+      r.gap = l.max_angle - theta;
+      if (!(r.gap < reach) || k_axis.norm() < 1e-12) continue;
+      r.normal = -k_axis.normalized();
+    } else {
+      const Eigen::Quaterniond dev = (P.q * l.rest).conjugate() * C.q;
+      const double along = dev.vec().dot(l.child_axis);
+      double tau = 2.0 * std::atan2(along, dev.w());
+      if (tau > M_PI) tau -= 2.0 * M_PI;
+      if (tau < -M_PI) tau += 2.0 * M_PI;
+      r.gap = l.max_angle - std::abs(tau);
+      if (!(r.gap < reach)) continue;
+      r.normal = (tau > 0.0 ? -1.0 : 1.0) * zc;
+    }
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+bool Collisions::impactInside(const std::vector<RigidBody>& bodies) const {
+  for (const Row& r : detect(bodies, -params_.impact_tolerance)) {
+    if (!active_.count({r.key0, r.key1})) return true;
+  }
+  return false;
+}
+
+void Collisions::buildJacobians(const std::vector<RigidBody>& bodies, const std::vector<Row>& rows,
+                                bool normals_only) {
+  jrows_.clear();
+  for (size_t c = 0; c < rows.size(); ++c) {
+    const Row& r = rows[c];
+    Eigen::Vector3d dirs[3] = {r.normal, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+    int count = 1;
+    if (!normals_only && !r.angular && r.mu > 0.0) {
+      dirs[1] = r.normal.unitOrthogonal();
+      dirs[2] = r.normal.cross(dirs[1]);
+      count = 3;
+    }
+    for (int k = 0; k < count; ++k) {
+      JRow j{r.a, r.b, static_cast<int>(c), Vector6d::Zero(), Vector6d::Zero()};
+      if (r.angular) {
+        j.ja << Eigen::Vector3d::Zero(), dirs[k];
+        j.jb << Eigen::Vector3d::Zero(), -dirs[k];
+      } else {
+        j.ja << dirs[k], (r.point - bodyOf(bodies, r.a).x).cross(dirs[k]);
+        j.jb << -dirs[k], -(r.point - bodyOf(bodies, r.b).x).cross(dirs[k]);
+      }
+      jrows_.push_back(j);
+    }
+  }
+}
+
+// W_c columns through the joints' Schur complement, and D = J_c W_c.
+bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Constraints& joints) {
+  const size_t n = bodies.size();
+  const int m = static_cast<int>(jrows_.size());
+  joint_system_.evaluate(bodies, joints);
+  const bool has_joints = joint_system_.rows() > 0;
+  if (has_joints && !solver_->factor(bodies, joint_system_)) return false;
+  w_.assign(m, std::vector<Vector6d>(n, Vector6d::Zero()));
+  for (int k = 0; k < m; ++k) {
+    const JRow& j = jrows_[k];
+    std::vector<Vector6d>& w = w_[k];
+    if (dynamicBody(bodies, j.a)) w[j.a] += applyInverseMass(bodies[j.a], j.ja);
+    if (dynamicBody(bodies, j.b)) w[j.b] += applyInverseMass(bodies[j.b], j.jb);
+    if (has_joints) {
+      const Eigen::VectorXd y = solver_->solve(joint_system_.times(w));
+      const std::vector<Vector6d> corr = solver_->massWeightedTranspose(bodies, joint_system_, y);
+      for (size_t i = 0; i < n; ++i) w[i] -= corr[i];
+    }
+  }
+  delassus_.resize(m, m);
+  for (int i = 0; i < m; ++i) {
+    const JRow& j = jrows_[i];
+    for (int k = 0; k < m; ++k) {
+      double v = 0.0;
+      if (j.a != kWorldBody) v += j.ja.dot(w_[k][j.a]);
+      if (j.b != kWorldBody) v += j.jb.dot(w_[k][j.b]);
+      delassus_(i, k) = v;
+    }
+  }
+  // Symmetrize the round-off (D is symmetric positive semidefinite).
+  delassus_ = 0.5 * (delassus_ + delassus_.transpose()).eval();
+  return true;
+}
+
+std::string Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& joints) {
+  stats_.active = 0;
+  stats_.deepest = 0.0;
+  stats_.iterations = 0;
+  std::vector<Row> rows = detect(bodies, 0.0);
+  if (rows.empty()) {
+    active_.clear();
+    return "";
+  }
+  bool impact = false;
+  for (const Row& r : rows) {
+    stats_.deepest = std::max(stats_.deepest, -r.gap);
+    if (!active_.count({r.key0, r.key1})) impact = true;
+  }
+  if (impact) ++stats_.impacts;
+
+  // 1. Impulses.
+  buildJacobians(bodies, rows, false);
+  if (!buildDelassus(bodies, joints)) return "the joints' constraint matrix is singular";
+  const int m = static_cast<int>(jrows_.size());
+  Eigen::VectorXd u0(m), target = Eigen::VectorXd::Zero(m);
+  std::vector<std::pair<int, int>> blocks;
+  std::vector<double> mu;
+  for (int i = 0; i < m; ++i) {
+    const JRow& j = jrows_[i];
+    u0(i) = j.ja.dot(velocityOf(bodyOf(bodies, j.a))) + j.jb.dot(velocityOf(bodyOf(bodies, j.b)));
+    if (i == 0 || jrows_[i - 1].block != j.block) {
+      const Row& r = rows[j.block];
+      const int count = (i + 1 < m && jrows_[i + 1].block == j.block) ? 3 : 1;
+      blocks.push_back({i, count});
+      mu.push_back(r.mu);
+      if (u0(i) < 0.0) target(i) = -r.e * u0(i);  // restitution of the approach speed
+    }
+  }
+  const double energy_before = [&] {
+    double e = 0.0;
+    for (const RigidBody& b : bodies) if (b.isDynamic()) e += b.kineticEnergy();
+    return e;
+  }();
+  Eigen::VectorXd p;
+  stats_.iterations = projectedGaussSeidel(delassus_, u0, target, blocks, mu, p);
+  for (int k = 0; k < m; ++k) {
+    if (p(k) == 0.0) continue;
+    for (size_t i = 0; i < bodies.size(); ++i) {
+      if (!bodies[i].isDynamic()) continue;
+      bodies[i].v += p(k) * w_[k][i].head<3>();
+      bodies[i].w += p(k) * w_[k][i].tail<3>();
+    }
+  }
+  double energy_after = 0.0;
+  for (const RigidBody& b : bodies) if (b.isDynamic()) energy_after += b.kineticEnergy();
+  stats_.max_energy_gain = std::max(stats_.max_energy_gain, energy_after - energy_before);
+
+  // 2. Positions: push out what overlaps, keep the joints.
+  for (int pass = 0; pass < kPositionPasses; ++pass) {
+    std::vector<Row> over = detect(bodies, 0.0);
+    double worst = 0.0;
+    for (const Row& r : over) worst = std::max(worst, -r.gap);
+    if (worst <= 1e-10) break;
+    buildJacobians(bodies, over, true);
+    if (!buildDelassus(bodies, joints)) return "the joints' constraint matrix is singular";
+    const int mo = static_cast<int>(jrows_.size());
+    Eigen::VectorXd gap(mo);
+    std::vector<std::pair<int, int>> nb;
+    std::vector<double> zero(mo, 0.0);
+    for (int i = 0; i < mo; ++i) {
+      gap(i) = over[i].gap;
+      nb.push_back({i, 1});
+    }
+    Eigen::VectorXd d;
+    projectedGaussSeidel(delassus_, gap, Eigen::VectorXd::Zero(mo), nb, zero, d);
+    std::vector<Vector6d> dq(bodies.size(), Vector6d::Zero());
+    for (int k = 0; k < mo; ++k)
+      for (size_t i = 0; i < bodies.size(); ++i) dq[i] += d(k) * w_[k][i];
+    for (size_t i = 0; i < bodies.size(); ++i) {
+      RigidBody& b = bodies[i];
+      if (!b.isDynamic()) continue;
+      b.x += dq[i].head<3>();
+      b.q = (quaternionFromRotationVector(dq[i].tail<3>()) * b.q).normalized();
+    }
+    if (!joints.empty()) {
+      const ProjectionResult pr = projectPositions(bodies, joints, joint_system_, *solver_);
+      if (!pr.problem.empty()) return "joint projection after the push-out: " + pr.problem;
+    }
+  }
+
+  // 3. The active set.
+  active_.clear();
+  for (const Row& r : detect(bodies, kActiveSlop)) active_.insert({r.key0, r.key1});
+  stats_.active = static_cast<int>(active_.size());
+  return "";
+}
+
+}  // namespace ponyhop

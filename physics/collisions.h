@@ -1,0 +1,147 @@
+// Contacts and joint limits as unilateral rows, solved together with the joints (docs/PHYSICS.md,
+// "Collisions").
+//
+// Sources of rows. Shapes (physics/shapes.h) are attached to bodies (or to the world: static
+// scenery); pairs of shapes are named explicitly (a scene models only the collisions it names).
+// Each pair yields contact points (normal n from b to a, gap phi); each point gives a normal row
+// and, with friction, two tangent rows. Joint limits (ConeLimit: the swing between two bodies'
+// axes, TwistLimit: the turn about the child's axis) give one angular row each when active.
+//
+// The contact stage, after every accepted substep (World's contact hook):
+//   1. Impulses. The rows' Jacobian J_c acts on the velocities that satisfy the joints (J_j v = 0
+//      after the step). The joints stay equality rows: an impulse P on the contact rows moves the
+//      velocities by dv = W_c P with  W_c = M^-1 J_c^T - M^-1 J_j^T A_jj^-1 J_j M^-1 J_c^T,
+//      A_jj = J_j M^-1 J_j^T factored by the World's own solver (dense or tree): each column is
+//      one joint solve. The contact-space Delassus matrix D = J_c W_c is the Schur complement of
+//      the joint rows. Then a mixed complementarity problem in P:
+//        normal    P_n >= 0,  v_n' = v_n + (D P)_n >= -e v_n^-,  P_n (v_n' + e v_n^-) = 0
+//        friction  |P_t| <= mu P_n (a cone: an isotropic disc per contact), P_t opposite to v_t'
+//                  when sliding, v_t' = 0 when sticking (maximal dissipation)
+//      solved by projected Gauss-Seidel with a disc projection for the tangents, to 1e-12 of the
+//      impulse scale. With e = 0 the kinetic energy cannot rise:
+//      dK = P.v' - P^T D P / 2 <= 0, since P_n v_n' = 0 and P_t.v_t' <= 0.
+//   2. Positions. What still overlaps is pushed out by the least mass-weighted displacement that
+//      keeps the joints (the same W_c with the gaps as targets, normal rows only), then the
+//      joints are projected back onto C = 0 (their second-order error).
+//   3. The active set: contacts that are touching after the stage are "active"; the next step
+//      treats them as persisting.
+// Impacts are located within the step: impactInside() tells the World that a contact which was
+// not active at the start of a substep ends it deeper than impact_tolerance; the World then undoes
+// the substep and takes it as two halves (down to 1/1024 of it), so the impulse acts at a state
+// at most impact_tolerance past the touching one.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <set>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "physics/constraint.h"
+#include "physics/constraint_solver.h"
+#include "physics/physics_params.h"
+#include "physics/shapes.h"
+
+namespace ponyhop {
+
+class World;
+
+struct CollisionParams {
+  double friction = 0.5;          // Coulomb's mu (both static and kinetic)
+  double restitution = 0.0;       // e: normal velocity after / before an impact
+  double margin = 0.0;            // m, every shape is inflated by this skin
+  double impact_tolerance = 1e-4; // m, a new contact this deep at the end of a substep splits it
+};
+
+struct CollisionStats {
+  int active = 0;                 // contact and limit rows' constraints active after the last stage
+  double deepest = 0.0;           // m, deepest overlap found by the last stage (before pushing out)
+  double max_energy_gain = -1e300;  // J, kinetic energy after - before the impulses, any stage
+  int impacts = 0;                // stages with at least one newly touching contact
+  int iterations = 0;             // projected Gauss-Seidel sweeps of the last stage
+};
+
+class Collisions {
+ public:
+  explicit Collisions(const CollisionParams& params, SolverKind solver = SolverKind::Dense);
+
+  // A shape on a body (kWorldBody: fixed in the world). Returns its index.
+  int addShape(int body, Shape shape);
+  // The pair (a, b) collides; per-pair friction and restitution (negative: the params').
+  void addPair(int shape_a, int shape_b, double friction = -1.0, double restitution = -1.0);
+  // A swing cone between body `parent`'s axis and `child`'s axis (body-frame unit vectors), angle
+  // in radians; kWorldBody parent: a fixed world axis.
+  void addConeLimit(int parent, const Eigen::Vector3d& parent_axis, int child, const Eigen::Vector3d& child_axis,
+                    double max_angle);
+  // A twist limit: the child's turn about its axis relative to the parent, |twist| <= max_angle,
+  // measured from the relative orientation at the time of the call (the rest pose).
+  void addTwistLimit(int parent, int child, const Eigen::Vector3d& child_axis, double max_angle,
+                     const std::vector<RigidBody>& bodies);
+
+  // Installs the contact stage and the impact check in the world. Featherstone: fails the world
+  // with a message (reduced coordinates do not take contact rows).
+  void attach(World& world);
+
+  // The contact stage on the state just reached (joints: the world's). Returns "" or a problem.
+  std::string resolve(std::vector<RigidBody>& bodies, const Constraints& joints);
+  // True when a contact not active at the start of the substep now overlaps by more than
+  // impact_tolerance (the World splits the substep).
+  bool impactInside(const std::vector<RigidBody>& bodies) const;
+
+  const CollisionParams& params() const { return params_; }
+  CollisionParams& params() { return params_; }
+  const CollisionStats& stats() const { return stats_; }
+  const std::vector<Shape>& shapes() const { return shapes_; }
+  int shapeBody(int shape) const { return owners_[shape]; }
+
+  // A found contact or active limit: one unilateral constraint (1 or 3 rows).
+  struct Row {
+    int a = kWorldBody, b = kWorldBody;  // the impulse acts + on a, - on b
+    Eigen::Vector3d point = Eigen::Vector3d::Zero();  // contacts: world point
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+    bool angular = false;  // limits: rows act on rotations only (normal = the axis)
+    double gap = 0.0;      // m (rad for limits)
+    double mu = 0.0, e = 0.0;
+    int key0 = 0, key1 = 0;  // identity for the active set (source, sub-index)
+  };
+  // Every contact and limit at the given state whose gap is below `reach`.
+  std::vector<Row> detect(const std::vector<RigidBody>& bodies, double reach) const;
+
+ private:
+  struct Pair {
+    int a, b;
+    double mu, e;
+  };
+  struct Limit {
+    bool twist = false;
+    int parent, child;
+    Eigen::Vector3d parent_axis, child_axis;
+    Eigen::Quaterniond rest;  // twist: parent-to-child rest rotation
+    double max_angle;
+  };
+  // Per row block (3 rows for a contact with friction, else 1): the 6-vectors J_a, J_b.
+  void buildJacobians(const std::vector<RigidBody>& bodies, const std::vector<Row>& rows, bool normals_only);
+  bool buildDelassus(const std::vector<RigidBody>& bodies, const Constraints& joints);
+
+  CollisionParams params_;
+  std::vector<Shape> shapes_;
+  std::vector<int> owners_;
+  std::vector<Pair> pairs_;
+  std::vector<Limit> limits_;
+  std::set<std::pair<int, int>> active_;
+  CollisionStats stats_;
+  std::unique_ptr<ConstraintSolver> solver_;
+  ConstraintSystem joint_system_;
+
+  // Scratch of one solve.
+  struct JRow {
+    int a, b, block;
+    Vector6d ja, jb;
+  };
+  std::vector<JRow> jrows_;
+  std::vector<std::vector<Vector6d>> w_;  // per row: W_c column (per body)
+  Eigen::MatrixXd delassus_;
+};
+
+}  // namespace ponyhop

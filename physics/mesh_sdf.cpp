@@ -1,0 +1,225 @@
+#include "physics/mesh_sdf.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "physics/shapes.h"
+
+namespace ponyhop {
+
+namespace {
+
+// Where the line {x_u = pu, x_v = pv} (along axis a) crosses the triangle, or false.
+bool crossAlong(int a, const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double pu,
+                double pv, double& at) {
+  const int u = (a + 1) % 3, v = (a + 2) % 3;
+  const double e1u = p1(u) - p0(u), e1v = p1(v) - p0(v), e2u = p2(u) - p0(u), e2v = p2(v) - p0(v);
+  const double d = e1u * e2v - e1v * e2u;
+  if (std::abs(d) < 1e-30) return false;  // edge-on to the line
+  const double qu = pu - p0(u), qv = pv - p0(v);
+  const double w1 = (qu * e2v - qv * e2u) / d;
+  const double w2 = (e1u * qv - e1v * qu) / d;
+  if (w1 < 0.0 || w2 < 0.0 || w1 + w2 > 1.0) return false;
+  at = p0(a) + w1 * (p1(a) - p0(a)) + w2 * (p2(a) - p0(a));
+  return true;
+}
+
+}  // namespace
+
+bool SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices,
+                               double cell, double padding, std::string* error, long max_nodes) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto fail = [&](const std::string& m) {
+    if (error) *error = m;
+    return false;
+  };
+  const size_t tris = indices.size() / 3;
+  if (tris == 0) return fail("collider mesh has no triangles");
+  if (!(cell > 0.0) || !std::isfinite(cell)) return fail("collider cell must be positive (m)");
+  for (uint32_t i : indices)
+    if (i >= vertices.size()) return fail("collider mesh: a triangle index is out of range");
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = -lo;
+  for (uint32_t i : indices) {
+    lo = lo.cwiseMin(vertices[i]);
+    hi = hi.cwiseMax(vertices[i]);
+  }
+  lo.array() -= padding;
+  hi.array() += padding;
+  cell_ = cell;
+  origin_ = lo;
+  for (int a = 0; a < 3; ++a) dims_(a) = static_cast<int>(std::ceil((hi(a) - lo(a)) / cell)) + 1;
+  const long nodes = static_cast<long>(dims_.x()) * dims_.y() * dims_.z();
+  if (nodes > max_nodes) {
+    return fail("collider grid of " + std::to_string(nodes) + " nodes is larger than " + std::to_string(max_nodes) +
+                ": raise the cell size");
+  }
+  const auto vert = [&](size_t t, int k) -> const Eigen::Vector3d& { return vertices[indices[3 * t + k]]; };
+  const auto nodeAt = [&](int i, int j, int k) -> Eigen::Vector3d { return origin_ + cell_ * Eigen::Vector3d(i, j, k); };
+
+  // 1. Distance: exact near each triangle, then closest-triangle propagation.
+  std::vector<double> dist(nodes, std::numeric_limits<double>::infinity());
+  std::vector<int> nearest(nodes, -1);
+  for (size_t t = 0; t < tris; ++t) {
+    Eigen::Vector3d tlo = vert(t, 0).cwiseMin(vert(t, 1)).cwiseMin(vert(t, 2));
+    Eigen::Vector3d thi = vert(t, 0).cwiseMax(vert(t, 1)).cwiseMax(vert(t, 2));
+    Eigen::Vector3i ilo, ihi;
+    for (int a = 0; a < 3; ++a) {
+      ilo(a) = std::clamp(static_cast<int>(std::floor((tlo(a) - origin_(a)) / cell_)) - 1, 0, dims_(a) - 1);
+      ihi(a) = std::clamp(static_cast<int>(std::ceil((thi(a) - origin_(a)) / cell_)) + 1, 0, dims_(a) - 1);
+    }
+    for (int k = ilo.z(); k <= ihi.z(); ++k)
+      for (int j = ilo.y(); j <= ihi.y(); ++j)
+        for (int i = ilo.x(); i <= ihi.x(); ++i) {
+          const Eigen::Vector3d p = nodeAt(i, j, k);
+          const double d = (p - closestPointOnTriangle(p, vert(t, 0), vert(t, 1), vert(t, 2))).norm();
+          const size_t n = index(i, j, k);
+          if (d < dist[n]) {
+            dist[n] = d;
+            nearest[n] = static_cast<int>(t);
+          }
+        }
+  }
+  const auto tryNeighbour = [&](size_t n, const Eigen::Vector3d& p, size_t m) {
+    const int t = nearest[m];
+    if (t < 0 || t == nearest[n]) return;
+    const double d = (p - closestPointOnTriangle(p, vert(t, 0), vert(t, 1), vert(t, 2))).norm();
+    if (d < dist[n]) {
+      dist[n] = d;
+      nearest[n] = t;
+    }
+  };
+  for (int pass = 0; pass < 2; ++pass)
+    for (int dir = 0; dir < 8; ++dir) {
+      const int di = (dir & 1) ? -1 : 1, dj = (dir & 2) ? -1 : 1, dk = (dir & 4) ? -1 : 1;
+      for (int kk = 0; kk < dims_.z(); ++kk) {
+        const int k = dk > 0 ? kk : dims_.z() - 1 - kk;
+        for (int jj = 0; jj < dims_.y(); ++jj) {
+          const int j = dj > 0 ? jj : dims_.y() - 1 - jj;
+          for (int ii = 0; ii < dims_.x(); ++ii) {
+            const int i = di > 0 ? ii : dims_.x() - 1 - ii;
+            const size_t n = index(i, j, k);
+            const Eigen::Vector3d p = nodeAt(i, j, k);
+            if (i - di >= 0 && i - di < dims_.x()) tryNeighbour(n, p, index(i - di, j, k));
+            if (j - dj >= 0 && j - dj < dims_.y()) tryNeighbour(n, p, index(i, j - dj, k));
+            if (k - dk >= 0 && k - dk < dims_.z()) tryNeighbour(n, p, index(i, j, k - dk));
+          }
+        }
+      }
+    }
+
+  // 2. Sign: crossings along the grid lines of each axis; a node is inside when most of the
+  // three lines through it have an odd number of crossings before it.
+  std::vector<unsigned char> votes(nodes, 0);
+  for (int a = 0; a < 3; ++a) {
+    const int u = (a + 1) % 3, v = (a + 2) % 3;
+    std::vector<std::vector<double>> lines(static_cast<size_t>(dims_(u)) * dims_(v));
+    for (size_t t = 0; t < tris; ++t) {
+      const Eigen::Vector3d tlo = vert(t, 0).cwiseMin(vert(t, 1)).cwiseMin(vert(t, 2));
+      const Eigen::Vector3d thi = vert(t, 0).cwiseMax(vert(t, 1)).cwiseMax(vert(t, 2));
+      const int u0 = std::max(0, static_cast<int>(std::ceil((tlo(u) - origin_(u)) / cell_)));
+      const int u1 = std::min(dims_(u) - 1, static_cast<int>(std::floor((thi(u) - origin_(u)) / cell_)));
+      const int v0 = std::max(0, static_cast<int>(std::ceil((tlo(v) - origin_(v)) / cell_)));
+      const int v1 = std::min(dims_(v) - 1, static_cast<int>(std::floor((thi(v) - origin_(v)) / cell_)));
+      for (int iv = v0; iv <= v1; ++iv)
+        for (int iu = u0; iu <= u1; ++iu) {
+          double at = 0.0;
+          if (crossAlong(a, vert(t, 0), vert(t, 1), vert(t, 2), origin_(u) + cell_ * iu, origin_(v) + cell_ * iv, at))
+            lines[static_cast<size_t>(iv) * dims_(u) + iu].push_back(at);
+        }
+    }
+    for (int iv = 0; iv < dims_(v); ++iv)
+      for (int iu = 0; iu < dims_(u); ++iu) {
+        std::vector<double>& c = lines[static_cast<size_t>(iv) * dims_(u) + iu];
+        std::sort(c.begin(), c.end());
+        size_t passed = 0;
+        for (int ia = 0; ia < dims_(a); ++ia) {
+          const double x = origin_(a) + cell_ * ia;
+          while (passed < c.size() && c[passed] < x) ++passed;
+          Eigen::Vector3i idx;
+          idx(a) = ia;
+          idx(u) = iu;
+          idx(v) = iv;
+          if (passed % 2 == 1) ++votes[index(idx.x(), idx.y(), idx.z())];
+        }
+      }
+  }
+  values_.resize(nodes);
+  for (long n = 0; n < nodes; ++n) values_[n] = static_cast<float>(votes[n] >= 2 ? -dist[n] : dist[n]);
+  build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return true;
+}
+
+double SignedDistanceGrid::trilinear(const Eigen::Vector3d& p, Eigen::Vector3d* grad) const {
+  const Eigen::Vector3d rel = (p - origin_) / cell_;
+  const Eigen::Vector3d top = (dims_ - Eigen::Vector3i::Ones()).cast<double>();
+  const Eigen::Vector3d clamped = rel.cwiseMax(0.0).cwiseMin(top);
+  Eigen::Vector3i i0;
+  Eigen::Vector3d f;
+  for (int a = 0; a < 3; ++a) {
+    i0(a) = std::min(static_cast<int>(std::floor(clamped(a))), dims_(a) - 2);
+    f(a) = clamped(a) - i0(a);
+  }
+  double c[2][2][2];
+  for (int dk = 0; dk < 2; ++dk)
+    for (int dj = 0; dj < 2; ++dj)
+      for (int di = 0; di < 2; ++di) c[di][dj][dk] = values_[index(i0.x() + di, i0.y() + dj, i0.z() + dk)];
+  const double x = f.x(), y = f.y(), z = f.z();
+  const auto lerp = [](double a, double b, double t) { return a + t * (b - a); };
+  const double c00 = lerp(c[0][0][0], c[1][0][0], x), c10 = lerp(c[0][1][0], c[1][1][0], x);
+  const double c01 = lerp(c[0][0][1], c[1][0][1], x), c11 = lerp(c[0][1][1], c[1][1][1], x);
+  const double c0 = lerp(c00, c10, y), c1 = lerp(c01, c11, y);
+  double value = lerp(c0, c1, z);
+  const Eigen::Vector3d outside = (rel - clamped) * cell_;
+  const double out = outside.norm();
+  if (grad) {
+    if (out > 0.0) {
+      *grad = outside / out;  // beyond the grid: away from it
+    } else {
+      const double gx = lerp(lerp(c[1][0][0] - c[0][0][0], c[1][1][0] - c[0][1][0], y),
+                             lerp(c[1][0][1] - c[0][0][1], c[1][1][1] - c[0][1][1], y), z);
+      const double gy = lerp(lerp(c[0][1][0] - c[0][0][0], c[1][1][0] - c[1][0][0], x),
+                             lerp(c[0][1][1] - c[0][0][1], c[1][1][1] - c[1][0][1], x), z);
+      const double gz = c1 - c0;
+      Eigen::Vector3d g(gx, gy, gz);
+      const double n = g.norm();
+      *grad = n > 0.0 ? Eigen::Vector3d(g / n) : Eigen::Vector3d::UnitZ();
+    }
+  }
+  return value + out;
+}
+
+double SignedDistanceGrid::distance(const Eigen::Vector3d& p) const { return trilinear(p, nullptr); }
+
+Eigen::Vector3d SignedDistanceGrid::gradient(const Eigen::Vector3d& p) const {
+  Eigen::Vector3d g;
+  trilinear(p, &g);
+  return g;
+}
+
+double SignedDistanceGrid::distanceAndGradient(const Eigen::Vector3d& p, Eigen::Vector3d& gradient) const {
+  return trilinear(p, &gradient);
+}
+
+double signedDistanceToTriangles(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices,
+                                 const Eigen::Vector3d& p) {
+  double best = std::numeric_limits<double>::infinity();
+  std::array<int, 3> crossings{0, 0, 0};
+  for (size_t t = 0; t + 2 < indices.size(); t += 3) {
+    const Eigen::Vector3d& a = vertices[indices[t]];
+    const Eigen::Vector3d& b = vertices[indices[t + 1]];
+    const Eigen::Vector3d& c = vertices[indices[t + 2]];
+    best = std::min(best, (p - closestPointOnTriangle(p, a, b, c)).norm());
+    for (int ax = 0; ax < 3; ++ax) {
+      double at = 0.0;
+      if (crossAlong(ax, a, b, c, p((ax + 1) % 3), p((ax + 2) % 3), at) && at > p(ax)) ++crossings[ax];
+    }
+  }
+  const int odd = (crossings[0] % 2) + (crossings[1] % 2) + (crossings[2] % 2);
+  return odd >= 2 ? -best : best;
+}
+
+}  // namespace ponyhop

@@ -1,0 +1,68 @@
+// A head collider from any triangle mesh: its signed distance sampled on a regular grid.
+//
+// Why a grid SDF and not fitted spheres and capsules: the field is built automatically from any
+// mesh with no fitting choices (a third-party head, a box, a sphere all go through the same code),
+// its error is controlled by one number (the cell size) and measurable anywhere, a capsule
+// query is a handful of trilinear samples along the link's axis, and its gradient is the contact
+// normal. A sphere fit approximates the surface by bumps whose error depends on the fit and on
+// how many spheres one pays for; it cannot follow a nose or a chin without many of them.
+//
+// Construction (Bridson's closest-triangle propagation, as in "makelevelset3"):
+//   1. Distance: every grid node within one cell of a triangle's bounding box gets the exact
+//      distance to that triangle (closest point on the triangle); the nearest triangle's index is
+//      kept. Then 2 x 8 sweeps over the grid in the 8 diagonal orders: a node takes a neighbour's
+//      nearest triangle when that one is closer (exact distance to it). Near the surface (within
+//      a cell) the distance is exact; further out it is the distance to a nearby, not always the
+//      nearest, triangle: an upper bound that is exact for convex parts.
+//   2. Sign: inside or outside by ray parity, counted along the grid's x, y and z lines (the
+//      crossings of each line with every triangle), and decided by a majority of the three: a
+//      small hole or a line through an edge sways one count, not two.
+// Query: trilinear interpolation of the node values (exact to O(cell^2 curvature) on smooth
+// surfaces); outside the grid, the value at the nearest grid point plus the distance to it.
+// The measured error against the triangles themselves: docs/PHYSICS.md, "Collisions".
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace ponyhop {
+
+class SignedDistanceGrid {
+ public:
+  // Builds the field of the triangles (3 indices each into `vertices`) on a grid of cubic cells
+  // of edge `cell` covering the mesh's bounding box plus `padding` on every side. Returns false
+  // with a message (no triangles, a non-positive cell, more than max_nodes nodes).
+  bool build(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices, double cell,
+             double padding, std::string* error, long max_nodes = 8'000'000);
+
+  // Signed distance (m, negative inside) and its gradient (of the interpolant, normalized).
+  double distance(const Eigen::Vector3d& p) const;
+  Eigen::Vector3d gradient(const Eigen::Vector3d& p) const;
+  double distanceAndGradient(const Eigen::Vector3d& p, Eigen::Vector3d& gradient) const;
+
+  double cell() const { return cell_; }
+  const Eigen::Vector3d& origin() const { return origin_; }
+  const Eigen::Vector3i& dims() const { return dims_; }
+  Eigen::Vector3d upper() const { return origin_ + cell_ * (dims_ - Eigen::Vector3i::Ones()).cast<double>(); }
+  double node(int i, int j, int k) const { return values_[index(i, j, k)]; }
+  double buildSeconds() const { return build_seconds_; }  // wall time of build()
+
+ private:
+  size_t index(int i, int j, int k) const { return (static_cast<size_t>(k) * dims_.y() + j) * dims_.x() + i; }
+  double trilinear(const Eigen::Vector3d& p, Eigen::Vector3d* grad) const;
+
+  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
+  double cell_ = 0.0;
+  std::vector<float> values_;
+  double build_seconds_ = 0.0;
+};
+
+// Exact signed distance from p to a closed triangle mesh by brute force over every triangle, the
+// sign by ray parity (majority of the +x, +y, +z rays). For tests and measurements: O(triangles).
+double signedDistanceToTriangles(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices,
+                                 const Eigen::Vector3d& p);
+
+}  // namespace ponyhop

@@ -1,0 +1,257 @@
+#include "physics/shapes.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "physics/mesh_sdf.h"
+
+namespace ponyhop {
+
+Shape Shape::sphere(double r, const Eigen::Vector3d& at) {
+  Shape s;
+  s.type = ShapeType::Sphere;
+  s.radius = r;
+  s.offset = at;
+  return s;
+}
+
+Shape Shape::capsule(double half_length, double r_a, double r_b, const Eigen::Vector3d& at,
+                     const Eigen::Quaterniond& rot) {
+  Shape s;
+  s.type = ShapeType::Capsule;
+  s.half_length = half_length;
+  s.radius_a = r_a;
+  s.radius_b = r_b;
+  s.offset = at;
+  s.rotation = rot;
+  return s;
+}
+
+Shape Shape::box(const Eigen::Vector3d& half, const Eigen::Vector3d& at, const Eigen::Quaterniond& rot) {
+  Shape s;
+  s.type = ShapeType::Box;
+  s.half_extents = half;
+  s.offset = at;
+  s.rotation = rot;
+  return s;
+}
+
+Shape Shape::plane(const Eigen::Vector3d& normal, const Eigen::Vector3d& point) {
+  Shape s;
+  s.type = ShapeType::Plane;
+  s.offset = point;
+  s.rotation = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), normal.normalized());
+  return s;
+}
+
+Shape Shape::grid(std::shared_ptr<const SignedDistanceGrid> g) {
+  Shape s;
+  s.type = ShapeType::Sdf;
+  s.sdf = std::move(g);
+  return s;
+}
+
+PlacedShape place(const Shape& shape, const Eigen::Vector3d& body_x, const Eigen::Quaterniond& body_q) {
+  PlacedShape p;
+  p.shape = &shape;
+  p.pose.linear() = (body_q * shape.rotation).normalized().toRotationMatrix();
+  p.pose.translation() = body_x + body_q * shape.offset;
+  return p;
+}
+
+namespace {
+
+// A rounded shape's core in the world: p(s) = a + s (b - a), r(s) = ra + s (rb - ra).
+struct Core {
+  Eigen::Vector3d a, b;
+  double ra = 0.0, rb = 0.0;
+  Eigen::Vector3d at(double s) const { return a + s * (b - a); }
+  double radius(double s) const { return ra + s * (rb - ra); }
+  bool point() const { return (b - a).squaredNorm() == 0.0; }
+};
+
+Core coreOf(const PlacedShape& p) {
+  const Shape& s = *p.shape;
+  const Eigen::Vector3d c = p.pose.translation();
+  if (s.type == ShapeType::Sphere) return {c, c, s.radius, s.radius};
+  const Eigen::Vector3d z = p.pose.linear().col(2);
+  return {c + s.half_length * z, c - s.half_length * z, s.radius_a, s.radius_b};
+}
+
+// Signed distance of the local point x to a box of half extents h, and its gradient.
+double boxDistance(const Eigen::Vector3d& h, const Eigen::Vector3d& x, Eigen::Vector3d* grad) {
+  const Eigen::Vector3d q = x.cwiseAbs() - h;
+  const Eigen::Vector3d outside = q.cwiseMax(0.0);
+  const double out_norm = outside.norm();
+  if (out_norm > 0.0) {
+    if (grad) *grad = outside.cwiseProduct(x.cwiseSign()) / out_norm;
+    return out_norm;
+  }
+  int axis = 0;
+  q.maxCoeff(&axis);
+  if (grad) *grad = Eigen::Vector3d::Unit(axis) * (x(axis) < 0.0 ? -1.0 : 1.0);
+  return q(axis);
+}
+
+// Distance from x to the core, minus the radius there (the round cone's signed distance).
+double roundedDistance(const Core& c, const Eigen::Vector3d& x, Eigen::Vector3d* grad) {
+  double s = 0.0;
+  if (!c.point()) s = minimizeConvex([&](double t) { return (x - c.at(t)).norm() - c.radius(t); }, 0.0, 1.0);
+  const Eigen::Vector3d d = x - c.at(s);
+  const double n = d.norm();
+  if (grad) {
+    if (n > 0.0) {
+      *grad = d / n;
+    } else {  // on the axis: any direction across it
+      const Eigen::Vector3d axis = c.point() ? Eigen::Vector3d::UnitX() : Eigen::Vector3d((c.b - c.a).normalized());
+      *grad = axis.unitOrthogonal();
+    }
+  }
+  return n - c.radius(s);
+}
+
+}  // namespace
+
+double signedDistance(const PlacedShape& p, const Eigen::Vector3d& x, Eigen::Vector3d* gradient) {
+  const Shape& s = *p.shape;
+  const Eigen::Matrix3d r = p.pose.linear();
+  const Eigen::Vector3d local = r.transpose() * (x - p.pose.translation());
+  Eigen::Vector3d g;
+  double d = 0.0;
+  switch (s.type) {
+    case ShapeType::Sphere:
+    case ShapeType::Capsule:
+      return roundedDistance(coreOf(p), x, gradient);
+    case ShapeType::Box:
+      d = boxDistance(s.half_extents, local, &g);
+      break;
+    case ShapeType::Plane:
+      d = local.z();
+      g = Eigen::Vector3d::UnitZ();
+      break;
+    case ShapeType::Sdf:
+      d = s.sdf->distanceAndGradient(local, g);
+      break;
+  }
+  if (gradient) *gradient = r * g;
+  return d;
+}
+
+bool supported(ShapeType a, ShapeType b) {
+  // a: a rounded shape or a box; b: anything (a box only against non-boxes... corners of a box
+  // against a box are measured too, see the header).
+  return a == ShapeType::Sphere || a == ShapeType::Capsule || (a == ShapeType::Box && b != ShapeType::Sdf);
+}
+
+namespace {
+
+ContactPoint contactAt(const Core& c, const PlacedShape& b, double s) {
+  const Eigen::Vector3d x = c.at(s);
+  Eigen::Vector3d n;
+  const double d = signedDistance(b, x, &n);
+  const double r = c.radius(s);
+  ContactPoint cp;
+  cp.normal = n;
+  cp.gap = d - r;
+  cp.point = x - 0.5 * (d + r) * n;
+  return cp;
+}
+
+// The smallest D_b(p(s)) - r(s) over s for a rounded a; its parameter in *at.
+ContactPoint roundedAgainst(const Core& c, const PlacedShape& b, double* at = nullptr) {
+  const auto f = [&](double s) { return signedDistance(b, c.at(s)) - c.radius(s); };
+  double s = 0.0;
+  if (!c.point()) {
+    if (b.shape->type == ShapeType::Sdf) {
+      // Not convex: sample at half a cell, then refine between the best sample's neighbours.
+      const double len = (c.b - c.a).norm();
+      const int n = std::max(2, static_cast<int>(std::ceil(2.0 * len / b.shape->sdf->cell())));
+      int best = 0;
+      double fbest = std::numeric_limits<double>::infinity();
+      for (int i = 0; i <= n; ++i) {
+        const double v = f(static_cast<double>(i) / n);
+        if (v < fbest) {
+          fbest = v;
+          best = i;
+        }
+      }
+      s = minimizeConvex(f, std::max(0, best - 1) / static_cast<double>(n), std::min(n, best + 1) / static_cast<double>(n),
+                         1e-9);
+    } else {
+      s = minimizeConvex(f, 0.0, 1.0);
+    }
+  }
+  if (at) *at = s;
+  return contactAt(c, b, s);
+}
+
+}  // namespace
+
+int collide(const PlacedShape& a, const PlacedShape& b, double reach, std::vector<ContactPoint>& out) {
+  const ShapeType ta = a.shape->type, tb = b.shape->type;
+  if (!supported(ta, tb)) {
+    if (!supported(tb, ta)) return 0;
+    const size_t first = out.size();
+    const int n = collide(b, a, reach, out);
+    for (size_t i = first; i < out.size(); ++i) out[i].normal = -out[i].normal;
+    return n;
+  }
+  if (a.shape->rounded()) {
+    const Core core = coreOf(a);
+    double s = 0.0;
+    const ContactPoint cp = roundedAgainst(core, b, &s);
+    if (!(cp.gap < reach)) return 0;
+    out.push_back(cp);
+    int added = 1;
+    // A capsule also touches at its end spheres when they are within reach (lying on a plane
+    // or along a surface: the support is a segment, not a point).
+    if (!core.point()) {
+      for (double end : {0.0, 1.0}) {
+        if (std::abs(end - s) < 1e-6) continue;
+        const ContactPoint e = contactAt(core, b, end);
+        if (e.gap < reach) {
+          out.push_back(e);
+          ++added;
+        }
+      }
+    }
+    return added;
+  }
+  // A box: its corners.
+  int added = 0;
+  const Eigen::Vector3d& h = a.shape->half_extents;
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d corner((k & 1) ? h.x() : -h.x(), (k & 2) ? h.y() : -h.y(), (k & 4) ? h.z() : -h.z());
+    const Core c{a.pose * corner, a.pose * corner, 0.0, 0.0};
+    const ContactPoint cp = roundedAgainst(c, b);
+    if (!(cp.gap < reach)) continue;
+    out.push_back(cp);
+    ++added;
+  }
+  return added;
+}
+
+Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                       const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return a;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + d1 / (d1 - d3) * ab;
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + d2 / (d2 - d6) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+}  // namespace ponyhop
