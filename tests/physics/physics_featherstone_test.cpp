@@ -11,7 +11,7 @@
 #include "physics/featherstone.h"
 #include "physics/prismatic_joint.h"
 #include "physics/spherical_joint.h"
-#include "physics_test_util.h"
+#include "common/physics_util.h"
 
 namespace ponyhop {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "physics/chain.h"
 #include "physics/spherical_joint.h"
-#include "physics_test_util.h"
+#include "common/physics_util.h"
 
 namespace ponyhop {
 namespace {
