@@ -8,8 +8,9 @@
 
 #include "app/commands.h"
 #include "app/scene_args.h"
-#include "engine/scene_io.h"
-#include "engine/scene_runtime.h"
+#include "sim/scene_io.h"
+#include "engine/asset_loader.h"
+#include "sim/sim.h"
 
 namespace ponyhop {
 namespace {
@@ -28,7 +29,7 @@ struct SimRow {
   size_t split = 0;
 };
 
-std::string header(const SceneRuntime& rt) {
+std::string header(const Sim& rt) {
   // Hopper: body centre of mass (m, m/s), attitude (rad), leg length (m), phase, foot contact
   // point (m), contact 0/1, the largest violation of the knee's five constraints.
   if (rt.hopper()) {
@@ -38,7 +39,7 @@ std::string header(const SceneRuntime& rt) {
   return "t,max_joint_error";
 }
 
-SimRow sample(const SceneRuntime& rt) {
+SimRow sample(const Sim& rt) {
   SimRow r;
   if (const Hopper* h = rt.hopper()) {
     const World& w = rt.world();
@@ -73,7 +74,7 @@ int runSim(const SimArgs& args) {
   if (!std::isfinite(duration) || duration > 1e6) {
     throw SceneError("--duration: must be a number of seconds in [0, 1e6]");
   }
-  SceneRuntime rt(scene);
+  Sim rt(scene, &assimpAssets());
 
   // Written to a temporary name and renamed: a failed run never replaces a good CSV.
   const std::string tmp = args.csv + ".tmp";

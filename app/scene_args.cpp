@@ -1,6 +1,6 @@
 #include "app/scene_args.h"
 
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 

@@ -1,4 +1,4 @@
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 
 #include <cmath>
 #include <cstdio>
