@@ -3,28 +3,25 @@
 namespace ponyhop {
 namespace {
 
-Eigen::Vector3f toColor(const Eigen::Vector3d& c) { return c.cast<float>(); }
+Material material(const Eigen::Vector3f& color, float specular, float shininess) {
+  Material m;
+  m.color = color;
+  m.specular = specular;
+  m.shininess = shininess;
+  return m;
+}
+Material material(const Eigen::Vector3d& color, float specular, float shininess) {
+  return material(Eigen::Vector3f(color.cast<float>()), specular, shininess);
+}
 
 // The hopper: a rounded body (a fat capsule along x with a cap and two side pods), a ball at the
 // hip, the upper leg as a tapered tube and the foot as a thin rod ending in a rubber toe.
 void drawHopper(const Hopper& hopper, const HopperSection& p, const World& world, Renderer& renderer) {
   const HopperShape s = hopper.shape(world);
-  Material paint;
-  paint.color = toColor(p.body_color);
-  paint.specular = 0.35f;
-  paint.shininess = 48.0f;
-  Material metal;
-  metal.color = toColor(p.leg_color);
-  metal.specular = 0.7f;
-  metal.shininess = 90.0f;
-  Material dark;
-  dark.color = {0.18f, 0.19f, 0.21f};
-  dark.specular = 0.4f;
-  dark.shininess = 60.0f;
-  Material rubber;
-  rubber.color = toColor(p.foot_color);
-  rubber.specular = 0.08f;
-  rubber.shininess = 12.0f;
+  const Material paint = material(p.body_color, 0.35f, 48.0f);
+  const Material metal = material(p.leg_color, 0.7f, 90.0f);
+  const Material dark = material(Eigen::Vector3f(0.18f, 0.19f, 0.21f), 0.4f, 60.0f);
+  const Material rubber = material(p.foot_color, 0.08f, 12.0f);
 
   const Eigen::Vector3d half = 0.5 * p.body_size;
   const auto at = [&](double x, double y, double z) { return Eigen::Vector3d(s.body_x + s.body_q * Eigen::Vector3d(x, y, z)); };
@@ -74,26 +71,16 @@ void SceneDraw::draw(const Sim& sim, Renderer& renderer) const {
     Eigen::Affine3d pose = Eigen::Affine3d::Identity();
     pose.translate(b.x);
     pose.rotate(b.q);
-    Material skin;
-    skin.color = toColor(scene.head->color);
-    skin.specular = 0.18f;
-    skin.shininess = 24.0f;
-    renderer.drawMesh(head_, pose * sim.head()->mesh_to_body, skin);
+    renderer.drawMesh(head_, pose * sim.head()->mesh_to_body, material(scene.head->color, 0.18f, 24.0f));
   }
   if (const Chain* chain = sim.chain()) {
-    Material hair;
-    hair.color = toColor(scene.chain->color);
-    hair.specular = 0.35f;
-    hair.shininess = 60.0f;
+    const Material hair = material(scene.chain->color, 0.35f, 60.0f);
     for (const CapsuleSegment& s : chain->segments(world)) {
       renderer.drawTaperedCapsule(s.top, s.bottom, s.radius_top, s.radius_bottom, hair);
     }
     if (sim.anchorBody() >= 0) {
-      Material metal;
-      metal.color = {0.25f, 0.27f, 0.30f};
-      metal.specular = 0.6f;
-      metal.shininess = 80.0f;
-      renderer.drawSphere(chain->anchor(world), 0.8 * chain->radii.front() + 0.004, metal);
+      renderer.drawSphere(chain->anchor(world), 0.8 * chain->radii.front() + 0.004,
+                          material(Eigen::Vector3f(0.25f, 0.27f, 0.30f), 0.6f, 80.0f));
     }
   }
 }

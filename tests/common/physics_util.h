@@ -32,6 +32,24 @@ inline void runFor(World& world, double seconds) {
   EXPECT_TRUE(world.ok()) << world.status();
 }
 
+// Largest |E - E0| over `steps` steps from the current state (J); expects the world to stay healthy.
+inline double maxEnergyDrift(World& world, int steps) {
+  const double e0 = world.energy();
+  double worst = 0.0;
+  for (int i = 0; i < steps && world.ok(); ++i) {
+    world.step();
+    worst = std::max(worst, std::abs(world.energy() - e0));
+  }
+  EXPECT_TRUE(world.ok()) << world.status();
+  return worst;
+}
+
+// a / b within [lo, hi] (convergence ratios when dt halves).
+inline void expectRatio(double a, double b, double lo, double hi) {
+  EXPECT_GT(a / b, lo) << a << " / " << b;
+  EXPECT_LT(a / b, hi) << a << " / " << b;
+}
+
 // Centres of the chain's links, root first.
 inline std::vector<Eigen::Vector3d> linkPositions(const ChainWorld& cw) {
   std::vector<Eigen::Vector3d> out;
