@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "physics/chain_params.h"
 #include "physics/hopper_params.h"
@@ -142,6 +143,7 @@ struct Scene {
   std::optional<AnchorParams> anchor;
   std::optional<ChainParams> chain;
   std::optional<HopperParams> hopper;
+  std::vector<std::string> notes;  // what the reader chose for the user (not a field), shown on stderr
 
   template <class V>
   void reflect(V& v) {
