@@ -3,13 +3,16 @@
 // (RLIMIT_FSIZE), outputs that are inputs or devices, values CLI11 would let through.
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/mount.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <fcntl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <thread>
 
@@ -270,6 +273,47 @@ TEST(OutputSafety, FramesAreReplacedWholeAndTheVideoBesideThem) {
   EXPECT_FALSE(fs::exists(out + ".lock"));
   for (const auto& e : fs::directory_iterator(dir)) {
     EXPECT_EQ(e.path().filename().string().find(".partial"), std::string::npos) << e.path();
+  }
+}
+
+// A small tmpfs (needs CAP_SYS_ADMIN: skipped elsewhere), unmounted when the test ends.
+struct Tmpfs {
+  std::string path;
+  bool ok = false;
+  Tmpfs(const std::string& p, const char* size) : path(p) {
+    fs::create_directories(p);
+    ok = mount("tmpfs", p.c_str(), "tmpfs", 0, size) == 0;
+  }
+  ~Tmpfs() {
+    if (ok) umount2(path.c_str(), MNT_DETACH);
+  }
+};
+
+TEST(OutputSafety, ARealFullDiskAndAnOutThatIsAMountPoint) {
+  const std::string dir = scratch("tmpfs");
+  Tmpfs disk(dir + "/disk", "size=256k");
+  if (!disk.ok) GTEST_SKIP() << "cannot mount a tmpfs here (not root?): " << std::strerror(errno);
+  // Full: 40 frames of 320x240 do not fit in 256 KB beside the previous output.
+  const std::string out = dir + "/disk/out";
+  previousOutput(out);
+  const auto full = runPonyhop("render assets/scenes/chain.json --frames 40 --size 320x240 --out " + out, "tmpfs_full");
+  EXPECT_EQ(full.code, 1) << full.out;
+  EXPECT_NE(full.out.find("No space left on device"), std::string::npos) << full.out;
+  expectPreviousOutput(out);
+
+  // --out is the mount point itself: it cannot be renamed, the frames are moved in one by one.
+  Tmpfs mnt(dir + "/mnt", "size=8m");
+  ASSERT_TRUE(mnt.ok);
+  for (const int frames : {4, 2}) {
+    const auto r = runPonyhop("render assets/scenes/chain.json --frames " + std::to_string(frames) +
+                                  " --size 64x48 --out " + mnt.path,
+                              "tmpfs_mount" + std::to_string(frames));
+    ASSERT_EQ(r.code, 0) << r.out;
+    EXPECT_EQ(countFrames(mnt.path), frames);
+    EXPECT_FALSE(loadPng(mnt.path + "/frame_00001.png").empty());
+    for (const auto& e : fs::directory_iterator(mnt.path)) {
+      EXPECT_EQ(e.path().filename().string().find(".partial"), std::string::npos) << e.path();
+    }
   }
 }
 
