@@ -8,7 +8,7 @@
 #include "app/commands.h"
 #include "app/output_safety.h"
 #include "app/scene_args.h"
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 #include "engine/image_diff.h"
 
 namespace ponyhop {

@@ -18,7 +18,7 @@
 #include "engine/render_session.h"
 #include "app/scene_args.h"
 #include "engine/frame_writer.h"
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 #include "engine/video.h"
 
 namespace ponyhop {

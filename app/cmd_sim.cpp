@@ -14,8 +14,9 @@
 #include "app/commands.h"
 #include "app/output_safety.h"
 #include "app/scene_args.h"
-#include "engine/scene_io.h"
-#include "engine/scene_runtime.h"
+#include "sim/scene_io.h"
+#include "engine/asset_loader.h"
+#include "sim/sim.h"
 
 namespace ponyhop {
 namespace {
@@ -34,7 +35,7 @@ struct SimRow {
   size_t split = 0;
 };
 
-std::string header(const SceneRuntime& rt) {
+std::string header(const Sim& rt) {
   // Hopper: body centre of mass (m, m/s), attitude (rad), leg length (m), phase, foot contact
   // point (m), contact 0/1, the largest violation of the knee's five constraints.
   if (rt.hopper()) {
@@ -44,7 +45,7 @@ std::string header(const SceneRuntime& rt) {
   return "t,max_joint_error";
 }
 
-SimRow sample(const SceneRuntime& rt) {
+SimRow sample(const Sim& rt) {
   SimRow r;
   if (const Hopper* h = rt.hopper()) {
     const World& w = rt.world();
@@ -81,7 +82,7 @@ int runSim(const SimArgs& args) {
   }
   checkOutputFile("--csv", args.csv, sceneInputs(scene));
   InterruptGuard interrupt;
-  SceneRuntime rt(scene);
+  Sim rt(scene, &assimpAssets());
 
   // Written to a temporary name and renamed: a failed run never replaces a good CSV.
   const std::string tmp = args.csv + ".partial-" + std::to_string(getpid());

@@ -14,7 +14,7 @@
 #include <regex>
 
 #include "engine/frame_writer.h"
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 namespace {

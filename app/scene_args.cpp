@@ -2,7 +2,7 @@
 
 #include <cstdio>
 
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 

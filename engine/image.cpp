@@ -9,7 +9,7 @@
 #include <system_error>
 
 #include "engine/frame_writer.h"
-#include "engine/input_file.h"
+#include "sim/input_file.h"
 
 namespace ponyhop {
 

@@ -14,11 +14,6 @@
 
 namespace ponyhop {
 
-void MeshData::computeBounds() {
-  bbox.setEmpty();
-  for (const auto& p : positions) bbox.extend(p);
-}
-
 static std::string lowerExtension(const std::string& path) {
   const size_t dot = path.find_last_of('.');
   if (dot == std::string::npos) return "";

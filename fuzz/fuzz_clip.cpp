@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string>
 
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 #include "physics/keyframes.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -8,7 +8,7 @@
 
 #include "app/panel.h"
 #include "engine/frame_writer.h"
-#include "test_util.h"
+#include "common/run_util.h"
 
 namespace ponyhop {
 namespace {

@@ -1,4 +1,4 @@
-#include "engine/input_file.h"
+#include "sim/input_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>

@@ -131,6 +131,33 @@ struct HeadParams {
   }
 };
 
+// The scene file's chain and hopper sections: the physics parameters (physics/) plus how they
+// are drawn, under the same keys (`chain.color` sits beside `chain.links`). Physics reads only
+// the base; engine/scene_draw.h reads the rest.
+struct ChainSection : ChainParams {
+  Eigen::Vector3d color{0.36, 0.22, 0.12};  // rgb 0..1, hair brown
+
+  template <class V>
+  void reflect(V& v) {
+    ChainParams::reflect(v);
+    v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Hair colour"});
+  }
+};
+
+struct HopperSection : HopperParams {
+  Eigen::Vector3d body_color{0.86, 0.33, 0.16};  // rgb 0..1
+  Eigen::Vector3d leg_color{0.62, 0.65, 0.70};
+  Eigen::Vector3d foot_color{0.12, 0.12, 0.13};
+
+  template <class V>
+  void reflect(V& v) {
+    HopperParams::reflect(v);
+    v("body_color", body_color, {.unit = "rgb", .min = 0, .max = 1, .help = "Body colour"});
+    v("leg_color", leg_color, {.unit = "rgb", .min = 0, .max = 1, .help = "Upper leg colour"});
+    v("foot_color", foot_color, {.unit = "rgb", .min = 0, .max = 1, .help = "Foot colour"});
+  }
+};
+
 struct Scene {
   std::string path;     // the file it was read from ("" when built in code)
   std::string name;     // a short title
@@ -141,8 +168,9 @@ struct Scene {
   PhysicsParams physics;
   std::optional<HeadParams> head;
   std::optional<AnchorParams> anchor;
-  std::optional<ChainParams> chain;
-  std::optional<HopperParams> hopper;
+  std::optional<ChainSection> chain;
+  std::optional<HopperSection> hopper;
+  std::vector<HopperSection> hoppers;  // more hoppers in the same world (each with its own position)
   std::vector<std::string> notes;  // what the reader chose for the user (not a field), shown on stderr
 
   template <class V>
@@ -157,6 +185,7 @@ struct Scene {
     v("anchor", anchor, {.help = "Prescribed anchor point of a chain scene"});
     v("chain", chain, {.help = "Chain of links (the ponytail)"});
     v("hopper", hopper, {.help = "Raibert hopper (body, leg, ground contact, controller)"});
+    v("hoppers", hoppers, {.help = "More hoppers in the same world, each a hopper section"});
   }
 };
 

@@ -9,6 +9,7 @@
 #include <memory>
 #include <numbers>
 
+#include "common/physics_util.h"
 #include "physics/hopper.h"
 
 namespace ponyhop {
@@ -16,19 +17,9 @@ namespace {
 
 constexpr double kRad = 180.0 / std::numbers::pi;
 
-PhysicsParams hopperPhysics() {
-  PhysicsParams pp;
-  pp.dt = 1e-3;
-  pp.integrator = Integrator::RK4;
-  pp.stabilization = Stabilization::Projection;
-  return pp;
-}
-
-// A hopper in its own world, stepped the way SceneRuntime steps it (Think, then the step), with
-// the measurements every test here needs.
-struct HopRun {
-  std::unique_ptr<World> world;
-  std::unique_ptr<Hopper> hopper;
+// A hopper in its own world (world.step() runs its Think first), with the measurements every test
+// here needs.
+struct HopRun : testing::HopperWorld {
   double max_tilt = 0.0, max_drift = 0.0, max_knee = 0.0, max_hip = 0.0;
   double max_slip = 0.0, min_foot_z = 1e9;
   std::vector<double> apex_time, apex;  // at each touchdown after the first: the flight's apex
@@ -36,20 +27,16 @@ struct HopRun {
   Eigen::Vector3d stance_start = Eigen::Vector3d::Zero();
   bool was_in_contact = false;
 
-  explicit HopRun(const HopperParams& hp) : world(std::make_unique<World>(hopperPhysics())) {
-    hopper = std::make_unique<Hopper>(*world, hp);
-  }
-  const RigidBody& body() const { return world->body(hopper->model().body); }
+  explicit HopRun(const HopperParams& hp) : HopperWorld(hp) {}
 
   // Steps until time T; `each` runs before every step (perturbations).
   void until(double T, const std::function<void()>& each = {}) {
     const Eigen::Vector3d start(0.0, 0.0, 0.0);
-    while (world->ok() && world->time() < T - 1e-9) {
+    while (world.ok() && world.time() < T - 1e-9) {
       if (each) each();
-      hopper->think(*world);
-      world->step();
-      if (!world->ok()) break;
-      const World& w = *world;
+      world.step();
+      if (!world.ok()) break;
+      const World& w = world;
       max_tilt = std::max(max_tilt, hopper->tilt(w));
       max_drift = std::max(max_drift, (body().x - start).head<2>().norm());
       max_knee = std::max(max_knee, hopper->kneeError(w));
@@ -93,7 +80,7 @@ TEST(HopperHop, HopsInPlaceForAMinute) {
   hp.velocity = Eigen::Vector3d(0.05, -0.05, 0.0);  // a small initial push: the controller must work
   HopRun run(hp);
   run.until(60.0);
-  ASSERT_TRUE(run.world->ok()) << run.world->status();
+  ASSERT_TRUE(run.world.ok()) << run.world.status();
   const std::vector<double> apexes = run.apexesAfter(5.0);
   const ContactStats& cs = run.hopper->contact().stats();
   std::printf(
@@ -126,7 +113,7 @@ TEST(HopperHop, HeightCommandsGiveDifferentSteadyApexes) {
     hp.command.height = heights[i];
     HopRun run(hp);
     run.until(12.0);
-    ASSERT_TRUE(run.world->ok()) << run.world->status();
+    ASSERT_TRUE(run.world.ok()) << run.world.status();
     const std::vector<double> apexes = run.apexesAfter(6.0);
     means[i] = mean(apexes);
     std::printf("[ height %.2f m ] apex mean %.4f m, spread %.2e m over %zu hops (6-12 s), max tilt %.3f deg\n",
@@ -153,18 +140,18 @@ TEST(HopperHop, RecoversFromASidewaysShoveInFlight) {
   shoved.until(14.0, [&] {
     const bool now = shoved.hopper->inContact();
     if (pushed && now && !was) {
-      speed_at_touchdown.push_back(shoved.hopper->centerOfMassVelocity(*shoved.world).head<2>().norm());
+      speed_at_touchdown.push_back(shoved.hopper->centerOfMassVelocity(shoved.world).head<2>().norm());
     }
     was = now;
     if (pushed || shoved.hopper->phase() != HopperPhase::Flight || shoved.body().v.z() <= 0.0) return;
     const HopperModel& m = shoved.hopper->model();
-    for (int i : {m.body, m.upper, m.foot}) shoved.world->body(i).v.y() += 0.5;
+    for (int i : {m.body, m.upper, m.foot}) shoved.world.body(i).v.y() += 0.5;
     pushed = true;
     hops_at_push = shoved.hopper->hops();
-    push_time = shoved.world->time();
+    push_time = shoved.world.time();
   });
   ASSERT_TRUE(pushed);
-  ASSERT_TRUE(shoved.world->ok()) << shoved.world->status();
+  ASSERT_TRUE(shoved.world.ok()) << shoved.world.status();
   int recovered_at = -1;
   for (size_t i = 0; i < speed_at_touchdown.size(); ++i) {
     bool stays = true;

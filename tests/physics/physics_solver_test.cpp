@@ -13,7 +13,7 @@
 #include "physics/hopper.h"
 #include "physics/spherical_joint.h"
 #include "physics/tree_solver.h"
-#include "physics_test_util.h"
+#include "common/physics_util.h"
 
 namespace ponyhop {
 namespace {
@@ -161,7 +161,8 @@ TEST(PhysicsSolver, TreeSolverHandlesALoopAsExtraRows) {
 TEST(PhysicsSolver, TreeLambdaMatchesDenseOnTheHopperWithAPonytail) {
   PhysicsParams pp = physics(SolverKind::Dense, 1.0 / 480.0);
   World world(pp);
-  Hopper hopper(world, HopperParams{});
+  const auto hopper_ptr = Hopper::add(world, HopperParams{});
+  const Hopper& hopper = *hopper_ptr;
   ASSERT_TRUE(hopper.built()) << world.status();
   ChainParams cp;
   cp.links = 6;
@@ -170,7 +171,6 @@ TEST(PhysicsSolver, TreeLambdaMatchesDenseOnTheHopperWithAPonytail) {
   ASSERT_TRUE(world.ok()) << world.status();
   int checked = 0, in_contact = 0;
   for (int i = 0; i < 480 && world.ok(); ++i) {
-    hopper.think(world);
     world.step();
     if (i % 12 == 0 && world.ok()) {
       world.evaluate();

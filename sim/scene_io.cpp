@@ -1,4 +1,4 @@
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 
 #include <cmath>
 #include <cstdio>
@@ -9,7 +9,7 @@
 #include <sstream>
 #include <type_traits>
 
-#include "engine/input_file.h"
+#include "sim/input_file.h"
 #include "physics/hopper.h"
 
 namespace ponyhop {
@@ -500,12 +500,13 @@ void validateScene(const Scene& scene_in, const std::string& source) {
   {
     // camera.follow names a body the scene has ("" = the scene's main body).
     const std::string& f = scene.camera.follow;
-    const bool exists = f.empty() || (f == "head" && scene.head) || (f == "hopper" && scene.hopper) ||
+    const bool has_hopper = scene.hopper || !scene.hoppers.empty();
+    const bool exists = f.empty() || (f == "head" && scene.head) || (f == "hopper" && has_hopper) ||
                         (f == "chain" && scene.chain);
     if (!exists) {
       std::string have;
       for (const auto& [name, present] : {std::pair<const char*, bool>{"head", bool(scene.head)},
-                                          {"hopper", bool(scene.hopper)}, {"chain", bool(scene.chain)}}) {
+                                          {"hopper", has_hopper}, {"chain", bool(scene.chain)}}) {
         if (present) have += std::string(have.empty() ? "" : ", ") + '"' + name + '"';
       }
       errors.push_back("camera.follow: \"" + shortText(f) + "\" is not a body of this scene (allowed: \"\"" +

@@ -9,7 +9,7 @@
 
 #include "physics/chain.h"
 #include "physics/spherical_joint.h"
-#include "physics_test_util.h"
+#include "common/physics_util.h"
 
 namespace ponyhop {
 namespace {
@@ -17,6 +17,8 @@ namespace {
 using testing::linkPositions;
 using testing::maxDistance;
 using testing::runFor;
+using testing::expectRatio;
+using testing::maxEnergyDrift;
 
 ChainWorld chainWorld(Integrator integrator, Stabilization stabilization, double dt, int links = 8,
                       AnchorParams anchor = {}) {
@@ -49,13 +51,7 @@ TEST(PhysicsChain, ReleasedChainStartsWithPositiveEnergyAndHangingChainHasNone) 
 TEST(PhysicsChain, RK4ConservesEnergyAtSmallStep) {
   ChainWorld cw = chainWorld(Integrator::RK4, Stabilization::Projection, 1e-4);
   const double e0 = cw.world.energy();
-  double worst = 0.0;
-  for (int i = 0; i < 5000 && cw.world.ok(); ++i) {
-    cw.world.step();
-    worst = std::max(worst, std::abs(cw.world.energy() - e0));
-  }
-  EXPECT_TRUE(cw.world.ok()) << cw.world.status();
-  EXPECT_LT(worst, 1e-9) << "E0 = " << e0 << " J";
+  EXPECT_LT(maxEnergyDrift(cw.world, 5000), 1e-9) << "E0 = " << e0 << " J";
 }
 
 // Errors in the link positions at t = 0.2 s against RK4 at dt/32. The released chain is
@@ -74,18 +70,14 @@ TEST(PhysicsChain, ConvergenceOrderWhenDtHalves) {
   const double rk1 = positionError(Integrator::RK4, 1.0 / 240.0, reference);
   const double rk2 = positionError(Integrator::RK4, 1.0 / 480.0, reference);
   const double rk3 = positionError(Integrator::RK4, 1.0 / 960.0, reference);
-  EXPECT_GT(rk1 / rk2, 11.0) << rk1 << " " << rk2;  // 2^4 = 16
-  EXPECT_LT(rk1 / rk2, 22.0) << rk1 << " " << rk2;
-  EXPECT_GT(rk2 / rk3, 11.0) << rk2 << " " << rk3;
-  EXPECT_LT(rk2 / rk3, 22.0) << rk2 << " " << rk3;
+  expectRatio(rk1, rk2, 11.0, 22.0);  // 2^4 = 16
+  expectRatio(rk2, rk3, 11.0, 22.0);
 
   const double se1 = positionError(Integrator::SymplecticEuler, 1.0 / 960.0, reference);
   const double se2 = positionError(Integrator::SymplecticEuler, 1.0 / 1920.0, reference);
   const double se3 = positionError(Integrator::SymplecticEuler, 1.0 / 3840.0, reference);
-  EXPECT_GT(se1 / se2, 1.6) << se1 << " " << se2;  // 2^1 = 2
-  EXPECT_LT(se1 / se2, 2.6) << se1 << " " << se2;
-  EXPECT_GT(se2 / se3, 1.6) << se2 << " " << se3;
-  EXPECT_LT(se2 / se3, 2.6) << se2 << " " << se3;
+  expectRatio(se1, se2, 1.6, 2.6);  // 2^1 = 2
+  expectRatio(se2, se3, 1.6, 2.6);
 }
 
 // Post-stabilization keeps every joint closed to round-off, with a shaking anchor, for both

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 namespace {

@@ -5,7 +5,6 @@
 
 #include <random>
 
-#include "engine/scene_io.h"
 #include "physics/contact.h"
 #include "physics/hopper.h"
 #include "physics/prismatic_joint.h"
@@ -103,13 +102,19 @@ TEST(HopperKnee, HoldsWhileTumblingWithoutStabilization) {
   world.body(b).v = world.body(a).velocityAt(world.body(b).x) + Eigen::Vector3d(0.0, 0.0, -0.5);
   world.projectVelocities();
   // A spring along the axis: the slide moves while everything turns.
-  world.setController([a, b](double, std::vector<RigidBody>& bodies) {
-    const Eigen::Vector3d axis = bodies[a].q * Eigen::Vector3d::UnitZ();
-    const double s = (bodies[b].x - bodies[a].x).dot(axis);
-    const Eigen::Vector3d f = -200.0 * (s + 0.4) * axis;
-    bodies[b].force += f;
-    bodies[a].force -= f;
-  });
+  struct AxisSpring final : Controller {
+    int a, b;
+    AxisSpring(int a_in, int b_in) : a(a_in), b(b_in) {}
+    void applyForces(World& w, double) override {
+      std::vector<RigidBody>& bodies = w.bodies();
+      const Eigen::Vector3d axis = bodies[a].q * Eigen::Vector3d::UnitZ();
+      const double s = (bodies[b].x - bodies[a].x).dot(axis);
+      const Eigen::Vector3d f = -200.0 * (s + 0.4) * axis;
+      bodies[b].force += f;
+      bodies[a].force -= f;
+    }
+  };
+  world.addController(std::make_shared<AxisSpring>(a, b));
   double max_error = 0.0, min_slide = 1e9, max_slide = -1e9;
   const auto& knee = static_cast<const PrismaticJoint&>(*world.joints()[0]);
   for (int i = 0; i < 2000; ++i) {
@@ -145,31 +150,10 @@ TEST(HopperKnee, PhysicalNonsenseIsRefused) {
   World world(pp);
   p.script.clear();
   p.upper_length = 0.1;
-  Hopper hopper(world, p);
-  EXPECT_FALSE(hopper.built());
+  const auto hopper = Hopper::add(world, p);
+  EXPECT_FALSE(hopper->built());
   EXPECT_FALSE(world.ok());
   EXPECT_NE(world.status().find("upper_length"), std::string::npos) << world.status();
-}
-
-TEST(HopperKnee, SceneChecksTheHopperSection) {
-  const nlohmann::json no_hopper = {{"chain", {{"attach", "hopper"}}}};
-  try {
-    parseScene(no_hopper, "test.json", {});
-    ADD_FAILURE() << "a chain attached to a missing hopper must be refused";
-  } catch (const SceneError& e) {
-    EXPECT_NE(std::string(e.what()).find("needs a hopper section"), std::string::npos) << e.what();
-  }
-  const nlohmann::json bad = {{"hopper", {{"min_length", 0.85}}}};
-  try {
-    parseScene(bad, "test.json", {});
-    ADD_FAILURE() << "min_length above rest_length must be refused";
-  } catch (const SceneError& e) {
-    EXPECT_NE(std::string(e.what()).find("hopper"), std::string::npos) << e.what();
-  }
-  const Scene ok = parseScene(nlohmann::json{{"hopper", nlohmann::json::object()}, {"chain", {{"attach", "hopper"}}}},
-                              "test.json", {{"hopper.command.vx", "0.5"}});
-  ASSERT_TRUE(ok.hopper.has_value());
-  EXPECT_DOUBLE_EQ(ok.hopper->command.vx, 0.5);
 }
 
 }  // namespace

@@ -11,9 +11,10 @@
 #include "app/ui_headless.h"
 #include "app/ui_sim.h"
 #include "engine/frame_writer.h"
+#include "engine/asset_loader.h"
 #include "engine/render_session.h"
-#include "engine/scene_io.h"
-#include "test_util.h"
+#include "sim/scene_io.h"
+#include "common/run_util.h"
 
 namespace ponyhop {
 namespace {
@@ -128,7 +129,7 @@ TEST(PanelTest, DraggingTheGravitySliderChangesTheMotionWithoutRestarting) {
 
 TEST(PanelTest, ResetButtonAndBackspaceRestoreTheInitialState) {
   Harness h("assets/scenes/chain.json");
-  const SceneRuntime fresh(loadScene("assets/scenes/chain.json"));  // the state at t = 0
+  const Sim fresh(loadScene("assets/scenes/chain.json"), &assimpAssets());  // the state at t = 0
   const Eigen::Vector3d tip0 = fresh.chain()->tip(fresh.world());
   const std::vector<RigidBody>& bodies0 = fresh.world().bodies();
   h.frames(40);

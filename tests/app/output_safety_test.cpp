@@ -17,7 +17,7 @@
 #include <thread>
 
 #include "engine/image.h"
-#include "tests/test_util.h"
+#include "common/run_util.h"
 
 namespace ponyhop {
 namespace {

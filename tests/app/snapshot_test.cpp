@@ -16,8 +16,8 @@
 #include "engine/image.h"
 #include "engine/image_diff.h"
 #include "engine/render_session.h"
-#include "engine/scene_io.h"
-#include "engine/scene_runtime.h"
+#include "sim/scene_io.h"
+#include "engine/asset_loader.h"
 #include "app/ui_headless.h"
 
 namespace ponyhop {
@@ -71,7 +71,7 @@ Image renderShot(const Scene& scene, double t, std::string* renderer = nullptr, 
   RenderSession session(scene);
   EXPECT_TRUE(session.simulateTo(t)) << session.status();
   if (contact >= 0) {
-    SceneRuntime& rt = session.runtime();
+    Sim& rt = session.sim();
     const Hopper* h = rt.hopper();
     EXPECT_TRUE(h != nullptr);
     auto reached = [&] {
@@ -187,7 +187,7 @@ std::string stateHash(const World& world) {
 }
 
 std::string fingerprint(const std::string& scene_path, int steps) {
-  SceneRuntime rt(loadScene(scene_path));
+  Sim rt(loadScene(scene_path), &assimpAssets());
   for (int i = 0; i < steps && rt.ok(); ++i) rt.step();
   EXPECT_TRUE(rt.ok()) << rt.status();
   return stateHash(rt.world());
@@ -240,7 +240,7 @@ TEST(FingerprintHash, DetectsTinyPhysicsChanges) {
   const std::string a = fingerprint("assets/scenes/chain.json", 200);
   EXPECT_EQ(a, fingerprint("assets/scenes/chain.json", 200)) << "not deterministic";
   EXPECT_NE(a, fingerprint("assets/scenes/chain.json", 201));
-  SceneRuntime rt(loadScene("assets/scenes/chain.json"));
+  Sim rt(loadScene("assets/scenes/chain.json"), &assimpAssets());
   rt.world().body(rt.chain()->links.back()).x.x() += 1e-12;
   for (int i = 0; i < 200; ++i) rt.step();
   EXPECT_NE(a, stateHash(rt.world()));

@@ -8,6 +8,7 @@
 #include <memory>
 #include <numbers>
 
+#include "common/physics_util.h"
 #include "physics/hopper.h"
 
 namespace ponyhop {
@@ -15,26 +16,15 @@ namespace {
 
 constexpr double kRad = 180.0 / std::numbers::pi;
 
-struct HopRun {
-  std::unique_ptr<World> world;
-  std::unique_ptr<Hopper> hopper;
+struct HopRun : testing::HopperWorld {
   double max_tilt = 0.0;
 
-  explicit HopRun(const HopperParams& hp) {
-    PhysicsParams pp;
-    pp.dt = 1e-3;
-    pp.integrator = Integrator::RK4;
-    pp.stabilization = Stabilization::Projection;
-    world = std::make_unique<World>(pp);
-    hopper = std::make_unique<Hopper>(*world, hp);
-  }
-  const RigidBody& body() const { return world->body(hopper->model().body); }
+  explicit HopRun(const HopperParams& hp) : HopperWorld(hp) {}
   Eigen::Vector3d position() const { return body().x; }
   void until(double T) {
-    while (world->ok() && world->time() < T - 1e-9) {
-      hopper->think(*world);
-      world->step();
-      max_tilt = std::max(max_tilt, hopper->tilt(*world));
+    while (world.ok() && world.time() < T - 1e-9) {
+      world.step();
+      max_tilt = std::max(max_tilt, hopper->tilt(world));
     }
   }
   // Mean horizontal velocity over [t0, t1] (displacement / time: exact over whole hops or not).
@@ -63,7 +53,7 @@ TEST(HopperRun, RunsAlongXThenYThenDiagonallyThenStops) {
   const Leg legs[] = {{"x", 6.0, 16.0, {1.0, 0.0}}, {"y", 20.0, 30.0, {0.0, 1.0}}, {"diagonal", 34.0, 44.0, {d, d}}};
   for (const Leg& leg : legs) {
     const Eigen::Vector2d v = run.meanVelocity(leg.t0, leg.t1);
-    ASSERT_TRUE(run.world->ok()) << run.world->status();
+    ASSERT_TRUE(run.world.ok()) << run.world.status();
     const double error = (v - leg.command).norm() / leg.command.norm();
     std::printf("[ run %-8s ] command (%.3f, %.3f) m/s, mean over %.0f-%.0f s (%.4f, %.4f) m/s: speed %.4f m/s, "
                 "vector error %.2f %%\n",
@@ -72,7 +62,7 @@ TEST(HopperRun, RunsAlongXThenYThenDiagonallyThenStops) {
   }
   // Stop: the command returns to zero at 44 s.
   const Eigen::Vector2d v_stop = run.meanVelocity(49.0, 52.0);
-  ASSERT_TRUE(run.world->ok()) << run.world->status();
+  ASSERT_TRUE(run.world.ok()) << run.world.status();
   std::printf("[ run stop     ] mean speed over 49-52 s %.4f m/s; max tilt over the run %.3f deg\n", v_stop.norm(),
               run.max_tilt * kRad);
   EXPECT_LT(v_stop.norm(), 0.05) << "it must come to a stop";
@@ -84,11 +74,11 @@ TEST(HopperRun, HeadingFollowsItsCommand) {
   hp.script = {key(0.0, 0.0, 0.0, 0.0), key(2.0, 0.0, 0.0, 90.0), key(8.0, 0.5, 0.0, -45.0)};
   HopRun run(hp);
   run.until(7.5);
-  ASSERT_TRUE(run.world->ok()) << run.world->status();
-  const double yaw1 = run.hopper->attitude(*run.world)[2] * kRad;
+  ASSERT_TRUE(run.world.ok()) << run.world.status();
+  const double yaw1 = run.hopper->attitude(run.world)[2] * kRad;
   run.until(14.0);
-  ASSERT_TRUE(run.world->ok()) << run.world->status();
-  const double yaw2 = run.hopper->attitude(*run.world)[2] * kRad;
+  ASSERT_TRUE(run.world.ok()) << run.world.status();
+  const double yaw2 = run.hopper->attitude(run.world)[2] * kRad;
   std::printf("[ heading ] yaw %.2f deg (command 90), then %.2f deg (command -45, running 0.5 m/s); twist slips %d\n",
               yaw1, yaw2, run.hopper->contact().stats().twist_slips);
   EXPECT_NEAR(yaw1, 90.0, 5.0);
@@ -108,7 +98,7 @@ TEST(HopperRun, SpeedRangeThatTracksWithinTenPercent) {
     hp.command.vx = s;
     HopRun run(hp);
     const Eigen::Vector2d v = run.meanVelocity(8.0, 14.0);
-    const bool ok = run.world->ok() && run.max_tilt * kRad < 15.0;
+    const bool ok = run.world.ok() && run.max_tilt * kRad < 15.0;
     const double error = ok ? std::abs(v.x() - s) / s : 1e9;
     const bool tracks = ok && error < 0.10 && std::abs(v.y()) < 0.1 * s;
     std::printf("[ speed %.2f m/s ] mean %.4f m/s, error %6.2f %%, max tilt %.2f deg -> %s\n", s, ok ? v.x() : 0.0,

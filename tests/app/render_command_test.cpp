@@ -8,8 +8,8 @@
 #include "engine/image.h"
 #include "engine/image_diff.h"
 #include "engine/render_session.h"
-#include "engine/scene_io.h"
-#include "tests/test_util.h"
+#include "sim/scene_io.h"
+#include "common/run_util.h"
 
 namespace ponyhop {
 namespace {

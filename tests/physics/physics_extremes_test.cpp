@@ -202,7 +202,7 @@ TEST(PhysicsExtremes, ShakingAndWhirlingHead) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The hopper (physics/hopper.h): Think once per step, then the step, at the hopper scene's
+// The hopper (physics/hopper.h): World::step runs its Think, then the stages, at the hopper scene's
 // dt = 1 ms. Joint bound: hip and knee error below 1e-9 m.
 
 struct HopperRun {
@@ -214,12 +214,12 @@ struct HopperRun {
 
 HopperRun runHopper(const PhysicsParams& pp, const HopperParams& hp, double seconds) {
   World world(pp);
-  Hopper hopper(world, hp);
+  const auto hopper_ptr = Hopper::add(world, hp);
+  const Hopper& hopper = *hopper_ptr;
   HopperRun r;
   EXPECT_TRUE(hopper.built()) << world.status();
   const int steps = static_cast<int>(std::lround(seconds / pp.dt));
   for (; r.steps < steps && world.ok(); ++r.steps) {
-    hopper.think(world);
     world.step();
     EXPECT_TRUE(finite(world)) << "step " << r.steps;
     if (!finite(world)) break;

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/scene.h"
+#include "sim/scene.h"
 
 namespace ponyhop {
 

@@ -8,7 +8,7 @@
 #include "engine/image.h"
 #include "engine/image_diff.h"
 #include "engine/render_session.h"
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 #include "app/ui_headless.h"
 
 namespace ponyhop {
@@ -28,7 +28,7 @@ Scene baseScene() {
 Image render(const Scene& scene, double t, int extra_steps = 0) {
   RenderSession session(scene);
   EXPECT_TRUE(session.simulateTo(t));
-  for (int i = 0; i < extra_steps; ++i) session.runtime().step();
+  for (int i = 0; i < extra_steps; ++i) session.sim().step();
   Image img;
   img.width = session.width();
   img.height = session.height();
