@@ -20,6 +20,11 @@ PACKAGES=(
   xvfb xauth                           # window tests without a display
 )
 
+# `make fuzz` only (scripts/setup.sh --fuzz): libFuzzer comes with clang's runtime libraries.
+if [ "${1:-}" = "--fuzz" ]; then
+  PACKAGES+=(clang libclang-rt-14-dev)
+fi
+
 missing=()
 for p in "${PACKAGES[@]}"; do
   [[ "$p" == \#* ]] && continue

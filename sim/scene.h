@@ -171,6 +171,7 @@ struct Scene {
   std::optional<ChainSection> chain;
   std::optional<HopperSection> hopper;
   std::vector<HopperSection> hoppers;  // more hoppers in the same world (each with its own position)
+  std::vector<std::string> notes;  // what the reader chose for the user (not a field), shown on stderr
 
   template <class V>
   void reflect(V& v) {

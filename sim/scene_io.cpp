@@ -9,6 +9,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "sim/input_file.h"
 #include "physics/hopper.h"
 
 namespace ponyhop {
@@ -40,6 +41,69 @@ std::string enumChoices() {
     s += '"' + std::string(n) + '"';
   }
   return s;
+}
+
+// A value as echoed in a message: at most ~80 characters, so a 10 MB bad value is not repeated.
+std::string shortText(const std::string& s) {
+  constexpr size_t kMax = 80;
+  if (s.size() <= kMax) return s;
+  return s.substr(0, kMax) + "... (" + std::to_string(s.size()) + " characters)";
+}
+std::string shortDump(const json& j) { return shortText(j.dump()); }
+
+// JSON text read with limits: nesting depth (the DOM's copy, dump and destruction recurse, so an
+// unbounded depth is a stack overflow), no key twice in one object (nlohmann keeps the last one
+// silently), and a number that does not fit a double named by its field.
+json parseJsonLimited(const std::string& text, const std::string& source) {
+  std::vector<std::string> path;                 // keys from the root to the current value
+  std::vector<std::set<std::string>> seen;       // keys met in each open object
+  const auto where = [&path]() {
+    std::string p;
+    for (const auto& k : path) {
+      if (!k.empty()) p += (p.empty() ? "" : ".") + k;  // "" marks an array level
+    }
+    return p;
+  };
+  const json::parser_callback_t cb = [&](int depth, json::parse_event_t event, json& parsed) -> bool {
+    switch (event) {
+      case json::parse_event_t::object_start:
+      case json::parse_event_t::array_start:
+        if (depth >= kMaxJsonDepth) {
+          throw SceneError(source + ": " + (path.empty() ? std::string("the document") : where()) +
+                           ": nested deeper than " + std::to_string(kMaxJsonDepth) +
+                           " levels of [ ] and { } (the limit for scene and clip files)");
+        }
+        seen.resize(size_t(depth) + 1);
+        seen[size_t(depth)].clear();
+        path.resize(size_t(depth));
+        if (event == json::parse_event_t::array_start) path.emplace_back("");
+        break;
+      case json::parse_event_t::key: {
+        const std::string k = parsed.get<std::string>();
+        path.resize(size_t(depth));
+        path.back() = k;
+        if (!seen[size_t(depth) - 1].insert(k).second) {
+          throw SceneError(source + ": " + where() + ": the key appears twice in one object (which one is meant?)");
+        }
+        break;
+      }
+      default:
+        break;
+    }
+    return true;
+  };
+  try {
+    return json::parse(text, cb, /*allow_exceptions=*/true, /*ignore_comments=*/true);
+  } catch (const json::out_of_range& e) {
+    // -1e400: nlohmann's "number overflow parsing '-1e400'" names neither file nor field.
+    std::string msg = e.what();
+    const auto q = msg.find("number overflow");
+    if (q != std::string::npos) msg = msg.substr(q);
+    throw SceneError(source + ": " + (path.empty() ? std::string("the document") : where()) + ": " +
+                     shortText(msg) + " (numbers must be finite doubles, |x| < 1.8e308)");
+  } catch (const json::exception& e) {
+    throw SceneError(source + ": not valid JSON: " + shortText(e.what()));
+  }
 }
 
 // Reads one JSON object into a reflectable struct, collecting every problem it finds.
@@ -80,7 +144,7 @@ class JsonReader {
 
  private:
   void bad(const std::string& key, const std::string& what, const json& got) {
-    errors_.push_back(key + ": must be " + what + ", got " + got.dump());
+    errors_.push_back(key + ": must be " + what + ", got " + shortDump(got));
   }
 
   template <class T>
@@ -252,9 +316,12 @@ void applyOverride(json& j, const Override& o) {
     if (last) {
       json v;
       try {
-        v = json::parse(o.value);
-      } catch (const json::exception&) {
-        v = o.value;  // unquoted text: a string
+        v = parseJsonLimited(o.value, "--set " + o.key);
+      } catch (const SceneError& e) {
+        // Unquoted text is a string; JSON that is too deep or has a repeated key is an error.
+        const std::string m = e.what();
+        if (m.find("nested deeper") != std::string::npos || m.find("appears twice") != std::string::npos) throw;
+        v = o.value;
       }
       *node = v;
     }
@@ -264,6 +331,29 @@ void applyOverride(json& j, const Override& o) {
 bool sectionPresent(const json& j, const std::string& name) { return j.contains(name) && !j[name].is_null(); }
 
 const char* kOptionalSections[] = {"head", "anchor", "chain", "hopper"};
+
+// Dense is O(n^3) per step: 4,096 links would run for days without a word. When the file does
+// not name a solver, long chains get the tree solver (the same equations, O(n), docs/SOLVERS.md);
+// a dense solver the user chose is kept, with its cost said up front.
+void chooseSolver(const json& j, Scene& scene) {
+  if (!scene.chain || scene.physics.solver != SolverKind::Dense) return;
+  const int n = scene.chain->links;
+  const bool picked = j.contains("physics") && j["physics"].is_object() && j["physics"].contains("solver");
+  if (!picked && n > kDenseSolverMaxLinks) {
+    scene.physics.solver = SolverKind::Tree;
+    scene.notes.push_back("chain.links = " + std::to_string(n) + " > " + std::to_string(kDenseSolverMaxLinks) +
+                          " and no physics.solver given: using \"tree\" (O(n); \"dense\" is O(n^3) per step, "
+                          "same results; set physics.solver to choose)");
+  } else if (picked && n > 4 * kDenseSolverMaxLinks) {
+    // Measured (docs/SOLVERS.md): about 48 ms per step at 128 links, growing as n^3.
+    const double ms = 48.0 * std::pow(n / 128.0, 3.0);
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "about %.3g s per step (%.3g h per simulated second at dt %.3g s)", ms / 1000.0,
+                  ms / 1000.0 / scene.physics.dt / 3600.0, scene.physics.dt);
+    scene.notes.push_back("physics.solver = \"dense\" with " + std::to_string(n) + " links: O(n^3), " + buf +
+                          "; \"tree\" gives the same results in O(n)");
+  }
+}
 
 }  // namespace
 
@@ -311,7 +401,7 @@ Scene parseScene(const json& j_in, const std::string& source, const std::vector<
     for (auto& e : errors) {
       for (const auto& o : overrides) {
         if (e.rfind(o.key, 0) == 0) {
-          e = "(from --set " + o.key + "=" + o.value + ") " + e;
+          e = "(from --set " + o.key + "=" + shortText(o.value) + ") " + e;
           break;
         }
       }
@@ -320,19 +410,18 @@ Scene parseScene(const json& j_in, const std::string& source, const std::vector<
   }
   scene.path = source;
   validateScene(scene, source);
+  chooseSolver(j, scene);
   return scene;
 }
 
+Scene parseSceneText(const std::string& text, const std::string& source, const std::vector<Override>& overrides) {
+  return parseScene(parseJsonLimited(text, source), source, overrides);
+}
+
 Scene loadScene(const std::string& path, const std::vector<Override>& overrides) {
-  std::ifstream in(path);
-  if (!in) throw SceneError(path + ": cannot open the scene file (does it exist?)");
-  json j;
-  try {
-    j = json::parse(in, nullptr, true, /*ignore_comments=*/true);
-  } catch (const json::parse_error& e) {
-    throw SceneError(path + ": not valid JSON: " + e.what());
-  }
-  Scene scene = parseScene(j, path, overrides);
+  std::string text, err;
+  if (!readInputFile(path, kMaxSceneFileBytes, "scene file", &text, &err)) throw SceneError(err);
+  Scene scene = parseSceneText(text, path, overrides);
   scene.path = path;
   return scene;
 }
@@ -343,25 +432,28 @@ std::string resolveClipPath(const std::string& clip, const std::string& scene_pa
   return resolveScenePath(bare ? "assets/animations/" + clip + ".json" : clip, scene_path);
 }
 
-AnimationParams loadClipFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw SceneError(path + ": cannot open the clip file");
-  json j;
-  try {
-    j = json::parse(in, nullptr, true, /*ignore_comments=*/true);
-  } catch (const json::parse_error& e) {
-    throw SceneError(path + ": not valid JSON: " + e.what());
-  }
+AnimationParams parseClipText(const std::string& text, const std::string& source) {
+  const json j = parseJsonLimited(text, source);
   AnimationParams clip;
   std::vector<std::string> errors;
   JsonReader::readStruct(j, clip, "", errors);
-  if (!errors.empty()) throw SceneError(joinErrors(path, errors));
+  if (!errors.empty()) throw SceneError(joinErrors(source, errors));
   return clip;
+}
+
+AnimationParams loadClipFile(const std::string& path) {
+  std::string text, err;
+  if (!readInputFile(path, kMaxSceneFileBytes, "clip file", &text, &err)) throw SceneError(err);
+  return parseClipText(text, path);
 }
 
 json sceneToJson(const Scene& scene) { return JsonWriter::write(scene); }
 
 void saveScene(const Scene& scene, const std::string& path) {
+  std::error_code ec0;
+  if (fs::exists(path, ec0) && !fs::is_regular_file(path, ec0)) {
+    throw SceneError(path + ": is not a regular file (a folder or a device); the scene is not saved there");
+  }
   const std::string tmp = path + ".tmp";
   {
     std::ofstream out(tmp);
@@ -403,6 +495,22 @@ void validateScene(const Scene& scene_in, const std::string& source) {
     }
     if (c.attach == ChainAttach::Hopper && !scene.hopper) {
       errors.push_back("chain.attach: \"hopper\" needs a hopper section in the scene");
+    }
+  }
+  {
+    // camera.follow names a body the scene has ("" = the scene's main body).
+    const std::string& f = scene.camera.follow;
+    const bool has_hopper = scene.hopper || !scene.hoppers.empty();
+    const bool exists = f.empty() || (f == "head" && scene.head) || (f == "hopper" && has_hopper) ||
+                        (f == "chain" && scene.chain);
+    if (!exists) {
+      std::string have;
+      for (const auto& [name, present] : {std::pair<const char*, bool>{"head", bool(scene.head)},
+                                          {"hopper", has_hopper}, {"chain", bool(scene.chain)}}) {
+        if (present) have += std::string(have.empty() ? "" : ", ") + '"' + name + '"';
+      }
+      errors.push_back("camera.follow: \"" + shortText(f) + "\" is not a body of this scene (allowed: \"\"" +
+                       (have.empty() ? "" : ", " + have) + ")");
     }
   }
   if (scene.hopper && errors.empty()) {

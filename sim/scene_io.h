@@ -25,11 +25,24 @@ struct Override {
 };
 Override parseOverride(const std::string& key_equals_value);  // throws SceneError
 
+// Limits of scene and clip files (docs/RELIABILITY.md): a larger file or a deeper nesting of
+// [ ] and { } is refused with the limit in the message, before the JSON is built.
+inline constexpr size_t kMaxSceneFileBytes = 16u << 20;
+inline constexpr int kMaxJsonDepth = 64;
+// A chain longer than this gets physics.solver = "tree" when the file names no solver (a note in
+// Scene::notes says so); shipped scenes are shorter, so their physics is untouched.
+inline constexpr int kDenseSolverMaxLinks = 32;
+
 // Reads a scene file, applies the overrides, validates every field (types, ranges, unknown keys,
 // files that must exist) and resolves relative paths. Throws SceneError listing every problem.
 Scene loadScene(const std::string& path, const std::vector<Override>& overrides = {});
 
-// The same from JSON text (`source` names it in messages).
+// The same from the file's text (`source` names it in messages): the limits above, a key twice
+// in one object, a number beyond a double's range are all SceneErrors naming source and field.
+Scene parseSceneText(const std::string& text, const std::string& source,
+                     const std::vector<Override>& overrides = {});
+
+// The same from JSON already parsed (`source` names it in messages).
 Scene parseScene(const nlohmann::json& j, const std::string& source,
                  const std::vector<Override>& overrides = {});
 
@@ -49,6 +62,7 @@ std::string resolveScenePath(const std::string& path, const std::string& scene_p
 // A clip file (assets/animations/*.json): {"mode": ..., "keys": [...]} with the fields of
 // AnimationParams. Throws SceneError naming the file and the key.
 AnimationParams loadClipFile(const std::string& path);
+AnimationParams parseClipText(const std::string& text, const std::string& source);
 
 // The file of head.animation.clip: a bare name is assets/animations/NAME.json. "" when the clip
 // is "", "mesh", or not found.

@@ -1,7 +1,9 @@
 // The snapshot comparator (engine/image_diff) and `ponyhop diff`, on synthetic pictures drawn
 // here with supersampled anti-aliasing, so that edges look like a renderer's.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -378,6 +380,51 @@ ExeRun runExe(const std::string& args) {
   std::stringstream ss;
   ss << in.rdbuf();
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ss.str()};
+}
+
+// A PNG whose header declares WxH, with a tiny (wrong) image body: enough for the header check.
+std::string pngDeclaring(uint32_t w, uint32_t h) {
+  std::string ihdr = "IHDR";
+  for (uint32_t v : {w, h}) {
+    for (int s = 24; s >= 0; s -= 8) ihdr.push_back(char((v >> s) & 0xff));
+  }
+  ihdr += std::string("\x08\x06\x00\x00\x00", 5);  // 8 bit RGBA
+  std::string png = "\x89PNG\r\n\x1a\n";
+  png += std::string("\x00\x00\x00\x0d", 4) + ihdr;
+  const uLong crc = crc32(0, reinterpret_cast<const Bytef*>(ihdr.data()), uInt(ihdr.size()));
+  for (int s = 24; s >= 0; s -= 8) png.push_back(char((crc >> s) & 0xff));
+  png += std::string("\x00\x00\x00\x00IEND\xae\x42\x60\x82", 12);
+  return png;
+}
+
+TEST(ImageHostile, HugeDeclaredSizeIsRefusedBeforeDecoding) {
+  std::string err;
+  const Image img = decodePng(pngDeclaring(12000, 12000), "huge.png", &err);
+  EXPECT_TRUE(img.empty());
+  EXPECT_NE(err.find("huge.png: the image declares 12000x12000 pixels; the limit is 16384 per side and 64 megapixels"),
+            std::string::npos)
+      << err;
+  err.clear();
+  decodePng(pngDeclaring(20000, 10), "wide.png", &err);
+  EXPECT_NE(err.find("20000x10"), std::string::npos) << err;
+  // Inside the limits the same header goes on to the decoder (which finds no image data).
+  err.clear();
+  decodePng(pngDeclaring(64, 64), "small.png", &err);
+  EXPECT_EQ(err.find("declares"), std::string::npos) << err;
+  EXPECT_NE(err.find("small.png: cannot read as an image"), std::string::npos) << err;
+}
+
+TEST(ImageHostile, FifoAndFolderAreRefusedWithoutBlocking) {
+  const std::filesystem::path dir = std::filesystem::path(PONYHOP_TEST_OUT) / "image_hostile";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string fifo = (dir / "fifo.png").string();
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  std::string err;
+  EXPECT_TRUE(loadPng(fifo, &err).empty());
+  EXPECT_NE(err.find("fifo.png: is a FIFO (named pipe), not a PNG file"), std::string::npos) << err;
+  EXPECT_TRUE(loadPng(dir.string(), &err).empty());
+  EXPECT_NE(err.find("is a folder"), std::string::npos) << err;
 }
 
 TEST(ImageDiffCli, ExitCodesAndDiffImage) {

@@ -106,11 +106,11 @@ TEST(RenderCommand, ShorterRunRemovesStaleFramesAndMakesAVideo) {
   const std::string out = scratch("rerun");
   const std::string base = std::string("render assets/scenes/head.json ") + kSmall + " --out " + out;
   ASSERT_EQ(runPonyhop(base + " --frames 4", "rerun1").code, 0);
-  const auto r = runPonyhop(base + " --frames 2 --video " + out + "/head.mp4", "rerun2");
+  const auto r = runPonyhop(base + " --frames 2 --video " + out + ".mp4", "rerun2");
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(fs::exists(out + "/frame_00001.png"));
   EXPECT_FALSE(fs::exists(out + "/frame_00002.png")) << "a frame of the earlier, longer run is left";
-  EXPECT_GT(fs::file_size(out + "/head.mp4"), 1000u);
+  EXPECT_GT(fs::file_size(out + ".mp4"), 1000u);
   for (const auto& e : fs::directory_iterator(fs::path(out).parent_path())) {
     EXPECT_EQ(e.path().string().find("rerun.partial"), std::string::npos) << "staging left: " << e.path();
   }

@@ -162,7 +162,13 @@ TEST(HopperHop, RecoversFromASidewaysShoveInFlight) {
     }
   }
   std::string list;
-  for (double s : speed_at_touchdown) list += " " + std::to_string(s).substr(0, 5);
+  for (double s : speed_at_touchdown) {
+    // snprintf, not " " + std::to_string(s): GCC 12 at -O3 (Release) reports a false -Wrestrict
+    // inside std::string's operator+ (GCC bug 105651) and -Werror stops the build.
+    char buf[32];
+    std::snprintf(buf, sizeof(buf), " %.3f", s);
+    list += buf;
+  }
   std::printf("[ shove 0.5 m/s ] at t = %.3f s (hop %d); speed at the next touchdowns:%s m/s; recovered after %d hops; "
               "max tilt %.3f deg\n",
               push_time, hops_at_push, list.c_str(), recovered_at, shoved.max_tilt * kRad);

@@ -1,6 +1,8 @@
 // Scene files: every field through reflect(), errors that name the file, the key and the range.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <filesystem>
 #include <fstream>
 
@@ -138,6 +140,108 @@ TEST(SceneIo, MissingAndBrokenFiles) {
     FAIL();
   } catch (const SceneError& e) {
     EXPECT_NE(std::string(e.what()).find("not valid JSON"), std::string::npos) << e.what();
+  }
+}
+
+// Hostile scene files (docs/RELIABILITY.md): each is a SceneError naming the file and the field,
+// never a crash, a hang or a library message.
+std::string textError(const std::string& text, const std::vector<Override>& o = {}) {
+  try {
+    parseSceneText(text, "hostile.json", o);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SceneIoHostile, DeepNestingIsRefusedWithTheLimit) {
+  // 200,000 levels overflowed the stack (the DOM's copy and dump recurse).
+  const std::string deep = "{\"name\":" + std::string(200000, '[') + std::string(200000, ']') + "}";
+  const std::string e = textError(deep);
+  EXPECT_NE(e.find("hostile.json: name: nested deeper than " + std::to_string(kMaxJsonDepth)), std::string::npos) << e;
+  // Just inside the limit is read (and then refused for its type, as any wrong value).
+  const std::string ok = "{\"name\":" + std::string(kMaxJsonDepth - 1, '[') + std::string(kMaxJsonDepth - 1, ']') + "}";
+  EXPECT_NE(textError(ok).find("name: must be a string"), std::string::npos) << textError(ok);
+  // --set values are held to the same limit.
+  const std::string o = textError("{}", {parseOverride("name=" + std::string(100000, '['))});
+  EXPECT_NE(o.find("nested deeper"), std::string::npos) << o.substr(0, 300);
+}
+
+TEST(SceneIoHostile, NumberOverflowNamesFileAndField) {
+  const std::string e = textError(R"({"physics": {"gravity": [0, 0, -9.81], "dt": -1e400}})");
+  EXPECT_NE(e.find("hostile.json: physics.dt: number overflow parsing '-1e400'"), std::string::npos) << e;
+  EXPECT_EQ(e.find("json.exception"), std::string::npos) << e;
+}
+
+TEST(SceneIoHostile, DuplicateKeysAreRefused) {
+  const std::string e = textError(R"({"physics": {"dt": 0.01, "dt": 0.02}})");
+  EXPECT_NE(e.find("hostile.json: physics.dt: the key appears twice"), std::string::npos) << e;
+  // The same key in two different objects is fine.
+  EXPECT_EQ(textError(R"({"physics": {"dt": 0.01}, "render": {"fps": 30}, "camera": {"mode": "fixed"}})"), "");
+}
+
+TEST(SceneIoHostile, CameraFollowMustNameABodyOfTheScene) {
+  std::string e = textError(R"({"camera": {"mode": "follow", "follow": "banana"}, "anchor": {}, "chain": {}})");
+  EXPECT_NE(e.find("camera.follow: \"banana\" is not a body of this scene"), std::string::npos) << e;
+  EXPECT_NE(e.find("\"chain\""), std::string::npos) << e;
+  e = textError(R"({"camera": {"follow": "hopper"}, "anchor": {}, "chain": {}})");
+  EXPECT_NE(e.find("camera.follow: \"hopper\""), std::string::npos) << e;
+  EXPECT_EQ(textError(R"({"camera": {"follow": "chain"}, "anchor": {}, "chain": {}})"), "");
+}
+
+TEST(SceneIoHostile, AHugeBadValueIsNotEchoedWhole) {
+  const std::string e = textError("{\"name\": " + std::string(1, '[') + "\"" + std::string(10 << 20, 'x') + "\"]}");
+  EXPECT_NE(e.find("name: must be a string"), std::string::npos) << e.substr(0, 300);
+  EXPECT_LT(e.size(), 400u);
+  const std::string o = textError("{}", {parseOverride("physics.dt=" + std::string(1 << 20, 'y'))});
+  EXPECT_NE(o.find("physics.dt"), std::string::npos) << o.substr(0, 300);
+  EXPECT_LT(o.size(), 600u);
+}
+
+TEST(SceneIoHostile, FilesThatAreNotFilesOrTooLarge) {
+  const std::string dir = std::string(PONYHOP_TEST_OUT) + "/hostile_files";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto errorLoading = [](const std::string& path) -> std::string {
+    try {
+      loadScene(path);
+    } catch (const SceneError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(errorLoading(dir).find(dir + ": is a folder, not a scene file"), std::string::npos) << errorLoading(dir);
+  const std::string fifo = dir + "/fifo.json";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_NE(errorLoading(fifo).find("is a FIFO"), std::string::npos) << errorLoading(fifo);  // and did not block
+  const std::string big = dir + "/big.json";
+  std::ofstream(big) << "{\"name\": \"" << std::string(kMaxSceneFileBytes, 'x') << "\"}";
+  const std::string e = errorLoading(big);
+  EXPECT_NE(e.find("the scene file is 16.0 MB (16777228 bytes); the limit is 16.0 MB (16777216 bytes)"),
+            std::string::npos)
+      << e;
+}
+
+TEST(SceneIoHostile, LongChainsWithoutASolverGetTheLinearOne) {
+  // Dense is O(n^3) per step: 4,096 links would run for days. Unless the file picks a solver,
+  // a long chain gets tree (same equations, O(n)), and a note says so.
+  Scene s = parseSceneText(R"({"anchor": {}, "chain": {"links": 4096}})", "long.json");
+  EXPECT_EQ(s.physics.solver, SolverKind::Tree);
+  ASSERT_EQ(s.notes.size(), 1u);
+  EXPECT_NE(s.notes[0].find("using \"tree\""), std::string::npos) << s.notes[0];
+  // Picked by the user: kept, with its cost said.
+  s = parseSceneText(R"({"physics": {"solver": "dense"}, "anchor": {}, "chain": {"links": 512}})", "long.json");
+  EXPECT_EQ(s.physics.solver, SolverKind::Dense);
+  ASSERT_EQ(s.notes.size(), 1u);
+  EXPECT_NE(s.notes[0].find("s per step"), std::string::npos) << s.notes[0];
+  s = parseSceneText(R"({"anchor": {}, "chain": {"links": 8}})", "long.json", {parseOverride("chain.links=4096"),
+                                                                               parseOverride("physics.solver=dense")});
+  EXPECT_EQ(s.physics.solver, SolverKind::Dense);
+  // Short chains (every shipped scene) are untouched.
+  for (const char* f : {"assets/scenes/ponytail.json", "assets/scenes/chain.json", "assets/scenes/ponytail_hopper.json"}) {
+    const Scene shipped = loadScene(f);
+    EXPECT_EQ(shipped.physics.solver, SolverKind::Dense) << f;
+    EXPECT_TRUE(shipped.notes.empty()) << f;
   }
 }
 
