@@ -24,6 +24,10 @@ PACKAGES=(
 if [ "${1:-}" = "--fuzz" ]; then
   PACKAGES+=(clang libclang-rt-14-dev)
 fi
+# `make format-check` only (scripts/setup.sh --format).
+if [ "${1:-}" = "--format" ]; then
+  PACKAGES+=(clang-format)
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do
