@@ -513,9 +513,14 @@ void validateScene(const Scene& scene_in, const std::string& source) {
                        (have.empty() ? "" : ", " + have) + ")");
     }
   }
-  if (scene.hopper && errors.empty()) {
+  if (errors.empty()) {
     // Physical sense beyond the ranges (leg lengths in order, the foot above the ground, ...).
-    if (std::string e = validate(*scene.hopper); !e.empty()) errors.push_back(e);
+    if (scene.hopper) {
+      if (std::string e = validate(*scene.hopper); !e.empty()) errors.push_back(e);
+    }
+    for (size_t i = 0; i < scene.hoppers.size(); ++i) {
+      if (std::string e = validate(scene.hoppers[i], "hoppers." + std::to_string(i)); !e.empty()) errors.push_back(e);
+    }
   }
   if (scene.render.width % 2 || scene.render.height % 2) {
     // H.264 in yuv420p needs even sizes; keep every output consistent with the video.
