@@ -49,7 +49,10 @@ std::string shortText(const std::string& s) {
   if (s.size() <= kMax) return s;
   return s.substr(0, kMax) + "... (" + std::to_string(s.size()) + " characters)";
 }
-std::string shortDump(const json& j) { return shortText(j.dump()); }
+std::string shortDump(const json& j) {
+  // replace: a string with invalid UTF-8 must not throw while an error is being reported
+  return shortText(j.dump(-1, ' ', false, json::error_handler_t::replace));
+}
 
 // JSON text read with limits: nesting depth (the DOM's copy, dump and destruction recurse, so an
 // unbounded depth is a stack overflow), no key twice in one object (nlohmann keeps the last one
@@ -322,6 +325,11 @@ void applyOverride(json& j, const Override& o) {
         const std::string m = e.what();
         if (m.find("nested deeper") != std::string::npos || m.find("appears twice") != std::string::npos) throw;
         v = o.value;
+        try {
+          (void)v.dump();  // JSON strings are UTF-8: refuse here what no writer could write
+        } catch (const json::type_error&) {
+          throw SceneError("--set " + o.key + ": the value is not valid UTF-8 text");
+        }
       }
       *node = v;
     }
