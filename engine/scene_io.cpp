@@ -9,6 +9,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "engine/data_dir.h"
 #include "physics/hopper.h"
 
 namespace ponyhop {
@@ -285,7 +286,8 @@ std::string resolveScenePath(const std::string& path, const std::string& scene_p
     const fs::path q = fs::path(scene_path).parent_path() / p;
     if (fs::is_regular_file(q, ec)) return q.string();
   }
-  const fs::path r = fs::path(PONYHOP_SOURCE_DIR) / p;
+  if (dataDir().empty()) return "";
+  const fs::path r = fs::path(dataDir()) / p;
   if (fs::is_regular_file(r, ec)) return r.string();
   return "";
 }
