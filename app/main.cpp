@@ -4,15 +4,18 @@
 #include <exception>
 
 #include "app/commands.h"
+#include "engine/data_dir.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"ponyhop: a ponytail and a Raibert hopper, simulated with Lagrange multipliers"};
+  app.set_version_flag("--version", std::string("ponyhop ") + ponyhop::versionString());
   app.require_subcommand(1);
   int exit_code = 0;
   ponyhop::addDiffCommand(app, exit_code);
   ponyhop::addSceneDocCommand(app, exit_code);
   ponyhop::addRenderCommand(app, exit_code);
   ponyhop::addSimCommand(app, exit_code);
+  ponyhop::addExportCommand(app, exit_code);
   ponyhop::addBenchCommand(app, exit_code);
 #ifdef PONYHOP_WINDOW
   ponyhop::addRunCommand(app, exit_code);

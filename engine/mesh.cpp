@@ -141,6 +141,23 @@ MeshData makeUvSphere(float radius, int slices, int stacks) {
   return m;
 }
 
+MeshData makeCapsuleMesh(const Eigen::Vector3f& p0, float r0, const Eigen::Vector3f& p1, float r1, int slices,
+                         int stacks) {
+  MeshData m = makeUvSphere(1.0f, slices, stacks | 1);  // odd: no ring on the equator
+  const Eigen::Vector3f axis = p1 - p0;
+  const float len = axis.norm();
+  const Eigen::Quaternionf R =
+      len > 1e-9f ? Eigen::Quaternionf::FromTwoVectors(Eigen::Vector3f::UnitZ(), axis / len) : Eigen::Quaternionf::Identity();
+  for (size_t i = 0; i < m.positions.size(); ++i) {
+    const Eigen::Vector3f n = m.positions[i];  // unit sphere: position = normal
+    const bool top = n.z() > 0.0f;
+    m.positions[i] = (top ? p1 : p0) + R * (n * (top ? r1 : r0));
+    m.normals[i] = R * n;
+  }
+  m.computeBounds();
+  return m;
+}
+
 MeshData makeBoxMesh(const Eigen::Vector3f& h) {
   MeshData m;
   for (int axis = 0; axis < 3; ++axis)

@@ -44,5 +44,9 @@ void transformMesh(MeshData& mesh, const Eigen::Affine3d& T);
 // Procedural meshes (also used by tests): a UV sphere and an axis-aligned box with flat faces.
 MeshData makeUvSphere(float radius, int slices, int stacks);
 MeshData makeBoxMesh(const Eigen::Vector3f& half_extents);
+// A tapered capsule from p0 (radius r0) to p1 (radius r1): a UV sphere whose halves are moved to
+// the two ends (the band across its equator is the cone between them).
+MeshData makeCapsuleMesh(const Eigen::Vector3f& p0, float r0, const Eigen::Vector3f& p1, float r1, int slices = 16,
+                         int stacks = 9);
 
 }  // namespace ponyhop

@@ -41,6 +41,9 @@ class SceneRuntime {
   const World& world() const { return world_; }
   const Chain* chain() const { return chain_ ? &*chain_ : nullptr; }
   int headBody() const { return head_body_; }
+  // The head's mesh as loaded (mesh coordinates) and its placement in the head body's frame.
+  const MeshData& headMesh() const { return head_mesh_; }
+  const Eigen::Affine3d& headMeshToBody() const { return head_mesh_to_body_; }
   const Hopper* hopper() const { return hopper_.get(); }
   Hopper* hopper() { return hopper_.get(); }
 
