@@ -13,6 +13,7 @@
 #include <regex>
 
 #include "app/commands.h"
+#include "app/render_range.h"
 #include "app/ui_headless.h"
 #include "engine/render_session.h"
 #include "app/scene_args.h"
@@ -38,6 +39,9 @@ struct RenderArgs {
   std::string out;
   std::string video;
   bool ui = false;
+  std::string range;   // --range A:B (app/render_range.h)
+  bool resume = false;
+  bool transparent = false;
 };
 
 // Progress on stderr: rewritten in place on a terminal, a plain line every ~10 % otherwise.
@@ -102,6 +106,7 @@ int runRender(const RenderArgs& args) {
     scene.render.width = w;
     scene.render.height = h;
   }
+  if (args.transparent) scene.render.transparent = true;
   validateScene(scene, args.scene.path);
   const std::string out = args.out.empty() ? "out/" + fs::path(args.scene.path).stem().string() : args.out;
   std::error_code ec;
@@ -111,6 +116,15 @@ int runRender(const RenderArgs& args) {
   if (!args.video.empty() && !ffmpegAvailable()) {
     throw SceneError("--video " + args.video + ": ffmpeg is not installed (apt-get install ffmpeg)");
   }
+  std::string video_err;
+  if (!args.video.empty() && videoContainer(args.video, &video_err).empty()) throw SceneError("--video " + video_err);
+  const bool chunk = !args.range.empty() || args.resume;
+  if (chunk && args.ui) throw SceneError("--range/--resume: not with --ui (the panel's plots depend on every frame before)");
+  if (!args.range.empty() && !args.video.empty()) {
+    throw SceneError("--range with --video: a chunk is part of a video; encode the merged folder with `ponyhop video`");
+  }
+  const FrameRange range =
+      args.range.empty() ? FrameRange{0, scene.render.frames - 1} : parseFrameRange(args.range, scene.render.frames);
 
   // --ui: the tuning panel beside the scene (the frame grows by the panel's width); the panel is
   // driven headless (app/ui_headless.h), the physics is the same stepping to the same times.
@@ -120,6 +134,19 @@ int runRender(const RenderArgs& args) {
     ui = std::make_unique<HeadlessUi>(scene, scene.render.width, scene.render.height);
   } else {
     session = std::make_unique<RenderSession>(scene);  // builds the world, the GL context and the renderer
+  }
+  if (chunk) {  // a render farm's chunk or a resumed run: straight into `out`, frame by frame
+    const int rc = renderChunk(*session, scene.render.fps, out, range, args.resume);
+    if (rc != 0 || args.video.empty()) return rc;
+    VideoOptions vo;
+    vo.fps = scene.render.fps;
+    std::string err;
+    if (!encodeVideo(out, args.video, vo, &err)) {
+      std::fprintf(stderr, "ponyhop render: %s\n", err.c_str());
+      return 1;
+    }
+    std::fprintf(stderr, "render: video %s\n", args.video.c_str());
+    return 0;
   }
   const int out_w = ui ? ui->width() : session->width();
   const int out_h = ui ? ui->height() : session->height();
@@ -212,8 +239,12 @@ void addRenderCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--fps", args->fps, "Frames per second (default: render.fps)")->check(CLI::Range(1.0, 1000.0));
   cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT (default: render.width x render.height)");
   cmd->add_option("--out", args->out, "Output folder (default: out/SCENE_NAME)");
-  cmd->add_option("--video", args->video, "Also encode an H.264 mp4 (ffmpeg)");
+  cmd->add_option("--video", args->video, "Also encode a video: .mp4, .mov (H.264), .webm (VP9) or .gif (ffmpeg)");
   cmd->add_flag("--ui", args->ui, "Draw the tuning panel beside the scene");
+  cmd->add_option("--range", args->range,
+                  "Render only frames A to B (A:B, inclusive), byte-identical to a full run's (docs/RENDER_FARM.md)");
+  cmd->add_flag("--resume", args->resume, "Keep frames already written whole in --out; render the others");
+  cmd->add_flag("--transparent", args->transparent, "No background: PNG frames with alpha (render.transparent)");
   cmd->callback([args, &exit_code] {
     try {
       exit_code = runRender(*args);
