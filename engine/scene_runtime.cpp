@@ -1,8 +1,10 @@
 #include "engine/scene_runtime.h"
 
 #include <cmath>
+#include <cstdio>
 
 #include "engine/animation_import.h"
+#include "engine/head_fit.h"
 #include "engine/scene_io.h"
 #include "physics/anchor_motion.h"
 #include "physics/keyframes.h"
@@ -29,7 +31,15 @@ void SceneRuntime::buildHead() {
   if (mesh_path.empty() || !loadMesh(mesh_path, head_mesh_, &err)) {
     throw SceneError(scene_.path + ": head.mesh: " + (mesh_path.empty() ? h.mesh + ": file not found" : err));
   }
-  head_mesh_to_body_ = meshToBody(h, head_mesh_.bbox);
+  // The file's own colours (textures, vertex colours, several materials) or head.color.
+  for (const std::string& w : head_mesh_.warnings) std::fprintf(stderr, "ponyhop: warning: head.mesh: %s\n", w.c_str());
+  if (h.materials == HeadMaterials::Color || (h.materials == HeadMaterials::Auto && !head_mesh_.hasOwnColors())) {
+    head_mesh_.dropMaterials();
+  }
+  const HeadFit fit = fitHead(h, mesh_path, head_mesh_);
+  head_mesh_to_body_ = headMeshToBody(h, fit);
+  head_anchor_ = head_mesh_to_body_ * headAnchorInMesh(h, fit, head_mesh_);
+  head_bounds_centre_ = fit.head_bounds.center().cast<double>();
 
   // The head's motion: a clip file, the mesh file's own animation, or inline keys.
   const TrackOptions options = trackOptions(h.animation);
@@ -40,7 +50,7 @@ void SceneRuntime::buildHead() {
     // same up-axis fix as the mesh).
     source = mesh_path;
     AnimationImportOptions import;
-    import.y_up_to_z_up = h.up_axis == UpAxis::Y;
+    import.y_up_to_z_up = fit.up == UpAxis::Y;
     track = importAnimationTrack(mesh_path, import, options, &err);
   } else {
     std::vector<Keyframe> keys = h.animation.keys;
@@ -73,7 +83,8 @@ void SceneRuntime::buildChain() {
     }
     case ChainAttach::Head:
       parent = head_body_;
-      anchor_local = meshPointToBody(*scene_.head, head_mesh_.bbox, scene_.head->anchor);
+      anchor_local = head_anchor_;
+      if (scene_.head->anchor_space == AnchorSpace::Bounds) anchor_local = standOffAnchor(c);
       break;
     case ChainAttach::Hopper:
       if (!hopper_ || !hopper_->built()) {
@@ -86,6 +97,24 @@ void SceneRuntime::buildChain() {
       break;
   }
   chain_ = addChain(world_, c, parent, anchor_local, v0);
+}
+
+// An anchor from the head's bounds, moved off the surface as far as the hanging ponytail needs to
+// clear the head (engine/head_fit.h).
+Eigen::Vector3d SceneRuntime::standOffAnchor(const ChainParams& c) const {
+  const RigidBody& head = world_.body(head_body_);
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(head_mesh_.positions.size());
+  for (const auto& p : head_mesh_.positions) points.push_back(head.pointToWorld(head_mesh_to_body_ * p.cast<double>()));
+  std::vector<double> radii;
+  for (int i = 0; i < c.links; ++i) {
+    const double s = c.links > 1 ? double(i) / (c.links - 1) : 0.0;
+    radii.push_back(c.radius * (1.0 + (c.taper - 1.0) * s));
+  }
+  const Eigen::Vector3d centre = head_mesh_to_body_ * head_bounds_centre_;
+  const Eigen::Vector3d out = (head_anchor_ - centre).normalized();
+  const double push = anchorStandOff(points, head.pointToWorld(head_anchor_), head.q * out, c.direction, c.length, radii);
+  return head_anchor_ + push * out;
 }
 
 void SceneRuntime::buildHopper() {
@@ -174,7 +203,7 @@ void SceneRuntime::draw(Renderer& renderer) const {
     pose.translate(b.x);
     pose.rotate(b.q);
     Material skin;
-    skin.color = toColor(scene_.head->color);
+    skin.color = head_mesh_.colors.empty() ? toColor(scene_.head->color) : Eigen::Vector3f(1.0f, 1.0f, 1.0f);
     skin.specular = 0.18f;
     skin.shininess = 24.0f;
     renderer.drawMesh(head_handle_, pose * head_mesh_to_body_, skin);

@@ -44,6 +44,7 @@ class SceneRuntime {
   // The head's mesh as loaded (mesh coordinates) and its placement in the head body's frame.
   const MeshData& headMesh() const { return head_mesh_; }
   const Eigen::Affine3d& headMeshToBody() const { return head_mesh_to_body_; }
+  const Eigen::Vector3d& headAnchor() const { return head_anchor_; }  // head body frame
   const Hopper* hopper() const { return hopper_.get(); }
   Hopper* hopper() { return hopper_.get(); }
 
@@ -64,6 +65,7 @@ class SceneRuntime {
   void buildHead();
   void buildChain();
   void buildHopper();
+  Eigen::Vector3d standOffAnchor(const ChainParams& c) const;
   void drawHopper(Renderer& renderer) const;
 
   Scene scene_;
@@ -74,6 +76,8 @@ class SceneRuntime {
   std::unique_ptr<Hopper> hopper_;
   MeshData head_mesh_;
   Eigen::Affine3d head_mesh_to_body_ = Eigen::Affine3d::Identity();
+  Eigen::Vector3d head_anchor_ = Eigen::Vector3d::Zero();  // the ponytail's anchor, head body frame
+  Eigen::Vector3d head_bounds_centre_ = Eigen::Vector3d::Zero();  // mesh coordinates
   MeshHandle head_handle_;
 };
 
