@@ -27,9 +27,10 @@
 #include "app/bench_mujoco.h"
 #include "app/bench_report.h"
 #include "app/bench_run.h"
+#include "physics/validate.h"
 #include "app/commands.h"
-#include "engine/data_dir.h"
-#include "engine/scene_runtime.h"
+#include "sim/data_dir.h"
+#include "sim/sim.h"
 #include "physics/physics_params.h"
 
 namespace ponyhop {
@@ -122,11 +123,10 @@ std::string cannotRun(const Method& m) {
            "drift for stabilization '" +
            m.stabilization + "' to correct (run it with stabilization = none)";
   }
-  if (m.solver == "featherstone" && m.integrator != "rk4" && m.integrator != "symplectic_euler") {
-    return "solver 'featherstone' integrates in joint space with rk4 or symplectic_euler; '" + m.integrator +
-           "' belongs to the multiplier formulation";
-  }
-  return "";
+  PhysicsParams p;  // the combinations no solver can run are refused by validate(), as for a scene
+  enumFromName(m.solver, p.solver);
+  enumFromName(m.integrator, p.integrator);
+  return validate(p);
 }
 
 struct Reference {
@@ -178,7 +178,7 @@ Reference computeReference(const BenchCase& c, const Config& cfg, double target,
 
 #ifdef PONYHOP_HAVE_MUJOCO
 MujocoChain mujocoChainOf(const BenchCase& c) {
-  SceneRuntime rt(loadScene(c.scene, c.overrides));
+  Sim rt(loadScene(c.scene, c.overrides));
   MujocoChain m;
   const Chain& ch = *rt.chain();
   m.anchor = ch.anchor(rt.world());
@@ -444,7 +444,7 @@ int runBench(BenchArgs& args) {
 #ifdef PONYHOP_HAVE_MUJOCO
       if (with_mujoco && c.links > 0 && c.anchor == "fixed") {
         const MujocoChain mc = mujocoChainOf(c);
-        SceneRuntime rt(loadScene(c.scene, c.overrides));
+        Sim rt(loadScene(c.scene, c.overrides));
         for (const char* integ : {"Euler", "RK4"}) {
           BenchRow row{&c, std::string("mujoco/") + integ, "mujoco", integ, "-", "fixed", dt, horizon, {}};
           row.r = benchMujocoRun(mc, integ, dt, horizon, cfg.repeats, c.long_duration, ref.trajectory, rt.chainEnergy());

@@ -10,8 +10,10 @@
 #include "app/commands.h"
 #include "app/pose_sampling.h"
 #include "app/scene_args.h"
+#include "engine/asset_loader.h"
 #include "engine/gltf_export.h"
-#include "engine/scene_io.h"
+#include "engine/mesh.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 namespace {
@@ -28,7 +30,7 @@ Eigen::Vector3f toBody(const RigidBody& b, const Eigen::Vector3d& p_world) {
 }
 
 // A mesh for every body, in its own frame, from the scene at t = 0.
-std::vector<BakeMesh> bodyMeshes(const SceneRuntime& rt, std::vector<int>& mesh_of_body) {
+std::vector<BakeMesh> bodyMeshes(const Sim& rt, std::vector<int>& mesh_of_body) {
   const World& w = rt.world();
   std::vector<BakeMesh> meshes;
   mesh_of_body.assign(size_t(w.bodyCount()), -1);
@@ -38,9 +40,10 @@ std::vector<BakeMesh> bodyMeshes(const SceneRuntime& rt, std::vector<int>& mesh_
     meshes.push_back(std::move(m));
   };
   const Scene& scene = rt.scene();
-  if (rt.headBody() >= 0) {
-    BakeMesh m{"head", rt.headMesh(), scene.head->color.cast<float>()};
-    transformMesh(m.mesh, rt.headMeshToBody());
+  if (rt.headBody() >= 0 && rt.head()) {
+    BakeMesh m{"head", rt.head()->mesh, scene.head->color.cast<float>()};
+    m.mesh.dropMaterials();
+    transformMesh(m.mesh, rt.head()->mesh_to_body);
     add(rt.headBody(), std::move(m));
   }
   if (const Chain* c = rt.chain()) {
@@ -58,7 +61,8 @@ std::vector<BakeMesh> bodyMeshes(const SceneRuntime& rt, std::vector<int>& mesh_
       }
     }
   }
-  if (const Hopper* h = rt.hopper()) {
+  for (const auto& hp : rt.hoppers()) {
+    const Hopper* h = hp.get();
     const HopperParams& p = h->params();
     const HopperShape s = h->shape(w);
     const HopperModel& m = h->model();
@@ -86,7 +90,7 @@ int runExport(const ExportArgs& args) {
   const std::string ext = std::filesystem::path(args.out).extension().string();
   if (ext != ".glb") throw SceneError("--out " + args.out + ": the bake is written as binary glTF: name it *.glb");
 
-  SceneRuntime rt(scene);
+  Sim rt(scene, &assimpAssets());
   Bake bake;
   std::vector<int> mesh_of_body;
   bake.meshes = bodyMeshes(rt, mesh_of_body);

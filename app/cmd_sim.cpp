@@ -4,16 +4,23 @@
 // time (values are held between steps).
 // --poses: every body's pose and velocity, one row per body per step, or at exactly the times
 // asked for (--rate, --at), interpolated between the two steps around each (app/pose_sampling.h).
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 
 #include "app/commands.h"
+#include "app/output_safety.h"
 #include "app/pose_sampling.h"
 #include "app/scene_args.h"
-#include "engine/scene_io.h"
-#include "engine/scene_runtime.h"
+#include "sim/scene_io.h"
+#include "engine/asset_loader.h"
+#include "sim/sim.h"
 
 namespace ponyhop {
 namespace {
@@ -35,7 +42,7 @@ struct SimRow {
   size_t split = 0;
 };
 
-std::string header(const SceneRuntime& rt) {
+std::string header(const Sim& rt) {
   // Hopper: body centre of mass (m, m/s), attitude (rad), leg length (m), phase, foot contact
   // point (m), contact 0/1, the largest violation of the knee's five constraints.
   if (rt.hopper()) {
@@ -45,7 +52,7 @@ std::string header(const SceneRuntime& rt) {
   return "t,max_joint_error";
 }
 
-SimRow sample(const SceneRuntime& rt) {
+SimRow sample(const Sim& rt) {
   SimRow r;
   if (const Hopper* h = rt.hopper()) {
     const World& w = rt.world();
@@ -75,10 +82,10 @@ void writeRow(std::FILE* f, double t, const SimRow& r) {
 }
 
 int runSummary(const Scene& scene, double duration, const SimArgs& args) {
-  SceneRuntime rt(scene);
+  Sim rt(scene, &assimpAssets());
 
   // Written to a temporary name and renamed: a failed run never replaces a good CSV.
-  const std::string tmp = args.csv + ".tmp";
+  const std::string tmp = args.csv + ".partial-" + std::to_string(getpid());
   std::FILE* f = std::fopen(tmp.c_str(), "w");
   if (!f) throw SceneError("--csv " + args.csv + ": cannot write the file");
   std::fprintf(f, "%s\n", header(rt).c_str());
@@ -89,7 +96,26 @@ int runSummary(const Scene& scene, double duration, const SimArgs& args) {
   SimRow prev = sample(rt);
   writeRow(f, 0.0, prev);
   next = 1;
+  // Progress on long runs: a line every 5 s of wall time (a long chain on a slow solver shows
+  // its pace instead of silence).
+  using Clock = std::chrono::steady_clock;
+  const auto t_start = Clock::now();
+  auto t_report = t_start + std::chrono::seconds(5);
   while (next < rows) {
+    if (const int sig = InterruptGuard::signal()) {
+      std::fclose(f);
+      std::remove(tmp.c_str());
+      std::fprintf(stderr, "ponyhop sim: stopped by %s; %s was not written\n", sig == SIGINT ? "SIGINT" : "SIGTERM",
+                   args.csv.c_str());
+      return InterruptGuard::exitCode(sig);
+    }
+    if (Clock::now() >= t_report) {
+      t_report += std::chrono::seconds(5);
+      const double wall = std::chrono::duration<double>(Clock::now() - t_start).count();
+      const double done = rt.time() / std::max(duration, 1e-12);
+      std::fprintf(stderr, "sim: %.3f of %.3f s simulated (%.1f%%), %.0f s elapsed, about %.0f s left\n", rt.time(),
+                   duration, 100.0 * done, wall, done > 0.0 ? wall * (1.0 - done) / done : 0.0);
+    }
     if (!rt.step()) {
       std::fclose(f);
       std::remove(tmp.c_str());
@@ -144,7 +170,7 @@ int runPoses(const Scene& scene, double duration, const SimArgs& args) {
     const long n = static_cast<long>(std::floor(duration * args.rate + 1e-9)) + 1;
     for (long k = 0; k < n; ++k) times.push_back(double(k) / args.rate);
   }
-  SceneRuntime rt(scene);
+  Sim rt(scene, &assimpAssets());
   const std::string tmp = args.poses + ".tmp";
   std::FILE* f = std::fopen(tmp.c_str(), "w");
   if (!f) throw SceneError("--poses " + args.poses + ": cannot write the file");
@@ -203,6 +229,9 @@ int runSim(const SimArgs& args) {
     throw SceneError("--rate and --at choose the times of --poses rows: give --poses FILE");
   }
   if (args.rate > 0.0 && !args.at.empty()) throw SceneError("--rate and --at: give one of them");
+  if (!args.csv.empty()) checkOutputFile("--csv", args.csv, sceneInputs(scene));
+  if (!args.poses.empty()) checkOutputFile("--poses", args.poses, sceneInputs(scene));
+  InterruptGuard interrupt;
   if (!args.csv.empty()) {
     const int rc = runSummary(scene, duration, args);
     if (rc != 0) return rc;
@@ -217,12 +246,13 @@ void addSimCommand(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand("sim", "Run the physics alone (no GL): a summary CSV and/or every body's pose");
   args->scene.add(cmd);
   cmd->add_option("--duration", args->duration, "Simulated seconds (default: the scene's duration)")
-      ->check(CLI::Range(0.0, 1e6));
-  cmd->add_option("--csv", args->csv, "Summary CSV, one row per millisecond (tip or hopper state)");
+      ->check(finiteIn(0.0, 1e6));
+  cmd->add_option("--csv", args->csv, "Summary CSV, one row per millisecond (tip or hopper state)")->check(nonEmpty());
   cmd->add_option("--poses", args->poses,
-                  "Every body's pose and velocity as CSV: t,body,name,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz");
+                  "Every body's pose and velocity as CSV: t,body,name,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz")
+      ->check(nonEmpty());
   cmd->add_option("--rate", args->rate, "--poses rows at t = k/RATE (interpolated between steps) instead of every step")
-      ->check(CLI::Range(1e-3, 1e6));
+      ->check(finiteIn(1e-3, 1e6));
   cmd->add_option("--at", args->at, "--poses rows at these times (s, ascending, interpolated)")->delimiter(',');
   cmd->callback([args, &exit_code] {
     try {

@@ -10,8 +10,8 @@
 #include <nlohmann/json.hpp>
 #include <type_traits>
 
-#include "engine/data_dir.h"
-#include "engine/scene_io.h"
+#include "sim/data_dir.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 namespace {

@@ -4,7 +4,7 @@
 
 namespace ponyhop {
 
-PoseSampler::PoseSampler(SceneRuntime& rt) : rt_(rt) {
+PoseSampler::PoseSampler(Sim& rt) : rt_(rt) {
   cur_ = capturePoses(rt.time(), rt.world().bodies());
   prev_ = cur_;
 }

@@ -6,14 +6,14 @@
 #include <string>
 #include <vector>
 
-#include "engine/scene_runtime.h"
+#include "sim/sim.h"
 #include "physics/body_pose.h"
 
 namespace ponyhop {
 
 class PoseSampler {
  public:
-  explicit PoseSampler(SceneRuntime& rt);
+  explicit PoseSampler(Sim& rt);
   // The poses at time t (t not before the previous call's). A time within 1e-9 dt of a step is
   // that step's state exactly. False when the world stopped before t (rt.status() says why).
   bool at(double t, PoseFrame& out);
@@ -22,7 +22,7 @@ class PoseSampler {
 
  private:
   bool stepOnce();
-  SceneRuntime& rt_;
+  Sim& rt_;
   PoseFrame prev_, cur_;
 };
 

@@ -9,39 +9,30 @@
 #include <assimp/Importer.hpp>
 #include <cctype>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <numbers>
 
-#include "engine/head_fit.h"
+#include "engine/isolated.h"
+#include "sim/head_fit.h"
 
 namespace ponyhop {
 
-void MeshData::computeBounds() {
-  bbox.setEmpty();
-  for (const auto& p : positions) bbox.extend(p);
-}
-
-bool MeshData::hasOwnColors() const {
-  if (!textures.empty()) return true;
-  for (const auto& c : colors)
-    if (!c.isApprox(colors.front(), 1e-4f)) return true;
-  return false;
-}
-
-void MeshData::dropMaterials() {
-  colors.clear();
-  uvs.clear();
-  parts.clear();
-  textures.clear();
+static std::string lowerExtension(const std::string& path) {
+  const size_t dot = path.find_last_of('.');
+  if (dot == std::string::npos) return "";
+  std::string e = path.substr(dot + 1);
+  for (char& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return e;
 }
 
 namespace {
 
 // The base-colour texture of a material: an image embedded in the file ("*N" or by name), or a
 // file beside the mesh. Empty image + a warning when it cannot be read.
-Image readTexture(const aiScene* scene, const aiString& ref, const std::string& mesh_path, std::string* warning) {
-  Image img;
+MeshTexture readTexture(const aiScene* scene, const aiString& ref, const std::string& mesh_path, std::string* warning) {
+  MeshTexture img;
   const aiTexture* emb = scene->GetEmbeddedTexture(ref.C_Str());
   int w = 0, h = 0, n = 0;
   unsigned char* data = nullptr;
@@ -51,7 +42,9 @@ Image readTexture(const aiScene* scene, const aiString& ref, const std::string& 
     if (emb->mHeight == 0) {  // compressed (png, jpg...): mWidth bytes
       data = stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(emb->pcData), int(emb->mWidth), &w, &h, &n, 4);
     } else {  // raw texels, BGRA
-      img = Image(int(emb->mWidth), int(emb->mHeight));
+      img.width = int(emb->mWidth);
+      img.height = int(emb->mHeight);
+      img.rgba.resize(size_t(img.width) * size_t(img.height) * 4);
       for (size_t i = 0; i < size_t(emb->mWidth) * emb->mHeight; ++i) {
         const aiTexel& t = emb->pcData[i];
         img.rgba[4 * i] = t.r, img.rgba[4 * i + 1] = t.g, img.rgba[4 * i + 2] = t.b, img.rgba[4 * i + 3] = t.a;
@@ -78,17 +71,8 @@ Image readTexture(const aiScene* scene, const aiString& ref, const std::string& 
   return img;
 }
 
-}  // namespace
-
-static std::string lowerExtension(const std::string& path) {
-  const size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos) return "";
-  std::string e = path.substr(dot + 1);
-  for (char& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return e;
-}
-
-bool loadMesh(const std::string& path, MeshData& out, std::string* err) {
+// assimp itself, in whatever process calls it.
+bool importMesh(const std::string& path, MeshData& out, std::string* err) {
   Assimp::Importer importer;
   unsigned flags = aiProcess_Triangulate | aiProcess_GenSmoothNormals | aiProcess_JoinIdenticalVertices |
                    aiProcess_PreTransformVertices | aiProcess_SortByPType |
@@ -129,9 +113,9 @@ bool loadMesh(const std::string& path, MeshData& out, std::string* err) {
         auto it = texture_of.find(ref.C_Str());
         if (it == texture_of.end()) {
           std::string warning;
-          Image img = readTexture(scene, ref, path, &warning);
+          MeshTexture img = readTexture(scene, ref, path, &warning);
           int id = -1;
-          if (!img.empty()) {
+          if (img.width > 0) {
             id = int(m.textures.size());
             m.textures.push_back(std::move(img));
           } else {
@@ -178,6 +162,129 @@ bool loadMesh(const std::string& path, MeshData& out, std::string* err) {
   if (m.indices.empty()) {
     if (err) *err = path + ": no triangles in the file";
     return false;
+  }
+  out = std::move(m);
+  return true;
+}
+
+// MeshData through the pipe from the import process: three counts, then the arrays.
+template <class T>
+void putArray(std::string& s, const std::vector<T>& v) {
+  const uint64_t n = v.size();
+  s.append(reinterpret_cast<const char*>(&n), sizeof(n));
+  s.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+template <class T>
+bool getArray(const std::string& s, size_t& at, std::vector<T>& v) {
+  uint64_t n = 0;
+  if (s.size() - at < sizeof(n)) return false;
+  std::memcpy(&n, s.data() + at, sizeof(n));
+  at += sizeof(n);
+  if (n > (s.size() - at) / sizeof(T)) return false;
+  v.resize(size_t(n));
+  std::memcpy(static_cast<void*>(v.data()), s.data() + at, size_t(n) * sizeof(T));
+  at += size_t(n) * sizeof(T);
+  return true;
+}
+
+// The materials after the geometry: colours, uvs, parts, texture sizes and texels, warnings.
+void putMaterials(std::string& s, const MeshData& m) {
+  putArray(s, m.colors);
+  putArray(s, m.uvs);
+  putArray(s, m.parts);
+  std::vector<int32_t> dims;
+  std::vector<uint8_t> texels;
+  for (const MeshTexture& t : m.textures) {
+    dims.insert(dims.end(), {t.width, t.height});
+    texels.insert(texels.end(), t.rgba.begin(), t.rgba.end());
+  }
+  putArray(s, dims);
+  putArray(s, texels);
+  std::vector<char> text;
+  for (const std::string& w : m.warnings) {
+    text.insert(text.end(), w.begin(), w.end());
+    text.push_back('\n');
+  }
+  putArray(s, text);
+}
+
+bool getMaterials(const std::string& s, size_t& at, MeshData& m) {
+  std::vector<int32_t> dims;
+  std::vector<uint8_t> texels;
+  std::vector<char> text;
+  if (!getArray(s, at, m.colors) || !getArray(s, at, m.uvs) || !getArray(s, at, m.parts) || !getArray(s, at, dims) ||
+      !getArray(s, at, texels) || !getArray(s, at, text) || dims.size() % 2 != 0) {
+    return false;
+  }
+  if ((!m.colors.empty() && m.colors.size() != m.positions.size()) || (!m.uvs.empty() && m.uvs.size() != m.positions.size())) {
+    return false;
+  }
+  size_t used = 0;
+  for (size_t i = 0; i < dims.size(); i += 2) {
+    if (dims[i] <= 0 || dims[i + 1] <= 0 || dims[i] > 16384 || dims[i + 1] > 16384) return false;
+    const size_t n = size_t(dims[i]) * size_t(dims[i + 1]) * 4;
+    if (texels.size() - used < n) return false;
+    m.textures.push_back(MeshTexture{dims[i], dims[i + 1], std::vector<uint8_t>(texels.begin() + long(used), texels.begin() + long(used + n))});
+    used += n;
+  }
+  if (used != texels.size()) return false;
+  for (const MeshPart& p : m.parts) {
+    if (p.texture >= int32_t(m.textures.size()) || uint64_t(p.first) + p.count > m.indices.size()) return false;
+  }
+  std::string w;
+  for (char c : text) {
+    if (c == '\n') {
+      m.warnings.push_back(w);
+      w.clear();
+    } else {
+      w += c;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+bool loadMesh(const std::string& path, MeshData& out, std::string* err) {
+  // assimp runs in a child process with a time and memory limit (engine/isolated.h): corrupted
+  // files crash, abort or hang it (docs/RELIABILITY.md), and they must not take ponyhop along.
+  std::string bytes, e;
+  const bool ok = runIsolated(
+      [&path](std::string& result, std::string& error) {
+        MeshData m;
+        if (!importMesh(path, m, &error)) return false;
+        putArray(result, m.positions);
+        putArray(result, m.normals);
+        putArray(result, m.indices);
+        putMaterials(result, m);
+        return true;
+      },
+      importLimits(), &bytes, &e);
+  if (!ok) {
+    if (err) *err = e.rfind(path, 0) == 0 ? e : path + ": the importer (assimp) " + e;
+    return false;
+  }
+  // What comes back is checked like any input: sizes agree, indices in range, values finite.
+  MeshData m;
+  size_t at = 0;
+  if (!getArray(bytes, at, m.positions) || !getArray(bytes, at, m.normals) || !getArray(bytes, at, m.indices) ||
+      !getMaterials(bytes, at, m) || at != bytes.size() || m.normals.size() != m.positions.size() ||
+      m.indices.size() % 3 != 0) {
+    if (err) *err = path + ": the import process returned inconsistent data";
+    return false;
+  }
+  for (const auto& p : m.positions) {
+    if (!p.allFinite()) {
+      if (err) *err = path + ": a vertex position is not a finite number";
+      return false;
+    }
+  }
+  for (const uint32_t i : m.indices) {
+    if (i >= m.positions.size()) {
+      if (err) *err = path + ": a triangle refers to vertex " + std::to_string(i) + " of " +
+                      std::to_string(m.positions.size());
+      return false;
+    }
   }
   m.computeBounds();
   out = std::move(m);

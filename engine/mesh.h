@@ -8,46 +8,18 @@
 #include <string>
 #include <vector>
 
-#include "engine/image.h"
-#include "engine/scene.h"
+#include "sim/mesh_data.h"
+#include "sim/scene.h"
 
 namespace ponyhop {
 
-// One indexed triangle list; all meshes/nodes of a file are merged with their node transforms
-// baked in. normals.size() == positions.size(), unit length.
-// Materials, when the file has them (all empty otherwise): colours are linear RGBA (a material's
-// base colour times the vertex colour, as glTF defines them), textures are sRGB base-colour maps.
-struct MeshPart {
-  uint32_t first = 0;  // first index
-  uint32_t count = 0;  // indices
-  int texture = -1;    // into MeshData::textures
-};
-
-struct MeshData {
-  std::vector<Eigen::Vector3f> positions;
-  std::vector<Eigen::Vector3f> normals;
-  std::vector<uint32_t> indices;  // 3 per triangle
-  Eigen::AlignedBox3f bbox;       // of positions (empty when there are none)
-  std::vector<Eigen::Vector4f> colors;  // per vertex, or empty
-  std::vector<Eigen::Vector2f> uvs;     // per vertex (v = 0 at the image's top row), or empty
-  std::vector<MeshPart> parts;          // index ranges by texture, or empty
-  std::vector<Image> textures;
-  std::vector<std::string> warnings;    // e.g. a texture that cannot be read
-
-  size_t triangleCount() const { return indices.size() / 3; }
-  void computeBounds();
-  // More than one plain colour: vertex colours, several base colours, or a texture.
-  bool hasOwnColors() const;
-  void dropMaterials();  // colours, uvs, parts and textures
-};
-
 // Loads `path` with its materials (base colours, vertex colours, base-colour textures: files
-// beside the mesh or embedded). Missing normals are generated smooth; STL (whose normals are per facet by format)
+// beside the mesh or embedded; MeshData::warnings names one that cannot be read). Missing normals are generated smooth; STL (whose normals are per facet by format)
 // gets smooth normals too. Returns false with "FILE: assimp's message" (or "FILE: no triangles").
 bool loadMesh(const std::string& path, MeshData& out, std::string* err);
 
 // Body-from-mesh transform of HeadParams with the whole mesh as the head and the mesh origin as
-// the pivot (engine/head_fit.h places any head from the mesh itself):
+// the pivot (sim/head_fit.h places any head from the mesh itself):
 //   p_body = offset + R * s * U * p_mesh
 // U: up-axis fix (y up -> z up is +90 deg about x, so a face toward +z looks toward -y; auto: y);
 // s: height / (mesh extent along its up axis) when height > 0, else scale;

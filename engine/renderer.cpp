@@ -328,7 +328,7 @@ static void uploadWithMaterials(const MeshData& m, GpuMesh& g) {
   }
   g.materials = true;
   g.parts = m.parts.empty() ? std::vector<MeshPart>{MeshPart{0, uint32_t(m.indices.size()), -1}} : m.parts;
-  for (const Image& img : m.textures) {
+  for (const MeshTexture& img : m.textures) {
     GLuint tex = 0;
     glGenTextures(1, &tex);
     glBindTexture(GL_TEXTURE_2D, tex);

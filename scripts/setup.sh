@@ -22,6 +22,15 @@ PACKAGES=(
   xvfb xauth                           # window tests without a display
 )
 
+# `make fuzz` only (scripts/setup.sh --fuzz): libFuzzer comes with clang's runtime libraries.
+if [ "${1:-}" = "--fuzz" ]; then
+  PACKAGES+=(clang libclang-rt-14-dev)
+fi
+# `make format-check` only (scripts/setup.sh --format).
+if [ "${1:-}" = "--format" ]; then
+  PACKAGES+=(clang-format)
+fi
+
 missing=()
 for p in "${PACKAGES[@]}"; do
   [[ "$p" == \#* ]] && continue
