@@ -9,6 +9,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "sim/data_dir.h"
 #include "sim/input_file.h"
 #include "physics/hopper.h"
 
@@ -383,7 +384,8 @@ std::string resolveScenePath(const std::string& path, const std::string& scene_p
     const fs::path q = fs::path(scene_path).parent_path() / p;
     if (fs::is_regular_file(q, ec)) return q.string();
   }
-  const fs::path r = fs::path(PONYHOP_SOURCE_DIR) / p;
+  if (dataDir().empty()) return "";
+  const fs::path r = fs::path(dataDir()) / p;
   if (fs::is_regular_file(r, ec)) return r.string();
   return "";
 }
