@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian packages ponyhop needs, and only those that are missing.
 # Idempotent: a machine that has everything runs no apt command at all.
+#   scripts/setup.sh           what `make demo` and `make test` need
+#   scripts/setup.sh --bench   also the peer engines `ponyhop bench` compares against (`make bench`)
 set -euo pipefail
 
 PACKAGES=(
@@ -19,6 +21,15 @@ PACKAGES=(
   gnuplot-nox                          # bench plots
   xvfb xauth                           # window tests without a display
 )
+
+# Peer engines for the bench (app/bench_peers.h), each optional at configure time: MuJoCo,
+# Bullet (its -float64 libraries: btMultiBody in double precision), ODE (double), DART.
+if [[ "${1:-}" == "--bench" ]]; then
+  PACKAGES+=(libmujoco-dev libbullet-dev libode-dev libdart-dev)
+elif [[ $# -gt 0 ]]; then
+  echo "setup.sh: unknown option '$1' (allowed: --bench)" >&2
+  exit 2
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do
