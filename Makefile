@@ -1,15 +1,21 @@
 # ponyhop: the two commands of the README's quick start, and a few for developers.
 #   make demo   installs what is missing, builds, renders the demo scenes into out/demo/
 #   make test   installs what is missing, builds, runs every test
-# CI (.ci/run) runs `make test`, then `make test-asan`: the same tests built with ASan+UBSan.
+# CI (.ci/run) runs `make test`, `make test-asan` (the same tests built with ASan+UBSan),
+# `make test-tsan`, `make release` and a bounded `make fuzz`.
 BUILD      ?= build
 ASAN_BUILD ?= build-asan
+TSAN_BUILD ?= build-tsan
+FUZZ_BUILD ?= build-fuzz
+RELEASE_BUILD ?= build-release
+FUZZ_SECONDS ?= 60
+SOAK_SECONDS ?= 600
 JOBS       ?= $(shell nproc)
 PONYHOP    := $(BUILD)/ponyhop
 DEMO_SCENES ?= ponytail hopper
 DEMO_FRAMES ?= 300
 
-.PHONY: all setup build demo test test-asan update-snapshots bench bench-quick clean
+.PHONY: all setup build demo test test-asan test-tsan release fuzz soak format format-check update-snapshots bench bench-quick clean
 
 all: build
 
@@ -44,6 +50,56 @@ test-asan: setup
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --output-on-failure -j$(JOBS)
 
+# The tests that run threads (the frame writer's encoder threads, renders with signals and locks)
+# under ThreadSanitizer, in their own build of only what they need.
+TSAN_TESTS := frame_writer_test render_command_test output_safety_test
+test-tsan: setup
+	@cmake -S . -B $(TSAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPONYHOP_TSAN=ON -DPONYHOP_WINDOW=OFF >/dev/null
+	@cmake --build $(TSAN_BUILD) -j$(JOBS) --target ponyhop $(TSAN_TESTS)
+	@cd $(TSAN_BUILD) && TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
+	  ctest --output-on-failure -j$(JOBS) -R '^(FrameWriter|Video|RenderCommand|OutputSafety)\.'
+
+# What a user gets from a plain `cmake -DCMAKE_BUILD_TYPE=Release` (GCC at -O3, warnings as
+# errors): it must build.
+release: setup
+	@cmake -S . -B $(RELEASE_BUILD) -DCMAKE_BUILD_TYPE=Release >/dev/null
+	@cmake --build $(RELEASE_BUILD) -j$(JOBS)
+
+# The libFuzzer targets of fuzz/ (clang, ASan + UBSan), each for FUZZ_SECONDS, starting from the
+# seed corpus in fuzz/corpus/NAME and the regression inputs in fuzz/regressions/NAME; new inputs
+# go to $(FUZZ_BUILD)/corpus/NAME, a crash to $(FUZZ_BUILD)/crash-* (copy it into
+# fuzz/regressions/NAME once fixed). docs/RELIABILITY.md.
+FUZZ_TARGETS := scene clip png mesh
+fuzz:
+	@bash scripts/setup.sh --fuzz
+	@CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPONYHOP_FUZZ=ON \
+	  -DPONYHOP_TESTS=OFF -DPONYHOP_WINDOW=OFF >/dev/null
+	@cmake --build $(FUZZ_BUILD) -j$(JOBS) --target $(addprefix fuzz_,$(FUZZ_TARGETS))
+	@for t in $(FUZZ_TARGETS); do \
+	  mkdir -p $(FUZZ_BUILD)/corpus/$$t; \
+	  echo "fuzz: $$t for $(FUZZ_SECONDS) s"; \
+	  ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  $(FUZZ_BUILD)/fuzz/fuzz_$$t $(FUZZ_BUILD)/corpus/$$t fuzz/corpus/$$t fuzz/regressions/$$t \
+	    -max_total_time=$(FUZZ_SECONDS) -max_len=65536 -timeout=30 -rss_limit_mb=3072 \
+	    -artifact_prefix=$(FUZZ_BUILD)/ -print_final_stats=1 2>$(FUZZ_BUILD)/fuzz_$$t.log \
+	    || { tail -50 $(FUZZ_BUILD)/fuzz_$$t.log; exit 1; }; \
+	  grep -E "^stat::number_of_executed_units|^stat::peak_rss_mb|cov: " $(FUZZ_BUILD)/fuzz_$$t.log | tail -3; \
+	done
+
+# Long runs stay bounded: every shipped scene simulated for SOAK_SECONDS of wall time, max RSS
+# printed at 1 and 10 minutes (scripts/soak.sh).
+soak: build
+	@bash scripts/soak.sh $(PONYHOP) $(SOAK_SECONDS)
+
+# The code follows .clang-format (Debian's clang-format): `make format` rewrites every tracked C++
+# file in place, `make format-check` (run by CI) lists the files that differ and fails.
+FORMAT_FILES = $(shell git ls-files '*.cpp' '*.h')
+format:
+	@clang-format -i $(FORMAT_FILES)
+format-check:
+	@command -v clang-format >/dev/null || bash scripts/setup.sh --format
+	@bad=$$(for f in $(FORMAT_FILES); do clang-format --dry-run -Werror "$$f" >/dev/null 2>&1 || echo "$$f"; done); 	  if [ -n "$$bad" ]; then echo "format-check: not formatted (run make format):"; echo "$$bad"; exit 1; fi; 	  echo "format-check: $(words $(FORMAT_FILES)) files follow .clang-format"
+
 # Re-render every golden image and physics fingerprint on purpose (never done by tests or CI).
 update-snapshots: build
 	@PONYHOP_UPDATE_SNAPSHOTS=1 $(BUILD)/tests/snapshot_test
@@ -64,4 +120,4 @@ bench-quick: build
 	@$(PONYHOP) bench --quick --out $(BUILD)/bench-quick
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD) $(TSAN_BUILD) $(FUZZ_BUILD) $(RELEASE_BUILD)

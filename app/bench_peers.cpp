@@ -44,7 +44,7 @@ bool PeerSim::finite() {
   return true;
 }
 
-PeerChain peerChainOf(const SceneRuntime& rt) {
+PeerChain peerChainOf(const Sim& rt) {
   PeerChain m;
   const Chain& ch = *rt.chain();
   m.anchor = ch.anchor(rt.world());

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "app/bench_run.h"
-#include "engine/scene_runtime.h"
+#include "sim/sim.h"
 
 namespace ponyhop {
 
@@ -43,7 +43,7 @@ struct PeerLink {
 };
 
 // The chain of a built scene (its chain, fixed anchor) as the peers build it.
-PeerChain peerChainOf(const SceneRuntime& rt);
+PeerChain peerChainOf(const Sim& rt);
 
 // A peer engine's chain, stepped in place.
 class PeerSim {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <memory>
 
-#include "engine/scene_runtime.h"
+#include "sim/sim.h"
 
 namespace ponyhop {
 namespace {
@@ -18,26 +18,10 @@ double seconds(Clock::duration d) { return std::chrono::duration<double>(d).coun
 
 long stepsFor(double duration, double dt) { return std::lround(duration / dt); }
 
-std::unique_ptr<SceneRuntime> build(const BenchCase& c, const Method& m, double dt) {
+std::unique_ptr<Sim> build(const BenchCase& c, const Method& m, double dt) {
   std::vector<Override> o = c.overrides;
   for (Override& x : methodOverrides(m, dt)) o.push_back(std::move(x));
-  return std::make_unique<SceneRuntime>(loadScene(c.scene, o));
-}
-
-// The point whose trajectory is compared: the chain's free end, else the hopper's body centre.
-Eigen::Vector3d trackedPoint(const SceneRuntime& rt) {
-  if (const Chain* c = rt.chain()) return c->tip(rt.world());
-  if (const Hopper* h = rt.hopper()) return rt.world().body(h->model().body).x;
-  return Eigen::Vector3d::Zero();
-}
-
-Eigen::Vector3d trackedVelocity(const SceneRuntime& rt) {
-  if (const Chain* c = rt.chain()) {
-    const RigidBody& b = rt.world().body(c->links.back());
-    return b.v + b.w.cross(c->tip(rt.world()) - b.x);
-  }
-  if (const Hopper* h = rt.hopper()) return rt.world().body(h->model().body).v;
-  return Eigen::Vector3d::Zero();
+  return std::make_unique<Sim>(loadScene(c.scene, o));
 }
 
 // Samples of a run with step dt: every step when dt >= kBenchGrid, else every kBenchGrid.
@@ -75,14 +59,14 @@ Trajectory simulateTrajectory(const BenchCase& c, const Method& m, double dt, do
     t.status = rt->status();
     return t;
   }
-  t.p.push_back(trackedPoint(*rt));
+  t.p.push_back(rt->trackedPoint());
   const long n = stepsFor(duration, dt);
   for (long i = 1; i <= n; ++i) {
     if (!rt->step()) {
       t.status = rt->status();
       return t;
     }
-    if (i % every == 0) t.p.push_back(trackedPoint(*rt));
+    if (i % every == 0) t.p.push_back(rt->trackedPoint());
   }
   return t;
 }
@@ -108,7 +92,7 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   const long n = stepsFor(horizon, dt);
   const long every = sampleEvery(dt);
   r.steps = n;
-  std::unique_ptr<SceneRuntime> first;
+  std::unique_ptr<Sim> first;
   Trajectory traj;
   traj.stride = every * dt;
   std::vector<double> per_step;
@@ -121,7 +105,7 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
       r.reason = rt->status();
       return r;
     }
-    if (rep == 0) traj.p.push_back(trackedPoint(*rt));
+    if (rep == 0) traj.p.push_back(rt->trackedPoint());
     rt->world().resetStageTimes();
     Clock::duration total{};
     long taken = 0, substep_sum = 0;
@@ -132,7 +116,7 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
       ++taken;
       substep_sum += std::max(1, rt->world().lastSubsteps());
       if (!ok) break;
-      if (rep == 0 && i % every == 0) traj.p.push_back(trackedPoint(*rt));
+      if (rep == 0 && i % every == 0) traj.p.push_back(rt->trackedPoint());
     }
     per_step.push_back(seconds(total) / static_cast<double>(std::max(1L, taken)));
     stages.push_back(rt->world().stageTimes());
@@ -166,7 +150,7 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   r.err_max = err[1];
 
   // Long run: the first repeat continued (untimed) to the long duration.
-  SceneRuntime& rt = *first;
+  Sim& rt = *first;
   r.tolerance_misses = rt.world().toleranceMisses();
   const long total_steps = stepsFor(c.long_duration, dt);
   const long sample = std::max(1L, std::lround(kDriftSample / dt));
@@ -177,7 +161,7 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   double drift = std::abs(e0 - e_start);
   const auto observe = [&] {
     r.joint_drift = std::max(r.joint_drift, rt.maxJointError());
-    r.max_speed = std::max(r.max_speed, trackedVelocity(rt).norm());
+    r.max_speed = std::max(r.max_speed, rt.trackedVelocity().norm());
     if (c.conservative) drift = std::max(drift, std::abs(rt.chainEnergy() - e_start));
   };
   observe();
@@ -203,8 +187,8 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   if (r.joint_drift > 1e-2) std::snprintf(why, sizeof why, "joint error %.3g m > 1 cm", r.joint_drift);
   else if (r.max_speed > 100.0) std::snprintf(why, sizeof why, "speed %.3g m/s > 100 m/s", r.max_speed);
   else if (c.conservative && r.energy_rel > 1.0) std::snprintf(why, sizeof why, "energy drift %.3g x E0", r.energy_rel);
-  else if (rt.hopper() && !(trackedPoint(rt).z() > 0.2 && trackedPoint(rt).z() < 5.0)) {
-    std::snprintf(why, sizeof why, "hopper body at z = %.3g m (fell or flew off)", trackedPoint(rt).z());
+  else if (rt.hopper() && !(rt.trackedPoint().z() > 0.2 && rt.trackedPoint().z() < 5.0)) {
+    std::snprintf(why, sizeof why, "hopper body at z = %.3g m (fell or flew off)", rt.trackedPoint().z());
   }
   if (why[0]) {
     r.long_status = "unbounded";

@@ -1,5 +1,5 @@
 // The bench's measurements of one run (`ponyhop bench`, docs/bench/README.md): a scene file with
-// overrides, stepped by SceneRuntime exactly as `ponyhop sim` steps it, timed step by step, its
+// overrides, stepped by Sim exactly as `ponyhop sim` steps it, timed step by step, its
 // tracked point (the chain's tip, the hopper's body centre) sampled on a fixed time grid.
 #pragma once
 
@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 #include "physics/reflect.h"
 #include "physics/stage_times.h"
 

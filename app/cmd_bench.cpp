@@ -28,8 +28,9 @@
 #include "app/bench_peers.h"
 #include "app/bench_report.h"
 #include "app/bench_run.h"
+#include "physics/validate.h"
 #include "app/commands.h"
-#include "engine/scene_runtime.h"
+#include "sim/sim.h"
 #include "physics/physics_params.h"
 
 namespace ponyhop {
@@ -124,11 +125,10 @@ std::string cannotRun(const Method& m) {
            "drift for stabilization '" +
            m.stabilization + "' to correct (run it with stabilization = none)";
   }
-  if (m.solver == "featherstone" && m.integrator != "rk4" && m.integrator != "symplectic_euler") {
-    return "solver 'featherstone' integrates in joint space with rk4 or symplectic_euler; '" + m.integrator +
-           "' belongs to the multiplier formulation";
-  }
-  return "";
+  PhysicsParams p;  // the combinations no solver can run are refused by validate(), as for a scene
+  enumFromName(m.solver, p.solver);
+  enumFromName(m.integrator, p.integrator);
+  return validate(p);
 }
 
 struct Reference {
@@ -180,7 +180,7 @@ Reference computeReference(const BenchCase& c, const Config& cfg, double target,
 
 // The chain of a scene as the peer engines build it (app/bench_peers.h).
 PeerChain peerChainOf(const std::string& scene, const std::vector<Override>& overrides) {
-  return peerChainOf(SceneRuntime(loadScene(scene, overrides)));
+  return peerChainOf(Sim(loadScene(scene, overrides)));
 }
 
 std::string dtName(double dt) { return "1/" + fmt(1.0 / dt, "%.0f"); }
@@ -474,7 +474,7 @@ int runBench(BenchArgs& args) {
       }
       if (!peers.empty() && c.links > 0 && c.anchor == "fixed") {
         const PeerChain chain = peerChainOf(c.scene, c.overrides);
-        SceneRuntime rt(loadScene(c.scene, c.overrides));
+        Sim rt(loadScene(c.scene, c.overrides));
         for (const Peer& peer : peers) {
           const auto slash = peer.name.find('/');
           BenchRow row{&c, peer.name, peer.name.substr(0, slash), peer.name.substr(slash + 1), "-", "fixed", dt,

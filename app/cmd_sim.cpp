@@ -1,15 +1,22 @@
 // `ponyhop sim SCENE [--duration T] [--set key=value]... --csv FILE`: the physics alone (no GL),
 // one CSV row per millisecond of simulated time. When dt > 1 ms a row takes the step nearest to
 // its time; when dt < 1 ms, rows sample the step nearest to each millisecond.
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 
 #include "app/commands.h"
+#include "app/output_safety.h"
 #include "app/scene_args.h"
-#include "engine/scene_io.h"
-#include "engine/scene_runtime.h"
+#include "sim/scene_io.h"
+#include "engine/asset_loader.h"
+#include "sim/sim.h"
 
 namespace ponyhop {
 namespace {
@@ -28,7 +35,7 @@ struct SimRow {
   size_t split = 0;
 };
 
-std::string header(const SceneRuntime& rt) {
+std::string header(const Sim& rt) {
   // Hopper: body centre of mass (m, m/s), attitude (rad), leg length (m), phase, foot contact
   // point (m), contact 0/1, the largest violation of the knee's five constraints.
   if (rt.hopper()) {
@@ -38,7 +45,7 @@ std::string header(const SceneRuntime& rt) {
   return "t,max_joint_error";
 }
 
-SimRow sample(const SceneRuntime& rt) {
+SimRow sample(const Sim& rt) {
   SimRow r;
   if (const Hopper* h = rt.hopper()) {
     const World& w = rt.world();
@@ -73,10 +80,12 @@ int runSim(const SimArgs& args) {
   if (!std::isfinite(duration) || duration > 1e6) {
     throw SceneError("--duration: must be a number of seconds in [0, 1e6]");
   }
-  SceneRuntime rt(scene);
+  checkOutputFile("--csv", args.csv, sceneInputs(scene));
+  InterruptGuard interrupt;
+  Sim rt(scene, &assimpAssets());
 
   // Written to a temporary name and renamed: a failed run never replaces a good CSV.
-  const std::string tmp = args.csv + ".tmp";
+  const std::string tmp = args.csv + ".partial-" + std::to_string(getpid());
   std::FILE* f = std::fopen(tmp.c_str(), "w");
   if (!f) throw SceneError("--csv " + args.csv + ": cannot write the file");
   std::fprintf(f, "%s\n", header(rt).c_str());
@@ -87,7 +96,26 @@ int runSim(const SimArgs& args) {
   SimRow prev = sample(rt);
   writeRow(f, 0.0, prev);
   next = 1;
+  // Progress on long runs: a line every 5 s of wall time (a long chain on a slow solver shows
+  // its pace instead of silence).
+  using Clock = std::chrono::steady_clock;
+  const auto t_start = Clock::now();
+  auto t_report = t_start + std::chrono::seconds(5);
   while (next < rows) {
+    if (const int sig = InterruptGuard::signal()) {
+      std::fclose(f);
+      std::remove(tmp.c_str());
+      std::fprintf(stderr, "ponyhop sim: stopped by %s; %s was not written\n", sig == SIGINT ? "SIGINT" : "SIGTERM",
+                   args.csv.c_str());
+      return InterruptGuard::exitCode(sig);
+    }
+    if (Clock::now() >= t_report) {
+      t_report += std::chrono::seconds(5);
+      const double wall = std::chrono::duration<double>(Clock::now() - t_start).count();
+      const double done = rt.time() / std::max(duration, 1e-12);
+      std::fprintf(stderr, "sim: %.3f of %.3f s simulated (%.1f%%), %.0f s elapsed, about %.0f s left\n", rt.time(),
+                   duration, 100.0 * done, wall, done > 0.0 ? wall * (1.0 - done) / done : 0.0);
+    }
     if (!rt.step()) {
       std::fclose(f);
       std::remove(tmp.c_str());
@@ -133,8 +161,8 @@ void addSimCommand(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand("sim", "Run the physics alone (no GL) and write one CSV row per millisecond");
   args->scene.add(cmd);
   cmd->add_option("--duration", args->duration, "Simulated seconds (default: the scene's duration)")
-      ->check(CLI::Range(0.0, 1e6));
-  cmd->add_option("--csv", args->csv, "Output CSV file")->required();
+      ->check(finiteIn(0.0, 1e6));
+  cmd->add_option("--csv", args->csv, "Output CSV file")->required()->check(nonEmpty());
   cmd->callback([args, &exit_code] {
     try {
       exit_code = runSim(*args);

@@ -1,11 +1,15 @@
 // ponyhop: constrained rigid-body dynamics the way games use it (a ponytail on a keyframed head,
 // a Raibert hopper), rendered headless to PNG/video, tuned live in a window, guarded by snapshots.
+#include <csignal>
 #include <cstdio>
 #include <exception>
 
 #include "app/commands.h"
 
 int main(int argc, char** argv) {
+  // A file size limit (RLIMIT_FSIZE) makes a write fail with EFBIG, reported like a full disk,
+  // instead of killing the process with SIGXFSZ halfway through a file.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"ponyhop: a ponytail and a Raibert hopper, simulated with Lagrange multipliers"};
   app.require_subcommand(1);
   int exit_code = 0;

@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <type_traits>
 
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 namespace {

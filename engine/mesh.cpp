@@ -7,14 +7,12 @@
 #include <assimp/Importer.hpp>
 #include <cctype>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 
-namespace ponyhop {
+#include "engine/isolated.h"
 
-void MeshData::computeBounds() {
-  bbox.setEmpty();
-  for (const auto& p : positions) bbox.extend(p);
-}
+namespace ponyhop {
 
 static std::string lowerExtension(const std::string& path) {
   const size_t dot = path.find_last_of('.');
@@ -24,7 +22,10 @@ static std::string lowerExtension(const std::string& path) {
   return e;
 }
 
-bool loadMesh(const std::string& path, MeshData& out, std::string* err) {
+namespace {
+
+// assimp itself, in whatever process calls it.
+bool importMesh(const std::string& path, MeshData& out, std::string* err) {
   Assimp::Importer importer;
   unsigned flags = aiProcess_Triangulate | aiProcess_GenSmoothNormals | aiProcess_JoinIdenticalVertices |
                    aiProcess_PreTransformVertices | aiProcess_SortByPType |
@@ -69,6 +70,71 @@ bool loadMesh(const std::string& path, MeshData& out, std::string* err) {
   if (m.indices.empty()) {
     if (err) *err = path + ": no triangles in the file";
     return false;
+  }
+  out = std::move(m);
+  return true;
+}
+
+// MeshData through the pipe from the import process: three counts, then the arrays.
+template <class T>
+void putArray(std::string& s, const std::vector<T>& v) {
+  const uint64_t n = v.size();
+  s.append(reinterpret_cast<const char*>(&n), sizeof(n));
+  s.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+template <class T>
+bool getArray(const std::string& s, size_t& at, std::vector<T>& v) {
+  uint64_t n = 0;
+  if (s.size() - at < sizeof(n)) return false;
+  std::memcpy(&n, s.data() + at, sizeof(n));
+  at += sizeof(n);
+  if (n > (s.size() - at) / sizeof(T)) return false;
+  v.resize(size_t(n));
+  std::memcpy(static_cast<void*>(v.data()), s.data() + at, size_t(n) * sizeof(T));
+  at += size_t(n) * sizeof(T);
+  return true;
+}
+
+}  // namespace
+
+bool loadMesh(const std::string& path, MeshData& out, std::string* err) {
+  // assimp runs in a child process with a time and memory limit (engine/isolated.h): corrupted
+  // files crash, abort or hang it (docs/RELIABILITY.md), and they must not take ponyhop along.
+  std::string bytes, e;
+  const bool ok = runIsolated(
+      [&path](std::string& result, std::string& error) {
+        MeshData m;
+        if (!importMesh(path, m, &error)) return false;
+        putArray(result, m.positions);
+        putArray(result, m.normals);
+        putArray(result, m.indices);
+        return true;
+      },
+      importLimits(), &bytes, &e);
+  if (!ok) {
+    if (err) *err = e.rfind(path, 0) == 0 ? e : path + ": the importer (assimp) " + e;
+    return false;
+  }
+  // What comes back is checked like any input: sizes agree, indices in range, values finite.
+  MeshData m;
+  size_t at = 0;
+  if (!getArray(bytes, at, m.positions) || !getArray(bytes, at, m.normals) || !getArray(bytes, at, m.indices) ||
+      at != bytes.size() || m.normals.size() != m.positions.size() || m.indices.size() % 3 != 0) {
+    if (err) *err = path + ": the import process returned inconsistent data";
+    return false;
+  }
+  for (const auto& p : m.positions) {
+    if (!p.allFinite()) {
+      if (err) *err = path + ": a vertex position is not a finite number";
+      return false;
+    }
+  }
+  for (const uint32_t i : m.indices) {
+    if (i >= m.positions.size()) {
+      if (err) *err = path + ": a triangle refers to vertex " + std::to_string(i) + " of " +
+                      std::to_string(m.positions.size());
+      return false;
+    }
   }
   m.computeBounds();
   out = std::move(m);

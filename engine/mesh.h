@@ -8,21 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "engine/scene.h"
+#include "sim/mesh_data.h"
+#include "sim/scene.h"
 
 namespace ponyhop {
-
-// One indexed triangle list; all meshes/nodes of a file are merged with their node transforms
-// baked in. normals.size() == positions.size(), unit length.
-struct MeshData {
-  std::vector<Eigen::Vector3f> positions;
-  std::vector<Eigen::Vector3f> normals;
-  std::vector<uint32_t> indices;  // 3 per triangle
-  Eigen::AlignedBox3f bbox;       // of positions (empty when there are none)
-
-  size_t triangleCount() const { return indices.size() / 3; }
-  void computeBounds();
-};
 
 // Loads `path`. Missing normals are generated smooth; STL (whose normals are per facet by format)
 // gets smooth normals too. Returns false with "FILE: assimp's message" (or "FILE: no triangles").

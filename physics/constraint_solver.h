@@ -7,11 +7,11 @@
 // acc_k are the kinematic bodies' known accelerations, the last bracket is Baumgarte's
 // stabilization C'' + 2 alpha C' + beta^2 C = 0). Then F_c = J^T lambda on the dynamic bodies.
 //
-// A subclass supplies only the factorization of A and the solve: DenseSolver (Eigen LDLT);
-// a Baraff tree solver (block LDL^T in leaves-first order) fits the same two calls and must give
-// the same lambda. Position/velocity projection (stabilization.h) reuses them with the mass
-// metric. A reduced-coordinate (Featherstone) method would replace World's joint-force stage
-// as a whole, as it yields accelerations without multipliers.
+// A subclass supplies only the factorization of A and the solve: DenseSolver (Eigen LDLT) and
+// TreeSolver (Baraff's block LDL^T in leaves-first order, O(n)), which give the same lambda.
+// Position/velocity projection (stabilization.h) reuses them with the mass metric. The
+// reduced-coordinate method (featherstone.h) replaces World's joint-force stage as a whole, as
+// it yields accelerations without multipliers.
 #pragma once
 
 #include <Eigen/Core>

@@ -143,7 +143,7 @@ ConstrainedStepResult rattleStep(double t, double h, const Eigen::VectorXd& lamb
   // Velocity-dependent forces (damping, drag, servos) taken at the predicted velocity make the
   // kick first order in them. One more evaluation at the kicked velocity, a fixed-point step
   // towards the trapezoidal kick p' = p+ + h/2 F(q', v'), brings the velocity error of that force
-  // to O(h^2) and the method back to second order (tests/physics_integrator_test.cpp:
+  // to O(h^2) and the method back to second order (tests/physics/physics_integrator_test.cpp:
   // RattleIsSecondOrderWithDamping). Forces that do not depend on the velocity come out
   // identical, and the step is left as it was.
   if (!s.forces(t + h)) return result;

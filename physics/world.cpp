@@ -72,6 +72,10 @@ int World::addJoint(std::unique_ptr<Constraint> joint) {
   return static_cast<int>(joints_.size()) - 1;
 }
 
+void World::addController(std::shared_ptr<Controller> controller) { controllers_.push_back(std::move(controller)); }
+
+void World::addContactSet(std::shared_ptr<ContactSet> contacts) { contacts_.push_back(std::move(contacts)); }
+
 int World::addForceElement(std::unique_ptr<ForceElement> element) {
   forces_.push_back(std::move(element));
   return static_cast<int>(forces_.size()) - 1;
@@ -83,6 +87,8 @@ int World::addForceElement(std::unique_ptr<ForceElement> element) {
 // it produces a non-finite or runaway value.
 
 void World::step() {
+  if (!ok()) return;
+  think();  // controllers' state machines: setpoints for this step (Think, seed 000)
   if (!ok()) return;
   last_substeps_ = 0;
   last_error_ = 0.0;
@@ -127,7 +133,7 @@ void World::substep(double h, int depth) {
                 "the joints were pulled apart faster than any step can follow (a teleported kinematic parent, "
                 "an extreme mass ratio, NaN-free but runaway forces): check the prescribed motion and parameters");
   }
-  resolveContacts();  // contact hook (the hopper's active set)
+  resolveContacts();  // contact sets (the hopper's foot: an active set)
   ++last_substeps_;
 }
 
@@ -139,7 +145,7 @@ bool World::takeStep(double h) {
     updateKinematicBodies(time_);  // prescribed bodies: pose, velocity, acceleration at t
     followTeleports(h);            // a prescribed body that jumps within the step carries its chain along
     applyExternalForces();         // gravity, joint damping, bending springs, air drag
-    applyControllerForces();       // controller hook (empty for chains; the hopper adds one)
+    applyControllerForces();       // controllers' force laws (none for chains; the hopper's muscles)
     solveJointForces();            // A lambda = b, F_c = J^T lambda, body accelerations
     watchStability(h);             // explicit methods: stop when h is beyond the stability limit
     integrate(h);                  // t += h (RK4 re-runs the four stages above at its stage times)
@@ -293,6 +299,10 @@ void World::watchStability(double h) {
   stop("integrate", what, cause.c_str());
 }
 
+void World::think() {
+  for (const auto& c : controllers_) c->think(*this);
+}
+
 void World::updateKinematicBodies(double t) {
   stage_time_ = t;
   for (RigidBody& b : bodies_) {
@@ -322,8 +332,8 @@ void World::applyExternalForces() {
 
 void World::applyControllerForces() {
   const auto timed = clock_.time(Stage::Controller);
-  if (!ok() || !controller_) return;
-  controller_(stage_time_, bodies_);
+  if (!ok() || controllers_.empty()) return;
+  for (const auto& c : controllers_) c->applyForces(*this, stage_time_);
   for (const RigidBody& b : bodies_) {
     if (b.isDynamic() && (!b.force.allFinite() || !b.torque.allFinite())) {
       return stop("controller forces", "non-finite force on '" + b.name + "'",
@@ -413,8 +423,8 @@ void World::stabilize() {
 
 void World::resolveContacts() {
   const auto timed = clock_.time(Stage::Contact);
-  if (!ok() || !contact_) return;
-  contact_(time_, bodies_);
+  if (!ok() || contacts_.empty()) return;
+  for (const auto& c : contacts_) c->update(*this);
   checkBodies("contact", false);
 }
 
@@ -470,9 +480,34 @@ void World::evaluate() {
 void World::projectVelocities() {
   if (!ok()) return;
   updateKinematicBodies(time_);
-  if (std::string e = ponyhop::projectVelocities(bodies_, joints_, system_, *solver_); !e.empty()) {
-    stop("velocity projection", e, "redundant or duplicate joints");
-  }
+  if (std::string e = projectVelocitiesOntoJoints(); !e.empty()) stop("velocity projection", e, "redundant or duplicate joints");
+}
+
+ProjectionResult World::projectPositionsOntoJoints() { return ponyhop::projectPositions(bodies_, joints_, system_, *solver_); }
+
+std::string World::projectVelocitiesOntoJoints(Eigen::VectorXd* impulses) {
+  return ponyhop::projectVelocities(bodies_, joints_, system_, *solver_, impulses);
+}
+
+World::SavedState World::saveState() const {
+  SavedState s;
+  s.bodies.reserve(bodies_.size());
+  for (const RigidBody& b : bodies_) s.bodies.push_back(b.state());
+  s.time = time_;
+  for (const auto& c : controllers_) s.controllers.push_back(c->saveState());
+  for (const auto& c : contacts_) s.contacts.push_back(c->saveState());
+  s.monitor = monitor_;
+  s.tolerance_substeps = tolerance_substeps_;
+  return s;
+}
+
+void World::restoreState(const SavedState& s) {
+  for (size_t i = 0; i < bodies_.size() && i < s.bodies.size(); ++i) bodies_[i].state() = s.bodies[i];
+  time_ = stage_time_ = s.time;
+  for (size_t i = 0; i < controllers_.size() && i < s.controllers.size(); ++i) controllers_[i]->restoreState(s.controllers[i]);
+  for (size_t i = 0; i < contacts_.size() && i < s.contacts.size(); ++i) contacts_[i]->restoreState(s.contacts[i]);
+  monitor_ = s.monitor;
+  tolerance_substeps_ = s.tolerance_substeps;
 }
 
 State World::gatherState() const {
@@ -483,19 +518,14 @@ State World::gatherState() const {
 
 void World::gatherStateInto(State& s) const {
   s.resize(dynamic_.size());
-  for (size_t k = 0; k < dynamic_.size(); ++k) {
-    const RigidBody& b = bodies_[dynamic_[k]];
-    s[k] = {b.x, b.q, b.v, b.w};
-  }
+  for (size_t k = 0; k < dynamic_.size(); ++k) s[k] = bodies_[dynamic_[k]].state();
 }
 
 void World::scatterState(const State& state) {
   for (size_t k = 0; k < dynamic_.size(); ++k) {
-    RigidBody& b = bodies_[dynamic_[k]];
-    b.x = state[k].x;
-    b.q = state[k].q.normalized();  // RK4 stage quaternions are not unit
-    b.v = state[k].v;
-    b.w = state[k].w;
+    BodyState& s = bodies_[dynamic_[k]].state();
+    s = state[k];
+    s.q.normalize();  // RK4 stage quaternions are not unit
   }
 }
 

@@ -22,13 +22,19 @@ PACKAGES=(
   xvfb xauth                           # window tests without a display
 )
 
-# Peer engines for the bench (app/bench_peers.h), each optional at configure time: MuJoCo,
-# Bullet (its -float64 libraries: btMultiBody in double precision), ODE (double), DART.
-if [[ "${1:-}" == "--bench" ]]; then
+# `make fuzz` only (scripts/setup.sh --fuzz): libFuzzer comes with clang's runtime libraries.
+if [ "${1:-}" = "--fuzz" ]; then
+  PACKAGES+=(clang libclang-rt-14-dev)
+fi
+# `make format-check` only (scripts/setup.sh --format).
+if [ "${1:-}" = "--format" ]; then
+  PACKAGES+=(clang-format)
+fi
+# `make bench` only (scripts/setup.sh --bench): the peer engines the bench compares against
+# (app/bench_peers.h), each optional at configure time: MuJoCo, Bullet (its -float64 libraries:
+# btMultiBody in double precision), ODE (double), DART.
+if [ "${1:-}" = "--bench" ]; then
   PACKAGES+=(libmujoco-dev libbullet-dev libode-dev libdart-dev)
-elif [[ $# -gt 0 ]]; then
-  echo "setup.sh: unknown option '$1' (allowed: --bench)" >&2
-  exit 2
 fi
 
 missing=()
