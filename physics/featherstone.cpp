@@ -590,7 +590,7 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
                                     const ReducedHooks& hooks) {
   // Unless someone changed the bodies, they hold what the last step wrote at this very t (its
   // kinematics at t + h, which is this step's t): the first stage skips forward kinematics.
-  const bool written = have_state_ && !bodiesChanged(bodies);
+  const bool written = have_state_ && t == written_time_ && !bodiesChanged(bodies);
   if (!written) readState(bodies);
   c0_ = coords_;
   u0_ = u_;
@@ -663,6 +663,7 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
   hooks.kinematics(t + h);
   writeState(bodies);
   remember(bodies);
+  written_time_ = t + h;
   return "";
 }
 

@@ -41,6 +41,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -164,6 +165,7 @@ class ArticulatedSystem {
   Coordinates c0_, y_, r_[4];
   Eigen::VectorXd u0_, us_, k_[4];
   bool stopped_ = false;  // the last derivative's force hook stopped the world
+  double written_time_ = std::numeric_limits<double>::quiet_NaN();  // time of the bodies step() wrote last
 };
 
 }  // namespace ponyhop
