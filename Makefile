@@ -112,10 +112,14 @@ update-snapshots: build
 	@PONYHOP_UPDATE_SNAPSHOTS=1 $(BUILD)/tests/snapshot_test
 	@echo "goldens rewritten in tests/snapshots/: review them with git diff before committing"
 
-# The report in docs/bench/ (about 20 min on 2 cores): the whole grid with 10 s long runs, then
+# The report in docs/bench/ (about 20 min on 2 cores), with the peer engines installed first
+# (setup.sh --bench: MuJoCo, Bullet, ODE, DART): the whole grid with 10 s long runs, then
 # the fixed-anchor chains at dt = 1/240 s for 60 s (energy drift). `ponyhop bench` alone runs 60 s
 # long runs on the whole grid (about an hour).
-bench: build
+bench:
+	@bash scripts/setup.sh --bench
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+	@cmake --build $(BUILD) -j$(JOBS)
 	@$(PONYHOP) bench --out docs/bench --long-fixed 10 --long-shake 5 --long-hopper 5
 	@$(PONYHOP) bench --out docs/bench/long60 --links 8,32 --anchors fixed --dts 240 --long-fixed 60 --no-hopper --no-scaling
 

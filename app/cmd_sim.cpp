@@ -145,6 +145,12 @@ int runSummary(const Scene& scene, double duration, const SimArgs& args) {
   if (ec) throw SceneError("--csv " + args.csv + ": " + ec.message());
   std::fprintf(stderr, "sim: %ld rows (%.3f s simulated, dt %.6g s) -> %s\n", rows, duration, scene.physics.dt,
                args.csv.c_str());
+  if (const int misses = rt.world().toleranceMisses(); misses > 0) {
+    std::fprintf(stderr,
+                 "sim: warning: %d substeps kept an error estimate above physics.tolerance = %g m even at the "
+                 "deepest split (1/1024 of dt): the tolerance was not met there\n",
+                 misses, scene.physics.tolerance);
+  }
   return 0;
 }
 

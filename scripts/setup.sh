@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian packages ponyhop needs, and only those that are missing.
 # Idempotent: a machine that has everything runs no apt command at all.
+#   scripts/setup.sh           what `make demo` and `make test` need
+#   scripts/setup.sh --bench   also the peer engines `ponyhop bench` compares against (`make bench`)
 set -euo pipefail
 
 PACKAGES=(
@@ -29,6 +31,12 @@ fi
 # `make format-check` only (scripts/setup.sh --format).
 if [ "${1:-}" = "--format" ]; then
   PACKAGES+=(clang-format)
+fi
+# `make bench` only (scripts/setup.sh --bench): the peer engines the bench compares against
+# (app/bench_peers.h), each optional at configure time: MuJoCo, Bullet (its -float64 libraries:
+# btMultiBody in double precision), ODE (double), DART.
+if [ "${1:-}" = "--bench" ]; then
+  PACKAGES+=(libmujoco-dev libbullet-dev libode-dev libdart-dev)
 fi
 
 missing=()
