@@ -110,10 +110,18 @@ void Collisions::attach(World& world) {
                "use solver = tree or dense");
     return;
   }
-  world.setContactHandler([this, &world](double, std::vector<RigidBody>& bodies) {
-    if (std::string e = resolve(bodies, world.joints()); !e.empty()) world.fail("collisions: " + e);
-  });
-  world.setImpactCheck([this](const std::vector<RigidBody>& bodies) { return impactInside(bodies); });
+  world.addContactSet(shared_from_this());
+}
+
+void Collisions::update(World& world) {
+  if (!world.ok()) return;
+  if (std::string e = resolve(world.bodies(), world.joints()); !e.empty()) world.fail("collisions: " + e);
+}
+
+bool Collisions::impactInside(const World& world) const { return impactIn(world.bodies()); }
+
+void Collisions::restoreState(const std::any& state) {
+  if (const auto* a = std::any_cast<std::set<std::pair<int, int>>>(&state)) active_ = *a;
 }
 
 std::vector<Collisions::Row> Collisions::detect(const std::vector<RigidBody>& bodies, double reach) const {
@@ -173,7 +181,7 @@ std::vector<Collisions::Row> Collisions::detect(const std::vector<RigidBody>& bo
   return rows;
 }
 
-bool Collisions::impactInside(const std::vector<RigidBody>& bodies) const {
+bool Collisions::impactIn(const std::vector<RigidBody>& bodies) const {
   for (const Row& r : detect(bodies, -params_.impact_tolerance)) {
     if (!active_.count({r.key0, r.key1})) return true;
   }

@@ -40,6 +40,7 @@
 
 #include "physics/constraint.h"
 #include "physics/constraint_solver.h"
+#include "physics/controller.h"
 #include "physics/physics_params.h"
 #include "physics/shapes.h"
 
@@ -62,7 +63,7 @@ struct CollisionStats {
   int iterations = 0;             // projected Gauss-Seidel sweeps of the last stage
 };
 
-class Collisions {
+class Collisions final : public ContactSet, public std::enable_shared_from_this<Collisions> {
  public:
   explicit Collisions(const CollisionParams& params, SolverKind solver = SolverKind::Dense);
 
@@ -79,15 +80,20 @@ class Collisions {
   void addTwistLimit(int parent, int child, const Eigen::Vector3d& child_axis, double max_angle,
                      const std::vector<RigidBody>& bodies);
 
-  // Installs the contact stage and the impact check in the world. Featherstone: fails the world
-  // with a message (reduced coordinates do not take contact rows).
+  // Adds this set to the world (hold it in a shared_ptr). Featherstone: fails the world with a
+  // message (reduced coordinates do not take contact rows).
   void attach(World& world);
+  // ContactSet: the contact stage and the impact check on the world's bodies and joints.
+  void update(World& world) override;
+  bool impactInside(const World& world) const override;
+  std::any saveState() const override { return active_; }
+  void restoreState(const std::any& state) override;
 
   // The contact stage on the state just reached (joints: the world's). Returns "" or a problem.
   std::string resolve(std::vector<RigidBody>& bodies, const Constraints& joints);
   // True when a contact not active at the start of the substep now overlaps by more than
   // impact_tolerance (the World splits the substep).
-  bool impactInside(const std::vector<RigidBody>& bodies) const;
+  bool impactIn(const std::vector<RigidBody>& bodies) const;
 
   const CollisionParams& params() const { return params_; }
   CollisionParams& params() { return params_; }

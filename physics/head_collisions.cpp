@@ -6,7 +6,7 @@
 
 namespace ponyhop {
 
-std::unique_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain, int head_body,
+std::shared_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain, int head_body,
                                                const std::vector<Eigen::Vector3d>& vertices,
                                                const std::vector<uint32_t>& indices, const HeadCollisionParams& params,
                                                std::string* error) {
@@ -19,7 +19,7 @@ std::unique_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain,
   cp.friction = params.friction;
   cp.restitution = params.restitution;
   cp.margin = params.margin;
-  auto col = std::make_unique<Collisions>(cp, world.params().solver);
+  auto col = std::make_shared<Collisions>(cp, world.params().solver);
   const int head = col->addShape(head_body, Shape::grid(grid));
   const int n = static_cast<int>(chain.links.size());
   for (int i = 1; i < n; ++i) {

@@ -26,7 +26,7 @@ struct HeadCollisionParams {
 // Builds the collider from the triangles (body frame of `head_body`) and the link capsules.
 // The root link is held by the cone, not by contact (its top sits on the head at the anchor).
 // Returns null and sets *error when the mesh cannot make a collider.
-std::unique_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain, int head_body,
+std::shared_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain, int head_body,
                                                const std::vector<Eigen::Vector3d>& vertices,
                                                const std::vector<uint32_t>& indices, const HeadCollisionParams& params,
                                                std::string* error);
