@@ -25,7 +25,7 @@
 //      joints are projected back onto C = 0 (their second-order error).
 //   3. The active set: contacts that are touching after the stage are "active"; the next step
 //      treats them as persisting.
-// Impacts are located within the step: impactInside() tells the World that a contact which was
+// Impacts are located within the step: impactInside() (ContactSet) tells the World that a contact which was
 // not active at the start of a substep ends it deeper than impact_tolerance; the World then undoes
 // the substep and takes it as two halves (down to 1/1024 of it), so the impulse acts at a state
 // at most impact_tolerance past the touching one.

@@ -54,7 +54,7 @@ class TriangleDistance {
     for (int dz = -span; dz <= span; ++dz)
       for (int dy = -span; dy <= span; ++dy)
         for (int dx = -span; dx <= span; ++dx) {
-          const auto it = buckets_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+          const auto it = buckets_.find(key(Eigen::Vector3i(c + Eigen::Vector3i(dx, dy, dz))));
           if (it == buckets_.end()) continue;
           for (int t : it->second)
             best = std::min(best, (p - closestPointOnTriangle(p, v_[idx_[3 * t]], v_[idx_[3 * t + 1]], v_[idx_[3 * t + 2]])).norm());
@@ -86,10 +86,10 @@ struct Result {
 Result play(const std::string& mesh_path, const std::string& clip, double duration) {
   Scene scene = loadScene("assets/scenes/ponytail.json");
   if (!mesh_path.empty()) {
-    scene.head.mesh = mesh_path;
-    scene.head.anchor_space = AnchorSpace::Bounds;  // the anchor: found on the mesh's surface
+    scene.head->mesh = mesh_path;
+    scene.head->anchor_space = AnchorSpace::Bounds;  // the anchor: found on the mesh's surface
   }
-  scene.head.animation.clip = clip;
+  scene.head->animation.clip = clip;
   Sim rt(scene, &assimpAssets());
   EXPECT_TRUE(rt.ok()) << rt.status();
   EXPECT_TRUE(rt.head() && rt.chain());
