@@ -9,6 +9,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "sim/data_dir.h"
 #include "sim/input_file.h"
 #include "physics/hopper.h"
 
@@ -383,7 +384,8 @@ std::string resolveScenePath(const std::string& path, const std::string& scene_p
     const fs::path q = fs::path(scene_path).parent_path() / p;
     if (fs::is_regular_file(q, ec)) return q.string();
   }
-  const fs::path r = fs::path(PONYHOP_SOURCE_DIR) / p;
+  if (dataDir().empty()) return "";
+  const fs::path r = fs::path(dataDir()) / p;
   if (fs::is_regular_file(r, ec)) return r.string();
   return "";
 }
@@ -521,9 +523,14 @@ void validateScene(const Scene& scene_in, const std::string& source) {
                        (have.empty() ? "" : ", " + have) + ")");
     }
   }
-  if (scene.hopper && errors.empty()) {
+  if (errors.empty()) {
     // Physical sense beyond the ranges (leg lengths in order, the foot above the ground, ...).
-    if (std::string e = validate(*scene.hopper); !e.empty()) errors.push_back(e);
+    if (scene.hopper) {
+      if (std::string e = validate(*scene.hopper); !e.empty()) errors.push_back(e);
+    }
+    for (size_t i = 0; i < scene.hoppers.size(); ++i) {
+      if (std::string e = validate(scene.hoppers[i], "hoppers." + std::to_string(i)); !e.empty()) errors.push_back(e);
+    }
   }
   if (scene.render.width % 2 || scene.render.height % 2) {
     // H.264 in yuv420p needs even sizes; keep every output consistent with the video.
