@@ -15,7 +15,9 @@ PONYHOP    := $(BUILD)/ponyhop
 DEMO_SCENES ?= ponytail hopper
 DEMO_FRAMES ?= 300
 
-.PHONY: all setup build demo test test-asan test-tsan release fuzz soak format format-check update-snapshots bench bench-quick clean
+PREFIX     ?= /usr/local
+
+.PHONY: all setup build install demo test test-asan test-tsan release fuzz soak format format-check update-snapshots bench bench-quick clean
 
 all: build
 
@@ -26,6 +28,10 @@ build: setup
 	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 	@cmake --build $(BUILD) -j$(JOBS)
 
+# The executable, its assets and docs under PREFIX (bin/, share/ponyhop/, share/doc/ponyhop/).
+install: build
+	@cmake --install $(BUILD) --prefix $(PREFIX)
+
 demo: build
 	@for s in $(DEMO_SCENES); do \
 	  if [ -f assets/scenes/$$s.json ]; then \
@@ -33,6 +39,7 @@ demo: build
 	    echo "demo: frames in out/demo/$$s/, video out/demo/$$s.mp4"; \
 	  fi; \
 	done
+	@echo "demo: the executable is $(PONYHOP) (make install PREFIX=... puts it in PREFIX/bin)"
 
 # Every test, with the normal build (about 5 min from a fresh clone on 2 cores, 30 s of it tests).
 test: build

@@ -30,6 +30,7 @@
 #include "app/bench_run.h"
 #include "physics/validate.h"
 #include "app/commands.h"
+#include "sim/data_dir.h"
 #include "sim/sim.h"
 #include "physics/physics_params.h"
 
@@ -346,6 +347,9 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
 int runBench(BenchArgs& args) {
   const auto start = Clock::now();
   const std::string load_before = loadAverage();
+  // From any folder: the scenes as given, else ponyhop's own (engine/data_dir.h).
+  args.chain_scene = resolveSceneFile(args.chain_scene);
+  args.hopper_scene = resolveSceneFile(args.hopper_scene);
   Config cfg = makeConfig(args.quick);
   if (args.long_fixed >= 0.0) cfg.long_fixed = args.long_fixed;
   if (args.long_shake >= 0.0) cfg.long_shake = args.long_shake;

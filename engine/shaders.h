@@ -7,12 +7,14 @@ namespace ponyhop::shaders {
 
 // Vertex shaders.
 extern const char* const kMeshVS;       // meshes and boxes: per-draw model matrix (uniforms)
+extern const char* const kMeshMatVS;    // meshes with their own colours/texture coordinates
 extern const char* const kCapsuleVS;    // spheres / capsules / tapered capsules: one instanced draw
 extern const char* const kGroundVS;     // the z = 0 plane
 extern const char* const kFullscreenVS; // background (gl_VertexID triangle)
 extern const char* const kLinesVS;      // debug lines
 // Fragment shaders.
 extern const char* const kLitFS;        // Blinn-Phong + rim, shadowed key light, fill, hemi ambient
+extern const char* const kMeshMatFS;    // kLitFS with the albedo times vertex colour and base-colour texture
 extern const char* const kGroundFS;     // filtered checker, shadow, fade into the background
 extern const char* const kBackgroundFS; // vertical gradient
 extern const char* const kLinesFS;

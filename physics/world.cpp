@@ -498,6 +498,7 @@ World::SavedState World::saveState() const {
   for (const auto& c : contacts_) s.contacts.push_back(c->saveState());
   s.monitor = monitor_;
   s.tolerance_substeps = tolerance_substeps_;
+  s.status = status_;
   return s;
 }
 
@@ -508,6 +509,8 @@ void World::restoreState(const SavedState& s) {
   for (size_t i = 0; i < contacts_.size() && i < s.contacts.size(); ++i) contacts_[i]->restoreState(s.contacts[i]);
   monitor_ = s.monitor;
   tolerance_substeps_ = s.tolerance_substeps;
+  status_ = s.status;
+  split_reason_.clear();
 }
 
 State World::gatherState() const {

@@ -77,6 +77,7 @@ class World {
     std::vector<std::any> contacts;
     StabilityMonitor monitor;
     int tolerance_substeps = 0;
+    std::string status;  // "" while running; a restore of a running state revives a stopped world
   };
   SavedState saveState() const;
   void restoreState(const SavedState& s);

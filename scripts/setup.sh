@@ -17,7 +17,9 @@ PACKAGES=(
   nlohmann-json3-dev                   # scene files
   libcli11-dev                         # command line
   libgtest-dev                         # tests (speed is measured by `ponyhop bench`)
-  ffmpeg                               # --video: H.264 encoding
+  ffmpeg                               # --video: H.264, VP9 and GIF encoding
+  parallel                             # the render-farm test (GNU parallel; docs/RENDER_FARM.md)
+  assimp-testmodels                    # third-party heads for the head-placement tests
   gnuplot-nox                          # bench plots
   xvfb xauth                           # window tests without a display
 )

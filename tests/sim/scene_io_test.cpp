@@ -179,6 +179,14 @@ TEST(SceneIoHostile, DeepNestingIsRefusedWithTheLimit) {
   EXPECT_NE(o.find("nested deeper"), std::string::npos) << o.substr(0, 300);
 }
 
+TEST(SceneIoHostile, SetValueThatIsNotUtf8IsRefused) {
+  // Found by fuzz_scene (fuzz/regressions/scene/set_invalid_utf8.bin): the error message's dump
+  // of the value threw nlohmann's type_error 316 and std::terminate ended the process.
+  const std::string e = textError("{}", {parseOverride("physics.solver=tree\x9b\x91")});
+  EXPECT_NE(e.find("--set physics.solver: the value is not valid UTF-8 text"), std::string::npos) << e;
+  EXPECT_NE(textError("{}", {parseOverride("name=\xff")}).find("not valid UTF-8"), std::string::npos);
+}
+
 TEST(SceneIoHostile, NumberOverflowNamesFileAndField) {
   const std::string e = textError(R"({"physics": {"gravity": [0, 0, -9.81], "dt": -1e400}})");
   EXPECT_NE(e.find("hostile.json: physics.dt: number overflow parsing '-1e400'"), std::string::npos) << e;
