@@ -62,9 +62,7 @@ void SceneDraw::draw(const Sim& sim, Renderer& renderer) const {
   const Scene& scene = sim.scene();
   const World& world = sim.world();
   for (size_t i = 0; i < sim.hoppers().size(); ++i) {
-    const bool listed = !(scene.hopper && i == 0);
-    const HopperSection& look = listed ? scene.hoppers[i - (scene.hopper ? 1 : 0)] : *scene.hopper;
-    if (sim.hoppers()[i]->built()) drawHopper(*sim.hoppers()[i], look, world, renderer);
+    if (sim.hoppers()[i]->built()) drawHopper(*sim.hoppers()[i], hopperSection(scene, i), world, renderer);
   }
   if (sim.headBody() >= 0 && head_.valid()) {
     const RigidBody& b = world.body(sim.headBody());

@@ -226,4 +226,10 @@ struct Scene {
   }
 };
 
+// The section of the scene's i-th hopper, in the order Sim builds them: `hopper`, then `hoppers`.
+inline const HopperSection& hopperSection(const Scene& scene, size_t i) {
+  if (scene.hopper) return i == 0 ? *scene.hopper : scene.hoppers[i - 1];
+  return scene.hoppers[i];
+}
+
 }  // namespace ponyhop
