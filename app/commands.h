@@ -11,6 +11,7 @@ void addSceneDocCommand(CLI::App& app, int& exit_code);
 void addRenderCommand(CLI::App& app, int& exit_code);
 void addSimCommand(CLI::App& app, int& exit_code);
 void addBenchCommand(CLI::App& app, int& exit_code);  // app/cmd_bench.cpp: speed against accuracy
+void addBenchRenderCommand(CLI::App& app, int& exit_code);  // app/cmd_bench_render.cpp: render time per pass
 #ifdef PONYHOP_WINDOW
 void addRunCommand(CLI::App& app, int& exit_code);  // app/cmd_run.cpp: the window with the tuning panel
 #endif

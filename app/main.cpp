@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   ponyhop::addRenderCommand(app, exit_code);
   ponyhop::addSimCommand(app, exit_code);
   ponyhop::addBenchCommand(app, exit_code);
+  ponyhop::addBenchRenderCommand(app, exit_code);
 #ifdef PONYHOP_WINDOW
   ponyhop::addRunCommand(app, exit_code);
 #endif

@@ -659,6 +659,8 @@ void Panel::drawReadouts() {
     ImGui::Text("Hopper phase: %s", sim_.hopperPhase().c_str());
   }
   ImGui::TextDisabled("Frame: physics %.2f  render %.2f  panel %.2f ms", r.physics_ms, r.render_ms, r.panel_ms);
+  ImGui::TextDisabled("View: %s  (shadow %.1f  main %.1f  AA %.1f ms)", r.view_draft ? "draft, moving" : "final",
+                      r.shadow_ms, r.main_ms, r.aa_ms);
 }
 
 void Panel::drawPresets() {

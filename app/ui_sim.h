@@ -64,6 +64,9 @@ struct Readouts {
   History rtf;            // achieved real-time factor (simulated s per wall s / requested speed)
   // Smoothed per-stage wall times of a displayed frame (ms).
   double physics_ms = 0.0, render_ms = 0.0, panel_ms = 0.0, frame_ms = 0.0;
+  // The scene view's last frame: draft while something moves, final when all is still; its passes (ms).
+  bool view_draft = false;
+  double shadow_ms = 0.0, main_ms = 0.0, aa_ms = 0.0;
   void clear();
 };
 

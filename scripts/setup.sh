@@ -18,6 +18,7 @@ PACKAGES=(
   ffmpeg                               # --video: H.264 encoding
   gnuplot-nox                          # bench plots
   xvfb xauth                           # window tests without a display
+  xdotool                              # the window test moves the mouse and presses keys in Xvfb
 )
 
 missing=()
