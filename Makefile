@@ -1,15 +1,23 @@
 # ponyhop: the two commands of the README's quick start, and a few for developers.
 #   make demo   installs what is missing, builds, renders the demo scenes into out/demo/
 #   make test   installs what is missing, builds, runs every test
-# CI (.ci/run) runs `make test`, then `make test-asan`: the same tests built with ASan+UBSan.
+# CI (.ci/run) runs `make test`, `make test-asan` (the same tests built with ASan+UBSan),
+# `make test-tsan`, `make release` and a bounded `make fuzz`.
 BUILD      ?= build
 ASAN_BUILD ?= build-asan
+TSAN_BUILD ?= build-tsan
+FUZZ_BUILD ?= build-fuzz
+RELEASE_BUILD ?= build-release
+FUZZ_SECONDS ?= 60
+SOAK_SECONDS ?= 600
 JOBS       ?= $(shell nproc)
 PONYHOP    := $(BUILD)/ponyhop
 DEMO_SCENES ?= ponytail hopper
 DEMO_FRAMES ?= 300
 
-.PHONY: all setup build demo test test-asan update-snapshots bench bench-quick clean
+PREFIX     ?= /usr/local
+
+.PHONY: all setup build install demo test test-asan test-tsan release fuzz soak format format-check update-snapshots bench bench-quick clean
 
 all: build
 
@@ -20,6 +28,10 @@ build: setup
 	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 	@cmake --build $(BUILD) -j$(JOBS)
 
+# The executable, its assets and docs under PREFIX (bin/, share/ponyhop/, share/doc/ponyhop/).
+install: build
+	@cmake --install $(BUILD) --prefix $(PREFIX)
+
 demo: build
 	@for s in $(DEMO_SCENES); do \
 	  if [ -f assets/scenes/$$s.json ]; then \
@@ -27,6 +39,7 @@ demo: build
 	    echo "demo: frames in out/demo/$$s/, video out/demo/$$s.mp4"; \
 	  fi; \
 	done
+	@echo "demo: the executable is $(PONYHOP) (make install PREFIX=... puts it in PREFIX/bin)"
 
 # Every test, with the normal build (about 5 min from a fresh clone on 2 cores, 30 s of it tests).
 test: build
@@ -44,15 +57,69 @@ test-asan: setup
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --output-on-failure -j$(JOBS)
 
+# The tests that run threads (the frame writer's encoder threads, renders with signals and locks)
+# under ThreadSanitizer, in their own build of only what they need.
+TSAN_TESTS := frame_writer_test render_command_test output_safety_test
+test-tsan: setup
+	@cmake -S . -B $(TSAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPONYHOP_TSAN=ON -DPONYHOP_WINDOW=OFF >/dev/null
+	@cmake --build $(TSAN_BUILD) -j$(JOBS) --target ponyhop $(TSAN_TESTS)
+	@cd $(TSAN_BUILD) && TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
+	  ctest --output-on-failure -j$(JOBS) -R '^(FrameWriter|Video|RenderCommand|OutputSafety)\.'
+
+# What a user gets from a plain `cmake -DCMAKE_BUILD_TYPE=Release` (GCC at -O3, warnings as
+# errors): it must build.
+release: setup
+	@cmake -S . -B $(RELEASE_BUILD) -DCMAKE_BUILD_TYPE=Release >/dev/null
+	@cmake --build $(RELEASE_BUILD) -j$(JOBS)
+
+# The libFuzzer targets of fuzz/ (clang, ASan + UBSan), each for FUZZ_SECONDS, starting from the
+# seed corpus in fuzz/corpus/NAME and the regression inputs in fuzz/regressions/NAME; new inputs
+# go to $(FUZZ_BUILD)/corpus/NAME, a crash to $(FUZZ_BUILD)/crash-* (copy it into
+# fuzz/regressions/NAME once fixed). docs/RELIABILITY.md.
+FUZZ_TARGETS := scene clip png mesh
+fuzz:
+	@bash scripts/setup.sh --fuzz
+	@CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPONYHOP_FUZZ=ON \
+	  -DPONYHOP_TESTS=OFF -DPONYHOP_WINDOW=OFF >/dev/null
+	@cmake --build $(FUZZ_BUILD) -j$(JOBS) --target $(addprefix fuzz_,$(FUZZ_TARGETS))
+	@for t in $(FUZZ_TARGETS); do \
+	  mkdir -p $(FUZZ_BUILD)/corpus/$$t; \
+	  echo "fuzz: $$t for $(FUZZ_SECONDS) s"; \
+	  ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  $(FUZZ_BUILD)/fuzz/fuzz_$$t $(FUZZ_BUILD)/corpus/$$t fuzz/corpus/$$t fuzz/regressions/$$t \
+	    -max_total_time=$(FUZZ_SECONDS) -max_len=65536 -timeout=30 -rss_limit_mb=3072 \
+	    -artifact_prefix=$(FUZZ_BUILD)/ -print_final_stats=1 2>$(FUZZ_BUILD)/fuzz_$$t.log \
+	    || { tail -50 $(FUZZ_BUILD)/fuzz_$$t.log; exit 1; }; \
+	  grep -E "^stat::number_of_executed_units|^stat::peak_rss_mb|cov: " $(FUZZ_BUILD)/fuzz_$$t.log | tail -3; \
+	done
+
+# Long runs stay bounded: every shipped scene simulated for SOAK_SECONDS of wall time, max RSS
+# printed at 1 and 10 minutes (scripts/soak.sh).
+soak: build
+	@bash scripts/soak.sh $(PONYHOP) $(SOAK_SECONDS)
+
+# The code follows .clang-format (Debian's clang-format): `make format` rewrites every tracked C++
+# file in place, `make format-check` (run by CI) lists the files that differ and fails.
+FORMAT_FILES = $(shell git ls-files '*.cpp' '*.h')
+format:
+	@clang-format -i $(FORMAT_FILES)
+format-check:
+	@command -v clang-format >/dev/null || bash scripts/setup.sh --format
+	@bad=$$(for f in $(FORMAT_FILES); do clang-format --dry-run -Werror "$$f" >/dev/null 2>&1 || echo "$$f"; done); 	  if [ -n "$$bad" ]; then echo "format-check: not formatted (run make format):"; echo "$$bad"; exit 1; fi; 	  echo "format-check: $(words $(FORMAT_FILES)) files follow .clang-format"
+
 # Re-render every golden image and physics fingerprint on purpose (never done by tests or CI).
 update-snapshots: build
 	@PONYHOP_UPDATE_SNAPSHOTS=1 $(BUILD)/tests/snapshot_test
 	@echo "goldens rewritten in tests/snapshots/: review them with git diff before committing"
 
-# The report in docs/bench/ (about 20 min on 2 cores): the whole grid with 10 s long runs, then
+# The report in docs/bench/ (about 20 min on 2 cores), with the peer engines installed first
+# (setup.sh --bench: MuJoCo, Bullet, ODE, DART): the whole grid with 10 s long runs, then
 # the fixed-anchor chains at dt = 1/240 s for 60 s (energy drift). `ponyhop bench` alone runs 60 s
 # long runs on the whole grid (about an hour).
-bench: build
+bench:
+	@bash scripts/setup.sh --bench
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+	@cmake --build $(BUILD) -j$(JOBS)
 	@$(PONYHOP) bench --out docs/bench --long-fixed 10 --long-shake 5 --long-hopper 5
 	@$(PONYHOP) bench --out docs/bench/long60 --links 8,32 --anchors fixed --dts 240 --long-fixed 60 --no-hopper --no-scaling
 
@@ -60,4 +127,4 @@ bench-quick: build
 	@$(PONYHOP) bench --quick --out $(BUILD)/bench-quick
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD) $(TSAN_BUILD) $(FUZZ_BUILD) $(RELEASE_BUILD)

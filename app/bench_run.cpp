@@ -5,7 +5,7 @@
 #include <cmath>
 #include <memory>
 
-#include "engine/scene_runtime.h"
+#include "sim/sim.h"
 
 namespace ponyhop {
 namespace {
@@ -18,26 +18,10 @@ double seconds(Clock::duration d) { return std::chrono::duration<double>(d).coun
 
 long stepsFor(double duration, double dt) { return std::lround(duration / dt); }
 
-std::unique_ptr<SceneRuntime> build(const BenchCase& c, const Method& m, double dt) {
+std::unique_ptr<Sim> build(const BenchCase& c, const Method& m, double dt) {
   std::vector<Override> o = c.overrides;
   for (Override& x : methodOverrides(m, dt)) o.push_back(std::move(x));
-  return std::make_unique<SceneRuntime>(loadScene(c.scene, o));
-}
-
-// The point whose trajectory is compared: the chain's free end, else the hopper's body centre.
-Eigen::Vector3d trackedPoint(const SceneRuntime& rt) {
-  if (const Chain* c = rt.chain()) return c->tip(rt.world());
-  if (const Hopper* h = rt.hopper()) return rt.world().body(h->model().body).x;
-  return Eigen::Vector3d::Zero();
-}
-
-Eigen::Vector3d trackedVelocity(const SceneRuntime& rt) {
-  if (const Chain* c = rt.chain()) {
-    const RigidBody& b = rt.world().body(c->links.back());
-    return b.v + b.w.cross(c->tip(rt.world()) - b.x);
-  }
-  if (const Hopper* h = rt.hopper()) return rt.world().body(h->model().body).v;
-  return Eigen::Vector3d::Zero();
+  return std::make_unique<Sim>(loadScene(c.scene, o));
 }
 
 // Samples of a run with step dt: every step when dt >= kBenchGrid, else every kBenchGrid.
@@ -75,14 +59,14 @@ Trajectory simulateTrajectory(const BenchCase& c, const Method& m, double dt, do
     t.status = rt->status();
     return t;
   }
-  t.p.push_back(trackedPoint(*rt));
+  t.p.push_back(rt->trackedPoint());
   const long n = stepsFor(duration, dt);
   for (long i = 1; i <= n; ++i) {
     if (!rt->step()) {
       t.status = rt->status();
       return t;
     }
-    if (i % every == 0) t.p.push_back(trackedPoint(*rt));
+    if (i % every == 0) t.p.push_back(rt->trackedPoint());
   }
   return t;
 }
@@ -108,7 +92,7 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   const long n = stepsFor(horizon, dt);
   const long every = sampleEvery(dt);
   r.steps = n;
-  std::unique_ptr<SceneRuntime> first;
+  std::unique_ptr<Sim> first;
   Trajectory traj;
   traj.stride = every * dt;
   std::vector<double> per_step;
@@ -121,7 +105,7 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
       r.reason = rt->status();
       return r;
     }
-    if (rep == 0) traj.p.push_back(trackedPoint(*rt));
+    if (rep == 0) traj.p.push_back(rt->trackedPoint());
     rt->world().resetStageTimes();
     Clock::duration total{};
     long taken = 0, substep_sum = 0;
@@ -132,7 +116,7 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
       ++taken;
       substep_sum += std::max(1, rt->world().lastSubsteps());
       if (!ok) break;
-      if (rep == 0 && i % every == 0) traj.p.push_back(trackedPoint(*rt));
+      if (rep == 0 && i % every == 0) traj.p.push_back(rt->trackedPoint());
     }
     per_step.push_back(seconds(total) / static_cast<double>(std::max(1L, taken)));
     stages.push_back(rt->world().stageTimes());
@@ -166,7 +150,8 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   r.err_max = err[1];
 
   // Long run: the first repeat continued (untimed) to the long duration.
-  SceneRuntime& rt = *first;
+  Sim& rt = *first;
+  r.tolerance_misses = rt.world().toleranceMisses();
   const long total_steps = stepsFor(c.long_duration, dt);
   const long sample = std::max(1L, std::lround(kDriftSample / dt));
   const double e0 = rt.chainEnergy();  // after the horizon: equal to the start's up to the drift so far
@@ -176,7 +161,7 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   double drift = std::abs(e0 - e_start);
   const auto observe = [&] {
     r.joint_drift = std::max(r.joint_drift, rt.maxJointError());
-    r.max_speed = std::max(r.max_speed, trackedVelocity(rt).norm());
+    r.max_speed = std::max(r.max_speed, rt.trackedVelocity().norm());
     if (c.conservative) drift = std::max(drift, std::abs(rt.chainEnergy() - e_start));
   };
   observe();
@@ -202,8 +187,8 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   if (r.joint_drift > 1e-2) std::snprintf(why, sizeof why, "joint error %.3g m > 1 cm", r.joint_drift);
   else if (r.max_speed > 100.0) std::snprintf(why, sizeof why, "speed %.3g m/s > 100 m/s", r.max_speed);
   else if (c.conservative && r.energy_rel > 1.0) std::snprintf(why, sizeof why, "energy drift %.3g x E0", r.energy_rel);
-  else if (rt.hopper() && !(trackedPoint(rt).z() > 0.2 && trackedPoint(rt).z() < 5.0)) {
-    std::snprintf(why, sizeof why, "hopper body at z = %.3g m (fell or flew off)", trackedPoint(rt).z());
+  else if (rt.hopper() && !(rt.trackedPoint().z() > 0.2 && rt.trackedPoint().z() < 5.0)) {
+    std::snprintf(why, sizeof why, "hopper body at z = %.3g m (fell or flew off)", rt.trackedPoint().z());
   }
   if (why[0]) {
     r.long_status = "unbounded";
@@ -212,13 +197,36 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   return r;
 }
 
+double timeSteps(const std::function<bool()>& step, double budget, int& steps, const std::function<void()>& after_warmup) {
+  // One untimed-for-the-result step: warms caches and estimates the cost.
+  auto t0 = Clock::now();
+  bool ok = step();
+  const double estimate = std::max(1e-7, seconds(Clock::now() - t0));
+  if (after_warmup) after_warmup();
+  const int blocks = 5;
+  const long per_block = std::clamp(std::lround(budget / blocks / estimate), 1L, 2000L);
+  std::vector<double> times;
+  steps = 0;
+  for (int b = 0; b < blocks && ok; ++b) {
+    if (b > 0 && estimate * per_block * b > budget) break;  // slow: fewer blocks
+    t0 = Clock::now();
+    for (long i = 0; i < per_block && (ok = step()); ++i) ++steps;
+    times.push_back(seconds(Clock::now() - t0) / per_block);
+  }
+  return median(times);
+}
+
+std::vector<Override> scalingOverrides(int links) {
+  return {{"chain.links", std::to_string(links)}, {"anchor.motion", "fixed"}, {"chain.direction", "[0,0,-1]"}};
+}
+
 ScalingResult benchScaling(const std::string& scene, const std::string& solver, int links, double budget) {
   ScalingResult s;
   BenchCase c;
   c.scene = scene;
   // Hanging straight down at rest: the same work per step as any motion, and no whip to stop
   // an explicit step, so every N runs its steps.
-  c.overrides = {{"chain.links", std::to_string(links)}, {"anchor.motion", "fixed"}, {"chain.direction", "[0,0,-1]"}};
+  c.overrides = scalingOverrides(links);
   const Method m{solver, "symplectic_euler", "none"};
   auto rt = build(c, m, kBenchGrid);
   if (!rt->ok()) {
@@ -226,25 +234,12 @@ ScalingResult benchScaling(const std::string& scene, const std::string& solver, 
     s.reason = rt->status();
     return s;
   }
-  // One untimed-for-the-result step: warms caches and estimates the cost.
-  auto t0 = Clock::now();
-  rt->step();
-  const double estimate = std::max(1e-7, seconds(Clock::now() - t0));
-  const int blocks = 5;
-  const long per_block = std::clamp(std::lround(budget / blocks / estimate), 1L, 2000L);
-  std::vector<double> times;
-  rt->world().resetStageTimes();
-  for (int b = 0; b < blocks && rt->ok(); ++b) {
-    if (b > 0 && estimate * per_block * b > budget) break;  // slow: fewer blocks
-    t0 = Clock::now();
-    for (long i = 0; i < per_block && rt->step(); ++i) ++s.steps;
-    times.push_back(seconds(Clock::now() - t0) / per_block);
-  }
+  const double per_step = timeSteps([&] { return rt->step(); }, budget, s.steps, [&] { rt->world().resetStageTimes(); });
   if (!rt->ok()) {
     s.status = "failed";
     s.reason = rt->status();
   }
-  s.us_per_step = 1e6 * median(times);
+  s.us_per_step = 1e6 * per_step;
   s.joint_forces_us = 1e6 * rt->world().stageTimes()[Stage::JointForces] / std::max(1, s.steps);
   return s;
 }

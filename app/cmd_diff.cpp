@@ -6,6 +6,9 @@
 #include <string>
 
 #include "app/commands.h"
+#include "app/output_safety.h"
+#include "app/scene_args.h"
+#include "sim/scene_io.h"
 #include "engine/image_diff.h"
 
 namespace ponyhop {
@@ -37,6 +40,15 @@ CLI::Validator unitRange(const std::string& what) {
 
 int runDiff(const DiffArgs& args) {
   std::string err;
+  if (!args.out.empty()) {
+    // Before reading anything: never the golden, never a device, a folder that takes the file.
+    try {
+      checkOutputFile("--out", args.out, {args.expected, args.actual});
+    } catch (const SceneError& e) {
+      std::fprintf(stderr, "ponyhop diff: %s\n", e.what());
+      return 2;
+    }
+  }
   const Image expected = loadPng(args.expected, &err);
   if (expected.empty()) {
     std::fprintf(stderr, "ponyhop diff: expected image %s\n", err.c_str());
@@ -92,7 +104,8 @@ void addDiffCommand(CLI::App& app, int& exit_code) {
       "Exit 0 pass, 1 differ or sizes differ, 2 unreadable file.");
   cmd->add_option("expected", args->expected, "Expected (golden) PNG")->required();
   cmd->add_option("actual", args->actual, "Actual PNG")->required();
-  cmd->add_option("--out", args->out, "Write the diff image here (red: differs, yellow: anti-aliasing)");
+  cmd->add_option("--out", args->out, "Write the diff image here (red: differs, yellow: anti-aliasing)")
+      ->check(nonEmpty());
   cmd->add_option("--threshold", args->options.threshold,
                   "Per-pixel colour threshold t in [0, 1]: a pixel differs when its YIQ distance > 35215 t^2")
       ->check(unitRange("--threshold"))

@@ -1,23 +1,25 @@
 // `ponyhop render SCENE [--frames N] [--fps F] [--size WxH] [--out DIR] [--video F.mp4] [--set k=v]...`
 //
-// Output safety: every input is validated and the scene is built before anything is written.
-// Frames go to a staging folder beside DIR (each one written to a temporary name and renamed),
-// and only when every frame is done are they moved into DIR, so a failed or interrupted run
-// never overwrites good output. PNG encoding runs on worker threads and overlaps rendering.
+// Output safety (app/output_safety.h, docs/RELIABILITY.md): every input and output path is
+// checked before anything is written; frames go to a staging folder beside DIR under a lock, and
+// only a run that succeeded swaps it in for DIR in one rename; SIGINT/SIGTERM stop cleanly.
+// PNG encoding runs on worker threads and overlaps rendering.
+#include <signal.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <regex>
 
 #include "app/commands.h"
+#include "app/render_range.h"
+#include "app/output_safety.h"
 #include "app/ui_headless.h"
 #include "engine/render_session.h"
 #include "app/scene_args.h"
 #include "engine/frame_writer.h"
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 #include "engine/video.h"
 
 namespace ponyhop {
@@ -38,6 +40,9 @@ struct RenderArgs {
   std::string out;
   std::string video;
   bool ui = false;
+  std::string range;   // --range A:B (app/render_range.h)
+  bool resume = false;
+  bool transparent = false;
 };
 
 // Progress on stderr: rewritten in place on a terminal, a plain line every ~10 % otherwise.
@@ -63,29 +68,27 @@ class Progress {
   bool tty_;
 };
 
-// Moves the staged frames into `out`, then removes frames of an earlier, longer run.
-bool publishFrames(const std::string& staging, const std::string& out, int frames, std::string* err) {
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) {
-    *err = out + ": cannot create the output folder: " + ec.message();
-    return false;
+int interrupted(int sig, const std::string& out) {
+  std::fprintf(stderr, "\nponyhop render: stopped by %s; the staged frames were removed, %s is untouched\n",
+               sig == SIGINT ? "SIGINT" : "SIGTERM", out.c_str());
+  return InterruptGuard::exitCode(sig);
+}
+
+// --range / --resume (app/render_range.h): a render farm's chunk or a resumed run, straight into
+// `out` frame by frame; then the video of the whole folder when asked (not with --range).
+int renderChunkCommand(const Scene& scene, const std::string& out, const FrameRange& range, const RenderArgs& args) {
+  RenderSession session(scene);
+  const int rc = renderChunk(session, scene.render.fps, out, range, args.resume);
+  if (rc != 0 || args.video.empty()) return rc;
+  VideoOptions vo;
+  vo.fps = scene.render.fps;
+  std::string err;
+  if (!encodeVideo(out, args.video, vo, &err)) {
+    std::fprintf(stderr, "ponyhop render: %s\n", err.c_str());
+    return 1;
   }
-  for (int i = 0; i < frames; ++i) {
-    fs::rename(FrameWriter::framePath(staging, i), FrameWriter::framePath(out, i), ec);
-    if (ec) {
-      *err = FrameWriter::framePath(out, i) + ": " + ec.message();
-      return false;
-    }
-  }
-  const std::regex frame_re("frame_(\\d{5,})\\.png");
-  for (const auto& entry : fs::directory_iterator(out, ec)) {
-    std::smatch m;
-    const std::string name = entry.path().filename().string();
-    if (std::regex_match(name, m, frame_re) && std::stoi(m[1]) >= frames) fs::remove(entry.path(), ec);
-  }
-  fs::remove_all(staging, ec);
-  return true;
+  std::fprintf(stderr, "render: video %s\n", args.video.c_str());
+  return 0;
 }
 
 int runRender(const RenderArgs& args) {
@@ -102,15 +105,34 @@ int runRender(const RenderArgs& args) {
     scene.render.width = w;
     scene.render.height = h;
   }
+  if (args.transparent) scene.render.transparent = true;
   validateScene(scene, args.scene.path);
   const std::string out = args.out.empty() ? "out/" + fs::path(args.scene.path).stem().string() : args.out;
   std::error_code ec;
-  if (fs::exists(out, ec) && !fs::is_directory(out, ec)) {
-    throw SceneError("--out " + out + ": exists and is not a folder");
+  if (!args.video.empty()) {
+    // Checked before any rendering: writable, not an input, not inside the frames folder (which
+    // is replaced whole).
+    checkOutputFile("--video", args.video, sceneInputs(scene));
+    const fs::path vdir = fs::weakly_canonical(fs::absolute(fs::path(args.video), ec).parent_path(), ec);
+    const fs::path odir = fs::weakly_canonical(fs::absolute(fs::path(out), ec), ec);
+    if (vdir == odir || samePath(args.video, out)) {
+      throw SceneError("--video " + args.video + ": is inside the frames folder " + out +
+                       ", which each render replaces whole; put the video beside it");
+    }
+    if (!ffmpegAvailable()) throw SceneError("--video " + args.video + ": ffmpeg is not installed (apt-get install ffmpeg)");
   }
-  if (!args.video.empty() && !ffmpegAvailable()) {
-    throw SceneError("--video " + args.video + ": ffmpeg is not installed (apt-get install ffmpeg)");
+  std::string video_err;
+  if (!args.video.empty() && videoContainer(args.video, &video_err).empty()) throw SceneError("--video " + video_err);
+  const bool chunk = !args.range.empty() || args.resume;
+  if (chunk && args.ui) throw SceneError("--range/--resume: not with --ui (the panel's plots depend on every frame before)");
+  if (!args.range.empty() && !args.video.empty()) {
+    throw SceneError("--range with --video: a chunk is part of a video; encode the merged folder with `ponyhop video`");
   }
+  const FrameRange range =
+      args.range.empty() ? FrameRange{0, scene.render.frames - 1} : parseFrameRange(args.range, scene.render.frames);
+  if (chunk) return renderChunkCommand(scene, out, range, args);  // without the folder lock: chunks share DIR
+  InterruptGuard interrupt;
+  FrameFolder folder("--out", out);  // checks DIR, takes its lock, cleans stale staging
 
   // --ui: the tuning panel beside the scene (the frame grows by the panel's width); the panel is
   // driven headless (app/ui_headless.h), the physics is the same stepping to the same times.
@@ -126,14 +148,7 @@ int runRender(const RenderArgs& args) {
   const auto simulateTo = [&](double t) { return ui ? ui->sim().advanceTo(t) : session->simulateTo(t); };
   const auto status = [&]() { return ui ? ui->sim().stopMessage() : session->status(); };
   const int frames = scene.render.frames;
-  const std::string staging = out + ".partial-" + std::to_string(getpid());
-  fs::remove_all(staging, ec);
-  fs::create_directories(staging, ec);
-  if (ec) {
-    std::fprintf(stderr, "ponyhop render: %s: cannot create a staging folder: %s\n", staging.c_str(),
-                 ec.message().c_str());
-    return 1;
-  }
+  const std::string& staging = folder.staging();
 
   // 2. Simulate, render, hand the pixels to the encoder threads.
   FrameWriter writer(staging, 2, 4);
@@ -143,13 +158,13 @@ int runRender(const RenderArgs& args) {
   const auto t_start = Clock::now();
   std::string err;
   for (int i = 0; i < frames; ++i) {
+    if (InterruptGuard::signal()) break;
     const double t = i / scene.render.fps;
     auto t0 = Clock::now();
     const bool sim_ok = simulateTo(t);
     sim_ms += msSince(t0);
     if (!sim_ok) {
       writer.finish();
-      fs::remove_all(staging, ec);
       std::fprintf(stderr, "\nponyhop render: the simulation stopped before frame %d: %s\n"
                            "  no frame was written; %s is untouched\n",
                    i, status().c_str(), out.c_str());
@@ -179,25 +194,47 @@ int runRender(const RenderArgs& args) {
   const auto t_flush = Clock::now();
   const bool written = writer.finish(&err);
   wait_ms += msSince(t_flush);
-  if (!written || !publishFrames(staging, out, frames, &err)) {
-    fs::remove_all(staging, ec);
-    std::fprintf(stderr, "ponyhop render: writing frames failed: %s\n", err.c_str());
+  if (const int sig = InterruptGuard::signal()) return interrupted(sig, out);
+  if (!written) {
+    std::fprintf(stderr, "ponyhop render: writing frames failed: %s\n  %s is untouched\n", err.c_str(), out.c_str());
     return 1;
   }
   const double total_s = msSince(t_start) / 1000.0;
 
-  // 3. Video, then the summary.
+  // 3. The video from the staged frames (under a temporary name), then the frames swap in for
+  // the old ones in one rename, then the video takes its name: nothing is replaced before
+  // everything succeeded.
   double video_s = 0.0;
+  const std::string video_tmp = args.video + ".partial-" + std::to_string(getpid());
   if (!args.video.empty()) {
     const auto t0 = Clock::now();
     VideoOptions vo;
     vo.fps = scene.render.fps;
-    fs::create_directories(fs::path(args.video).parent_path().empty() ? "." : fs::path(args.video).parent_path(), ec);
-    if (!encodeVideo(out, args.video, vo, &err)) {
-      std::fprintf(stderr, "ponyhop render: %s\n", err.c_str());
+    const bool encoded = encodeVideo(staging, video_tmp, vo, &err);
+    if (const int sig = InterruptGuard::signal()) {
+      fs::remove(video_tmp, ec);
+      return interrupted(sig, out);
+    }
+    if (!encoded) {
+      fs::remove(video_tmp, ec);
+      std::fprintf(stderr, "ponyhop render: %s\n  %s is untouched\n", err.c_str(), out.c_str());
       return 1;
     }
     video_s = msSince(t0) / 1000.0;
+  }
+  if (!folder.publish(&err)) {
+    if (!args.video.empty()) fs::remove(video_tmp, ec);
+    std::fprintf(stderr, "ponyhop render: %s\n", err.c_str());
+    return 1;
+  }
+  if (!args.video.empty()) {
+    fs::rename(video_tmp, args.video, ec);
+    if (ec) {
+      fs::remove(video_tmp, ec);
+      std::fprintf(stderr, "ponyhop render: %s: %s (the frames are in %s)\n", args.video.c_str(), ec.message().c_str(),
+                   out.c_str());
+      return 1;
+    }
   }
   std::fprintf(stderr,
                "render: %d frames %dx%d (%d samples) in %.2f s = %.1f ms/frame: simulate %.2f, render %.1f, "
@@ -219,11 +256,17 @@ void addRenderCommand(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand("render", "Render a scene headless into a PNG sequence (and a video)");
   args->scene.add(cmd);
   cmd->add_option("--frames", args->frames, "Number of frames (default: render.frames)")->check(CLI::Range(1, 1000000));
-  cmd->add_option("--fps", args->fps, "Frames per second (default: render.fps)")->check(CLI::Range(1.0, 1000.0));
-  cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT (default: render.width x render.height)");
-  cmd->add_option("--out", args->out, "Output folder (default: out/SCENE_NAME)");
-  cmd->add_option("--video", args->video, "Also encode an H.264 mp4 (ffmpeg)");
+  cmd->add_option("--fps", args->fps, "Frames per second (default: render.fps)")->check(finiteIn(1.0, 1000.0));
+  cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT (default: render.width x render.height)")
+      ->check(nonEmpty());
+  cmd->add_option("--out", args->out, "Output folder (default: out/SCENE_NAME); replaced whole by a run that succeeds")
+      ->check(nonEmpty());
+  cmd->add_option("--video", args->video, "Also encode a video: .mp4, .mov (H.264), .webm (VP9) or .gif (ffmpeg)")->check(nonEmpty());
   cmd->add_flag("--ui", args->ui, "Draw the tuning panel beside the scene");
+  cmd->add_option("--range", args->range,
+                  "Render only frames A to B (A:B, inclusive), byte-identical to a full run's (docs/RENDER_FARM.md)");
+  cmd->add_flag("--resume", args->resume, "Keep frames already written whole in --out; render the others");
+  cmd->add_flag("--transparent", args->transparent, "No background: PNG frames with alpha (render.transparent)");
   cmd->callback([args, &exit_code] {
     try {
       exit_code = runRender(*args);

@@ -7,7 +7,7 @@
 #include "app/commands.h"
 #include "app/scene_args.h"
 #include "app/ui_window.h"
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 

@@ -1,13 +1,18 @@
 #include "app/scene_args.h"
 
-#include "engine/scene_io.h"
+#include <cstdio>
+
+#include "sim/data_dir.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 
 Scene SceneArgs::load() const {
   std::vector<Override> overrides;
   for (const auto& s : sets) overrides.push_back(parseOverride(s));
-  return loadScene(path, overrides);
+  Scene scene = loadScene(resolveSceneFile(path), overrides);
+  for (const auto& n : scene.notes) std::fprintf(stderr, "ponyhop: note: %s\n", n.c_str());
+  return scene;
 }
 
 }  // namespace ponyhop

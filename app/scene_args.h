@@ -2,12 +2,40 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <cstdio>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "engine/scene.h"
+#include "sim/scene.h"
 
 namespace ponyhop {
+
+// CLI11 checks for what CLI11 lets through: "" for a path or size (which would silently mean the
+// default) and NaN (which passes CLI::Range, every comparison being false).
+inline CLI::Validator nonEmpty() {
+  return CLI::Validator([](std::string& s) { return s.empty() ? std::string("must not be empty") : std::string(); },
+                        "NOT EMPTY");
+}
+inline CLI::Validator finiteIn(double lo, double hi) {
+  char range[64];
+  std::snprintf(range, sizeof(range), "[%g, %g]", lo, hi);
+  return CLI::Validator(
+      [lo, hi, r = std::string(range)](std::string& s) -> std::string {
+        double v = 0.0;
+        size_t used = 0;
+        try {
+          v = std::stod(s, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used == 0 || used != s.size() || !(v >= lo && v <= hi)) {
+          return "'" + s + "' is not a number in " + r;
+        }
+        return "";
+      },
+      "in " + std::string(range));
+}
 
 struct SceneArgs {
   std::string path;

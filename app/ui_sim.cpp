@@ -6,7 +6,8 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
-#include "engine/scene_io.h"
+#include "engine/asset_loader.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 namespace {
@@ -43,6 +44,8 @@ bool onlyHopperCommand(const Scene& a, const Scene& b) {
   }
   return a.hopper.has_value() && b.hopper.has_value();
 }
+
+std::unique_ptr<Sim> makeSim(const Scene& scene) { return std::make_unique<Sim>(scene, &assimpAssets()); }
 
 double smooth(double old_value, double sample) { return old_value <= 0.0 ? sample : 0.9 * old_value + 0.1 * sample; }
 
@@ -107,7 +110,7 @@ std::set<std::string> changedKeys(const Scene& a, const Scene& b) {
 // ---------------------------------------------------------------------------------------------
 
 LiveSim::LiveSim(const Scene& scene) : edited_(scene), applied_(scene) {
-  replaceRuntime(std::make_unique<SceneRuntime>(scene), 0.0);
+  replaceRuntime(makeSim(scene), 0.0);
 }
 
 LiveSim::~LiveSim() = default;  // the renderer frees its meshes itself when it goes
@@ -131,17 +134,8 @@ int LiveSim::linkCount() const {
 }
 
 Eigen::Vector3d LiveSim::followPoint() const {
-  // SceneRuntime::followPoint reads the scene it was built from; a live camera edit does not
-  // rebuild it, so the applied scene decides here.
-  const std::string& f = applied_.camera.follow;
-  const World& w = runtime_->world();
-  const Chain* c = runtime_->chain();
-  if (f == "chain" && c && !c->empty()) return w.body(c->links.front()).x;
-  if (f == "hopper" && hopperBody() >= 0) return w.body(hopperBody()).x;
-  if (runtime_->headBody() >= 0 && (f.empty() || f == "head")) return w.body(runtime_->headBody()).x;
-  if (hopperBody() >= 0) return w.body(hopperBody()).x;
-  if (c) return c->anchor(w);
-  return Eigen::Vector3d::Zero();
+  // The applied scene decides: a live camera edit does not rebuild the sim.
+  return runtime_->followPoint(applied_.camera.follow);
 }
 
 int LiveSim::hopperBody() const {
@@ -173,51 +167,13 @@ ApplyKind LiveSim::classify(const Scene& from, const Scene& to) const {
   return live ? ApplyKind::Live : ApplyKind::KeepState;
 }
 
-bool LiveSim::carryState(SceneRuntime& next) const {
-  const World& from = runtime_->world();
-  World& to = next.world();
-  if (!runtime_->ok() || from.bodyCount() != to.bodyCount() || from.joints().size() != to.joints().size()) return false;
-  // Reduced coordinates (physics.solver = featherstone) keep their own state: not carried.
-  if (from.reduced() || to.reduced()) return false;
-  for (int i = 0; i < to.bodyCount(); ++i) {
-    if (from.body(i).isDynamic() != to.body(i).isDynamic()) return false;
-  }
-  // The new world starts at its t = 0; its prescribed motions are shifted so that they continue
-  // from the current simulated time instead of jumping back to their start.
-  const double t = simTime();
-  for (int i = 0; i < to.bodyCount(); ++i) {
-    RigidBody& b = to.body(i);
-    const RigidBody& a = from.body(i);
-    if (b.isDynamic()) {
-      b.x = a.x;
-      b.q = a.q;
-      b.v = a.v;
-      b.w = a.w;
-    } else if (b.motion) {
-      KinematicMotion m = b.motion;
-      b.motion = [m, t](double s) { return m(s + t); };
-      b.setKinematicState(b.motion(0.0));
-    }
-  }
-  // The copied pose must still satisfy the joints (an edit that moved an attachment does not).
-  return to.maxJointError() < 1e-4;
-}
-
-void LiveSim::replaceRuntime(std::unique_ptr<SceneRuntime> next, double time_offset) {
-  releaseMeshes();
+void LiveSim::replaceRuntime(std::unique_ptr<Sim> next, double time_offset) {
+  draw_.release();
   runtime_ = std::move(next);
   time_offset_ = time_offset;
   perturbation_->body = -1;  // body indices belong to the old world
   runtime_->world().addForceElement(std::make_unique<Perturbation>(perturbation_));
   target_time_ = simTime();
-}
-
-void LiveSim::releaseMeshes() {
-  if (uploaded_to_) {
-    for (int id : mesh_ids_) uploaded_to_->release(MeshHandle{id});
-  }
-  uploaded_to_ = nullptr;
-  mesh_ids_.clear();
 }
 
 ApplyKind LiveSim::applyEdits() {
@@ -245,11 +201,11 @@ ApplyKind LiveSim::applyEdits() {
   } else if (kind != ApplyKind::Live) {
     const auto t0 = Clock::now();
     try {
-      auto next = std::make_unique<SceneRuntime>(edited_);
+      auto next = makeSim(edited_);
       const double t = simTime();
-      if (kind == ApplyKind::KeepState && !carryState(*next)) {
+      if (kind == ApplyKind::KeepState && !(runtime_->ok() && next->carryStateFrom(*runtime_, t))) {
         done = ApplyKind::Restart;
-        next = std::make_unique<SceneRuntime>(edited_);  // the copy above touched it
+        next = makeSim(edited_);  // the copy above touched it
       }
       replaceRuntime(std::move(next), done == ApplyKind::KeepState ? t : 0.0);
     } catch (const std::exception& e) {
@@ -266,7 +222,7 @@ ApplyKind LiveSim::applyEdits() {
 
 void LiveSim::reset() {
   try {
-    replaceRuntime(std::make_unique<SceneRuntime>(applied_), 0.0);
+    replaceRuntime(makeSim(applied_), 0.0);
   } catch (const std::exception& e) {
     error_ = e.what();  // the applied scene built before; only a vanished file gets here
     return;
@@ -370,7 +326,7 @@ bool LiveSim::save(const std::string& path) {
 bool LiveSim::load(const std::string& path) {
   try {
     Scene s = loadScene(path);
-    replaceRuntime(std::make_unique<SceneRuntime>(s), 0.0);
+    replaceRuntime(makeSim(s), 0.0);
     applied_ = edited_ = s;
   } catch (const std::exception& e) {
     error_ = e.what();
@@ -383,20 +339,8 @@ bool LiveSim::load(const std::string& path) {
 }
 
 void LiveSim::draw(Renderer& renderer) {
-  if (uploaded_to_ != &renderer) {
-    releaseMeshes();
-    // SceneRuntime does not hand out its mesh handles; the renderer numbers meshes in upload
-    // order, so two empty probes bracket the ids the runtime took. They are released when the
-    // runtime is replaced: a rebuild per slider tick must not pile up copies of the head.
-    const MeshHandle before = renderer.upload(MeshData{});
-    runtime_->upload(renderer);
-    const MeshHandle after = renderer.upload(MeshData{});
-    for (int id = before.id + 1; id < after.id; ++id) mesh_ids_.push_back(id);
-    renderer.release(before);
-    renderer.release(after);
-    uploaded_to_ = &renderer;
-  }
-  runtime_->draw(renderer);
+  draw_.upload(*runtime_, renderer);
+  draw_.draw(*runtime_, renderer);
   const PerturbationTarget& p = *perturbation_;
   if (p.active() && p.body < runtime_->world().bodyCount()) {
     const Eigen::Vector3d a = p.grabbedPoint(runtime_->world().body(p.body));

@@ -25,8 +25,9 @@
 #include <vector>
 
 #include "engine/renderer.h"
-#include "engine/scene.h"
-#include "engine/scene_runtime.h"
+#include "engine/scene_draw.h"
+#include "sim/scene.h"
+#include "sim/sim.h"
 #include "physics/perturbation.h"
 
 namespace ponyhop {
@@ -118,8 +119,8 @@ class LiveSim {
   const Readouts& readouts() const { return readouts_; }
   Readouts& readouts() { return readouts_; }
 
-  SceneRuntime& runtime() { return *runtime_; }
-  const SceneRuntime& runtime() const { return *runtime_; }
+  Sim& runtime() { return *runtime_; }
+  const Sim& runtime() const { return *runtime_; }
   // The point the follow camera tracks: the body named by the applied camera.follow ("head",
   // "chain", "hopper"), else the head, the chain's anchor, or the origin.
   Eigen::Vector3d followPoint() const;
@@ -145,15 +146,13 @@ class LiveSim {
   double lastRebuildMs() const { return rebuild_ms_; }
 
  private:
-  void replaceRuntime(std::unique_ptr<SceneRuntime> next, double time_offset);
-  void releaseMeshes();
+  void replaceRuntime(std::unique_ptr<Sim> next, double time_offset);
   ApplyKind classify(const Scene& from, const Scene& to) const;
-  bool carryState(SceneRuntime& next) const;
   void record(double sim_advanced, double wall_dt, double step_us);
 
   Scene edited_;
   Scene applied_;
-  std::unique_ptr<SceneRuntime> runtime_;
+  std::unique_ptr<Sim> runtime_;
   double time_offset_ = 0.0;  // simulated time of the runtime's t = 0 (a keep-state rebuild)
   std::shared_ptr<PerturbationTarget> perturbation_ = std::make_shared<PerturbationTarget>();
   std::string error_;
@@ -168,9 +167,8 @@ class LiveSim {
   Readouts readouts_;
   double rebuild_ms_ = 0.0;
 
-  // Meshes the runtime uploaded into `uploaded_to_` (released when the runtime is replaced).
-  Renderer* uploaded_to_ = nullptr;
-  std::vector<int> mesh_ids_;
+  // The running sim's meshes on the renderer (released when the sim is replaced).
+  SceneDraw draw_;
 };
 
 // The dotted keys whose value differs between two scenes ("chain.links", "physics.gravity").

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "engine/scene.h"
+#include "sim/scene.h"
 
 namespace ponyhop {
 

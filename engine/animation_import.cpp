@@ -4,7 +4,10 @@
 #include <assimp/Importer.hpp>
 #include <assimp/scene.h>
 #include <cmath>
+#include <cstring>
 #include <numbers>
+
+#include "engine/isolated.h"
 
 namespace ponyhop {
 
@@ -47,10 +50,104 @@ Eigen::Quaterniond rotationAt(const aiNodeAnim& ch, double t) {
   return toEigen(a.mValue).slerp(u, toEigen(b.mValue)).normalized();
 }
 
+std::optional<ImportedAnimation> importHere(const std::string& path, const AnimationImportOptions& opt,
+                                           std::string* error);
+
+// ImportedAnimation through the pipe from the import process.
+void putBytes(std::string& s, const void* p, size_t n) { s.append(static_cast<const char*>(p), n); }
+void putString(std::string& s, const std::string& v) {
+  const uint64_t n = v.size();
+  putBytes(s, &n, sizeof(n));
+  s += v;
+}
+struct Reader {
+  const std::string& s;
+  size_t at = 0;
+  bool ok = true;
+  void get(void* p, size_t n) {
+    if (!ok || s.size() - at < n) {
+      ok = false;
+      return;
+    }
+    std::memcpy(p, s.data() + at, n);
+    at += n;
+  }
+  std::string string() {
+    uint64_t n = 0;
+    get(&n, sizeof(n));
+    if (!ok || n > s.size() - at) {
+      ok = false;
+      return {};
+    }
+    std::string v = s.substr(at, size_t(n));
+    at += size_t(n);
+    return v;
+  }
+};
+
+std::string serialize(const ImportedAnimation& a) {
+  std::string s;
+  putString(s, a.animation_name);
+  putString(s, a.node_name);
+  putBytes(s, &a.ticks_per_second, sizeof(double));
+  putBytes(s, &a.position_keys, sizeof(int));
+  putBytes(s, &a.rotation_keys, sizeof(int));
+  const uint64_t n = a.samples.size();
+  putBytes(s, &n, sizeof(n));
+  for (const PoseSample& p : a.samples) {
+    const double v[8] = {p.t, p.position.x(), p.position.y(), p.position.z(),
+                         p.rotation.w(), p.rotation.x(), p.rotation.y(), p.rotation.z()};
+    putBytes(s, v, sizeof(v));
+  }
+  return s;
+}
+
+bool deserialize(const std::string& s, ImportedAnimation& a) {
+  Reader r{s};
+  a.animation_name = r.string();
+  a.node_name = r.string();
+  r.get(&a.ticks_per_second, sizeof(double));
+  r.get(&a.position_keys, sizeof(int));
+  r.get(&a.rotation_keys, sizeof(int));
+  uint64_t n = 0;
+  r.get(&n, sizeof(n));
+  if (!r.ok || n > (s.size() - r.at) / (8 * sizeof(double))) return false;
+  a.samples.resize(size_t(n));
+  for (PoseSample& p : a.samples) {
+    double v[8];
+    r.get(v, sizeof(v));
+    p.t = v[0];
+    p.position = Eigen::Vector3d(v[1], v[2], v[3]);
+    p.rotation = Eigen::Quaterniond(v[4], v[5], v[6], v[7]);
+  }
+  return r.ok && r.at == s.size();
+}
+
 }  // namespace
 
 std::optional<ImportedAnimation> importAnimation(const std::string& path, const AnimationImportOptions& opt,
                                                  std::string* error) {
+  // assimp runs in a child process with a time and memory limit (engine/isolated.h), as for
+  // meshes: a file that crashes or hangs it costs a message, not ponyhop.
+  std::string bytes, e;
+  const bool ok = runIsolated(
+      [&](std::string& result, std::string& err) {
+        const std::optional<ImportedAnimation> a = importHere(path, opt, &err);
+        if (!a) return false;
+        result = serialize(*a);
+        return true;
+      },
+      importLimits(), &bytes, &e);
+  if (!ok) return fail(error, e.rfind(path, 0) == 0 ? e : path + ": the importer (assimp) " + e);
+  ImportedAnimation a;
+  if (!deserialize(bytes, a)) return fail(error, path + ": the import process returned inconsistent data");
+  return a;
+}
+
+namespace {
+
+std::optional<ImportedAnimation> importHere(const std::string& path, const AnimationImportOptions& opt,
+                                           std::string* error) {
   Assimp::Importer importer;
   const aiScene* scene = importer.ReadFile(path, 0);
   if (!scene) return fail(error, path + ": cannot read the animation: " + importer.GetErrorString());
@@ -137,6 +234,8 @@ std::optional<ImportedAnimation> importAnimation(const std::string& path, const 
   }
   return out;
 }
+
+}  // namespace
 
 std::optional<KeyframeTrack> importAnimationTrack(const std::string& path, const AnimationImportOptions& options,
                                                   const TrackOptions& track, std::string* error) {

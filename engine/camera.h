@@ -4,7 +4,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "engine/scene.h"
+#include "sim/scene.h"
 
 namespace ponyhop {
 

@@ -51,8 +51,6 @@ static const bool kFilterForced = [] {
   stbi_write_force_png_filter = 1;
   return true;
 }();
-// stb_image: the implementation comes from libstb.a.
-#include <stb_image.h>
 
 namespace ponyhop {
 
@@ -104,17 +102,8 @@ bool writePngAtomic(const std::string& path, int width, int height, const uint8_
 }
 
 std::optional<Image> readPng(const std::string& path, std::string* err) {
-  int w = 0, h = 0, n = 0;
-  unsigned char* data = stbi_load(path.c_str(), &w, &h, &n, 4);
-  if (!data) {
-    if (err) *err = path + ": " + (stbi_failure_reason() ? stbi_failure_reason() : "cannot read image");
-    return std::nullopt;
-  }
-  Image img;
-  img.width = w;
-  img.height = h;
-  img.rgba.assign(data, data + size_t(w) * size_t(h) * 4);
-  stbi_image_free(data);
+  Image img = loadPng(path, err);
+  if (img.empty()) return std::nullopt;
   return img;
 }
 

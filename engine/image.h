@@ -22,9 +22,18 @@ struct Image {
   const uint8_t* px(int x, int y) const { return rgba.data() + (static_cast<size_t>(y) * width + x) * 4; }
 };
 
+// Limits of images read (docs/RELIABILITY.md): the header is read first and a larger image is
+// refused before its pixels are allocated.
+inline constexpr int kMaxImageSide = 16384;
+inline constexpr int64_t kMaxImagePixels = 64'000'000;
+inline constexpr size_t kMaxImageFileBytes = size_t(256) << 20;
+
 // Reads any PNG (grey, grey+alpha, RGB, RGBA; 8 or 16 bit) as RGBA8. On failure returns an
 // empty image and, when `err` is given, a message naming the file and the reason.
+// Only a regular file is opened (a FIFO or device is refused, nothing blocks).
 Image loadPng(const std::string& path, std::string* err = nullptr);
+// The same from the file's bytes (`source` names it in messages).
+Image decodePng(const std::string& bytes, const std::string& source, std::string* err = nullptr);
 
 // Writes `image` as an RGBA PNG. Atomic: writes `path`.tmp, then renames it over `path`, so a
 // reader never sees a half-written file. Returns false with a message naming the file on failure.

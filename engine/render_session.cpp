@@ -2,20 +2,24 @@
 
 #include <stdexcept>
 
+#include "engine/asset_loader.h"
+
 namespace ponyhop {
 
-Camera sceneCamera(const Scene& scene, const SceneRuntime& runtime, double t, FollowCamera& follow, double dt) {
-  if (scene.camera.mode == CameraMode::Follow) return follow.update(scene.camera, t, runtime.followPoint(), dt);
+Camera sceneCamera(const Scene& scene, const Sim& sim, double t, FollowCamera& follow, double dt) {
+  if (scene.camera.mode == CameraMode::Follow) {
+    return follow.update(scene.camera, t, sim.followPoint(scene.camera.follow), dt);
+  }
   return cameraAt(scene.camera, t);
 }
 
-RenderSession::RenderSession(const Scene& scene, bool /*reserve_panel*/) : scene_(scene), runtime_(scene) {
+RenderSession::RenderSession(const Scene& scene, bool /*reserve_panel*/) : scene_(scene), sim_(scene, &assimpAssets()) {
   std::string err;
   context_ = HeadlessContext::create(scene_.render.width, scene_.render.height, &err);
   if (!context_) throw std::runtime_error("cannot create the headless GL context: " + err);
   renderer_ = std::make_unique<Renderer>();
   if (!renderer_->init(&err)) throw std::runtime_error("renderer: " + err);
-  runtime_.upload(*renderer_);
+  draw_.upload(sim_, *renderer_);
 }
 
 RenderSession::~RenderSession() {
@@ -23,13 +27,18 @@ RenderSession::~RenderSession() {
   renderer_.reset();  // GL objects go while the context lives
 }
 
-bool RenderSession::simulateTo(double t) { return runtime_.advanceTo(t); }
+bool RenderSession::simulateTo(double t) { return sim_.advanceTo(t); }
+
+void RenderSession::skipFrame(double t) {
+  sceneCamera(scene_, sim_, t, follow_, t - last_t_);
+  last_t_ = t;
+}
 
 void RenderSession::renderFrame(double t, std::vector<uint8_t>& rgba) {
-  const Camera cam = sceneCamera(scene_, runtime_, t, follow_, t - last_t_);
+  const Camera cam = sceneCamera(scene_, sim_, t, follow_, t - last_t_);
   last_t_ = t;
   renderer_->beginFrame(cam, scene_.light, scene_.render);
-  runtime_.draw(*renderer_);
+  draw_.draw(sim_, *renderer_);
   renderer_->endFrame();
   renderer_->readPixels(rgba);
 }

@@ -11,7 +11,8 @@
 #include "engine/camera.h"
 #include "engine/gl_context.h"
 #include "engine/renderer.h"
-#include "engine/scene_runtime.h"
+#include "engine/scene_draw.h"
+#include "sim/sim.h"
 
 namespace ponyhop {
 
@@ -26,11 +27,14 @@ class RenderSession {
   bool simulateTo(double t);
   // Draws the current state as seen at time t (the camera moves with t) and reads it back.
   void renderFrame(double t, std::vector<uint8_t>& rgba);
+  // Advances what a rendered frame at time t would (the follow camera) without drawing: a chunk
+  // of a sequence (`render --range`) passes the frames before it so that its own match a full run.
+  void skipFrame(double t);
 
-  const std::string& status() const { return runtime_.status(); }
+  const std::string& status() const { return sim_.status(); }
   int width() const { return scene_.render.width; }
   int height() const { return scene_.render.height; }
-  SceneRuntime& runtime() { return runtime_; }
+  Sim& sim() { return sim_; }
   Renderer& renderer() { return *renderer_; }
   const RenderStats& stats() const { return renderer_->stats(); }
   std::string glRenderer() const { return context_->rendererName(); }
@@ -38,7 +42,8 @@ class RenderSession {
 
  private:
   Scene scene_;
-  SceneRuntime runtime_;
+  Sim sim_;
+  SceneDraw draw_;
   std::unique_ptr<HeadlessContext> context_;
   std::unique_ptr<Renderer> renderer_;
   FollowCamera follow_;
@@ -46,6 +51,6 @@ class RenderSession {
 };
 
 // The camera for a scene at time t (orbit/fixed are stateless; follow uses `follow`).
-Camera sceneCamera(const Scene& scene, const SceneRuntime& runtime, double t, FollowCamera& follow, double dt);
+Camera sceneCamera(const Scene& scene, const Sim& sim, double t, FollowCamera& follow, double dt);
 
 }  // namespace ponyhop

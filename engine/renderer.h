@@ -23,7 +23,7 @@
 
 #include "engine/camera.h"
 #include "engine/mesh.h"
-#include "engine/scene.h"
+#include "sim/scene.h"
 
 namespace ponyhop {
 

@@ -144,6 +144,36 @@ void main() {
 }
 )GLSL";
 
+// A mesh with its file's materials: vertex colours (linear, base colour included) and texture
+// coordinates for its base-colour texture.
+const char* const kMeshMatVS = R"GLSL(
+layout(location = 0) in vec3 a_pos;
+layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec4 a_color;
+layout(location = 3) in vec2 a_uv;
+uniform mat4 u_viewProj;
+uniform mat4 u_model;
+uniform mat3 u_normalMat;
+uniform vec4 u_colorSpec;
+uniform vec2 u_shinRim;
+out vec3 v_pos;
+out vec3 v_normal;
+out vec4 v_color;
+out vec2 v_uv;
+flat out vec4 v_colorSpec;
+flat out vec2 v_shinRim;
+void main() {
+  vec4 w = u_model * vec4(a_pos, 1.0);
+  v_pos = w.xyz;
+  v_normal = u_normalMat * a_normal;
+  v_color = a_color;
+  v_uv = a_uv;
+  v_colorSpec = u_colorSpec;
+  v_shinRim = u_shinRim;
+  gl_Position = u_viewProj * w;
+}
+)GLSL";
+
 // The convex hull of two spheres (p0, r0) and (p1, r1) from one static mesh. Each vertex holds an
 // azimuth (cos, sin), a parameter t in 0..1 along its cap and the cap it belongs to. The hull's
 // side is a cone tangent to both spheres; its normal makes the angle alpha = asin((r0 - r1) / L)
@@ -198,6 +228,27 @@ void main() {
 }
 )GLSL";
 
+// kLitFS with the albedo from the mesh's materials (u_baseTex: sRGB texture, read linear).
+const char* const kMeshMatFS = R"GLSL(
+in vec3 v_pos;
+in vec3 v_normal;
+in vec4 v_color;
+in vec2 v_uv;
+flat in vec4 v_colorSpec;
+flat in vec2 v_shinRim;
+uniform sampler2D u_baseTex;
+uniform int u_hasTex;
+out vec4 o_color;
+void main() {
+  vec3 N = normalize(v_normal);
+  if (!gl_FrontFacing) N = -N;
+  vec3 albedo = v_colorSpec.rgb * v_color.rgb;
+  if (u_hasTex != 0) albedo *= texture(u_baseTex, v_uv).rgb;
+  vec3 c = shade(v_pos, N, albedo, v_colorSpec.a, v_shinRim.x, v_shinRim.y);
+  o_color = vec4(linearToSrgb(toneMap(c)), 1.0);
+}
+)GLSL";
+
 // ---------------------------------------------------------------------------------------------
 // ---------------------------------------------------------------------------------------------
 // Background and ground in one full-screen pass (no overdraw: each pixel is shaded once). The
@@ -223,6 +274,7 @@ in vec4 v_far;
 out vec4 o_color;
 uniform mat4 u_viewProj;
 uniform int u_groundOn;
+uniform int u_transparent;     // 1: no background (alpha 0 where there is no ground)
 uniform float u_groundZ;
 uniform vec3 u_groundAlbedo;   // linear
 uniform float u_gridSpacing;   // m (0: plain)
@@ -272,7 +324,7 @@ void main() {
   vec2 gp = u_gridSpacing > 0.0 ? P.xy / u_gridSpacing : vec2(0.0);
   float k = filteredChecker(gp);
   if (u_groundOn == 0 || t <= 0.0 || t >= 1.0 || f >= 1.0) {
-    o_color = vec4(bg, 1.0);
+    o_color = u_transparent != 0 ? vec4(0.0) : vec4(bg, 1.0);
     gl_FragDepth = 1.0;
     return;
   }
@@ -327,8 +379,8 @@ void main() {
   // bilinear tap); the corners are clamped to the frame.
   vec2 uv = gl_FragCoord.xy * u_texel;
   ivec2 p = ivec2(gl_FragCoord.xy), hi = textureSize(u_frame, 0) - 1;
-  vec3 cM = texelFetch(u_frame, p, 0).rgb;
-  float lM = luma(cM);
+  vec4 cM = texelFetch(u_frame, p, 0);  // alpha < 1 only in transparent frames (premultiplied)
+  float lM = luma(cM.rgb);
   float lNW = luma(texelFetch(u_frame, clamp(p + ivec2(-1, 1), ivec2(0), hi), 0).rgb);
   float lNE = luma(texelFetch(u_frame, clamp(p + ivec2(1, 1), ivec2(0), hi), 0).rgb);
   float lSW = luma(texelFetch(u_frame, clamp(p + ivec2(-1, -1), ivec2(0), hi), 0).rgb);
@@ -336,17 +388,17 @@ void main() {
   float lMin = min(lM, min(min(lNW, lNE), min(lSW, lSE)));
   float lMax = max(lM, max(max(lNW, lNE), max(lSW, lSE)));
   if (lMax - lMin < max(1.0 / 24.0, lMax * 0.125)) {  // no edge here
-    o_color = vec4(cM, 1.0);
+    o_color = cM;
     return;
   }
   vec2 dir = vec2(-((lNW + lNE) - (lSW + lSE)), (lNW + lSW) - (lNE + lSE));
   float reduce = max((lNW + lNE + lSW + lSE) * 0.25 * 0.125, 1.0 / 128.0);
   float scale = 1.0 / (min(abs(dir.x), abs(dir.y)) + reduce);
   dir = clamp(dir * scale, vec2(-8.0), vec2(8.0)) * u_texel;
-  vec3 a = 0.5 * (texture(u_frame, uv + dir * (1.0 / 3.0 - 0.5)).rgb + texture(u_frame, uv + dir * (2.0 / 3.0 - 0.5)).rgb);
-  vec3 b = 0.5 * a + 0.25 * (texture(u_frame, uv - dir * 0.5).rgb + texture(u_frame, uv + dir * 0.5).rgb);
-  float lB = luma(b);
-  o_color = vec4((lB < lMin || lB > lMax) ? a : b, 1.0);
+  vec4 a = 0.5 * (texture(u_frame, uv + dir * (1.0 / 3.0 - 0.5)) + texture(u_frame, uv + dir * (2.0 / 3.0 - 0.5)));
+  vec4 b = 0.5 * a + 0.25 * (texture(u_frame, uv - dir * 0.5) + texture(u_frame, uv + dir * 0.5));
+  float lB = luma(b.rgb);
+  o_color = (lB < lMin || lB > lMax) ? a : b;
 }
 )GLSL";
 

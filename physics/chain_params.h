@@ -27,7 +27,6 @@ struct ChainParams {
   double drag = 0.0;             // N s/m per metre of link, linear air drag on each link
   Eigen::Vector3d direction{1.0, 0.0, 0.0};  // initial direction from the anchor (unit)
   ChainAttach attach = ChainAttach::Anchor;
-  Eigen::Vector3d color{0.36, 0.22, 0.12};   // rgb 0..1, hair brown
 
   template <class V>
   void reflect(V& v) {
@@ -43,7 +42,6 @@ struct ChainParams {
     v("drag", drag, {.unit = "N s/m^2", .min = 0, .max = 100, .help = "Air drag per metre of link"});
     v("direction", direction, {.min = -1, .max = 1, .help = "Initial direction from the anchor"});
     v("attach", attach, {.help = "What the first link hangs from"});
-    v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Hair colour"});
   }
 };
 

@@ -7,11 +7,11 @@
 // acc_k are the kinematic bodies' known accelerations, the last bracket is Baumgarte's
 // stabilization C'' + 2 alpha C' + beta^2 C = 0). Then F_c = J^T lambda on the dynamic bodies.
 //
-// A subclass supplies only the factorization of A and the solve: DenseSolver (Eigen LDLT);
-// a Baraff tree solver (block LDL^T in leaves-first order) fits the same two calls and must give
-// the same lambda. Position/velocity projection (stabilization.h) reuses them with the mass
-// metric. A reduced-coordinate (Featherstone) method would replace World's joint-force stage
-// as a whole, as it yields accelerations without multipliers.
+// A subclass supplies only the factorization of A and the solve: DenseSolver (Eigen LDLT) and
+// TreeSolver (Baraff's block LDL^T in leaves-first order, O(n)), which give the same lambda.
+// Position/velocity projection (stabilization.h) reuses them with the mass metric. The
+// reduced-coordinate method (featherstone.h) replaces World's joint-force stage as a whole, as
+// it yields accelerations without multipliers.
 #pragma once
 
 #include <Eigen/Core>
@@ -37,6 +37,9 @@ class ConstraintSolver {
   virtual bool factor(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) = 0;
   // y with A y = rhs, after factor().
   virtual Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const = 0;
+  // The same into `out` (resized when needed): a solver that keeps its work space allocates
+  // nothing here (the tree solver); the default calls solve().
+  virtual void solveInto(const Eigen::VectorXd& rhs, Eigen::VectorXd& out) const { out = solve(rhs); }
 
   // The joint-force stage. Needs the bodies' accumulated forces (dynamic) and prescribed
   // accelerations (kinematic). Writes constraint_force/torque and the total accelerations a,
@@ -54,6 +57,9 @@ class ConstraintSolver {
 
  private:
   Eigen::VectorXd lambda_;
+  // Work space of solveJointForces (kept between calls: a steady step allocates nothing).
+  std::vector<Vector6d> acc_, vel_, fc_;
+  Eigen::VectorXd rhs_, jx_;
 };
 
 // M^-1 x for one body's 6-vector (1/m on the linear part, I_world^-1 on the angular part).

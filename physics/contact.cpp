@@ -97,30 +97,10 @@ void GroundContact::update(World& world) {
 }
 
 Eigen::VectorXd GroundContact::projectVelocities(World& world, bool& ok) {
-  std::vector<RigidBody>& bodies = world.bodies();
-  system_.evaluate(bodies, world.joints());
-  ok = true;
-  if (system_.rows() == 0) return {};
-  std::vector<Vector6d> vel(bodies.size());
-  for (size_t i = 0; i < bodies.size(); ++i) vel[i] << bodies[i].v, bodies[i].w;
-  // (J M^-1 J^T) y = -J v, dv = M^-1 J^T y: y is the impulse of every row (N s).
-  if (!solver_.factor(bodies, system_)) {
-    ok = false;
-    return {};
-  }
-  const Eigen::VectorXd y = solver_.solve(-system_.times(vel));
-  const std::vector<Vector6d> dv = solver_.massWeightedTranspose(bodies, system_, y);
-  for (size_t i = 0; i < bodies.size(); ++i) {
-    if (!bodies[i].isDynamic()) continue;
-    if (!dv[i].allFinite()) {
-      ok = false;
-      return {};
-    }
-    bodies[i].v += dv[i].head<3>();
-    bodies[i].w += dv[i].tail<3>();
-  }
-  const int m = world.joints()[joint_]->dimension();
-  return y.segment(rowOffset(world), m);
+  Eigen::VectorXd y;
+  ok = world.projectVelocitiesOntoJoints(&y).empty();
+  if (!ok || y.size() == 0) return {};
+  return y.segment(rowOffset(world), world.joints()[joint_]->dimension());
 }
 
 void GroundContact::touchdown(World& world) {
@@ -144,7 +124,7 @@ void GroundContact::touchdown(World& world) {
   if (state_->twist) state_->twist_ref = g.normalized();
 
   // No penetration is left: positions onto C = 0 (the landing point lifted to the surface).
-  const ProjectionResult p = projectPositions(bodies, world.joints(), system_, solver_);
+  const ProjectionResult p = world.projectPositionsOntoJoints();
   if (!p.problem.empty() || !(p.error < 1e-6)) {
     world.fail("ground contact: touchdown projection failed (" + p.problem + ")");
     return;

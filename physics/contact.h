@@ -33,10 +33,13 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <any>
 #include <memory>
+#include <tuple>
+#include <utility>
 
 #include "physics/constraint.h"
-#include "physics/dense_solver.h"
+#include "physics/controller.h"
 #include "physics/force_elements.h"
 #include "physics/world.h"
 
@@ -97,15 +100,20 @@ struct ContactStats {
   double max_touchdown_energy_gain = -1e300;  // J, kinetic energy after - before the impulse
 };
 
-class GroundContact {
+class GroundContact final : public ContactSet {
  public:
   // Adds the contact constraint and the friction element to `world` for the toe sphere of body
   // `foot` (centre in the foot's frame, radius). Contact with the plane z = 0.
   GroundContact(World& world, int foot, const Eigen::Vector3d& center_local, double radius, double mu,
                 double twist_radius);
 
-  // The contact stage (World::setContactHandler calls it after each step).
-  void update(World& world);
+  // The contact stage (World calls it after each accepted substep).
+  void update(World& world) override;
+  // The active set and the counters (what update() changes).
+  std::any saveState() const override { return std::pair<ContactState, ContactStats>(*state_, stats_); }
+  void restoreState(const std::any& s) override {
+    std::tie(*state_, stats_) = std::any_cast<const std::pair<ContactState, ContactStats>&>(s);
+  }
 
   bool inContact() const { return state_->mode != ContactMode::Off; }
   const ContactState& state() const { return *state_; }
@@ -118,8 +126,9 @@ class GroundContact {
  private:
   void touchdown(World& world);
   void checkForces(World& world);
-  // Velocities onto the joints' and the contact's velocity constraints; returns the contact's
-  // impulse rows (empty when it has none) or sets ok = false.
+  // Velocities onto the joints' and the contact's velocity constraints (World's projection,
+  // through its solver); returns the contact's impulse rows (empty when it has none) or sets
+  // ok = false.
   Eigen::VectorXd projectVelocities(World& world, bool& ok);
   int rowOffset(const World& world) const;
 
@@ -128,8 +137,6 @@ class GroundContact {
   double radius_, mu_, twist_radius_;
   int joint_ = -1;
   std::shared_ptr<ContactState> state_;
-  DenseSolver solver_;
-  ConstraintSystem system_;
   ContactStats stats_;
 };
 

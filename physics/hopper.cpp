@@ -149,18 +149,30 @@ void computeHopperForces(const HopperModel& m, const HopperSetpoints& s, double 
 
 // ---------------------------------------------------------------------------------------------
 
-Hopper::Hopper(World& world, const HopperParams& params) : params_(params) {
+std::shared_ptr<Hopper> Hopper::add(World& world, const HopperParams& params) {
+  auto h = std::make_shared<Hopper>(Key{}, world, params);
+  if (h->built()) {
+    world.addController(h);
+    world.addContactSet(h->contact_);
+  }
+  return h;
+}
+
+Hopper::Hopper(Key, World& world, const HopperParams& params) : params_(params) {
+  mem_.command = params.command;
   if (std::string e = validate(params); !e.empty()) {
     world.fail(e);
     return;
   }
   const HopperParams& p = params_;
-  core_ = std::make_shared<Core>();
-  HopperModel& m = core_->model;
+  HopperModel& m = model_;
   m.params = p;
-  stance_time_ = p.stance_time;
-  heading_ = commandAt(world.time()).heading * kDeg;
-  desired_velocity_ = p.velocity.head<2>();  // the command is approached from the initial motion
+  mem_.stance_time = p.stance_time;
+  // The heading setpoint starts at the body's own yaw (0: every frame starts aligned with the
+  // world) and slews toward the command: starting at a commanded 90 deg would leave the yaw servo
+  // on its equilibrium at 90 deg from the setpoint, and the body would never turn.
+  mem_.heading = 0.0;
+  mem_.desired_velocity = p.velocity.head<2>();  // the command is approached from the initial motion
 
   // Body: hip below its centre of mass. Upper leg: a tube (solid-cylinder inertia) from the hip
   // down, centre of mass halfway. Foot: a rod, the toe sphere's centre at its lower end, centre
@@ -203,26 +215,28 @@ Hopper::Hopper(World& world, const HopperParams& params) : params_(params) {
   m.knee_joint = world.addJoint(std::make_unique<PrismaticJoint>(m.upper, Eigen::Vector3d::Zero(),
                                                                  Eigen::Quaterniond::Identity(), m.foot,
                                                                  Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
-  core_->contact = std::make_unique<GroundContact>(world, m.foot, m.toe_in_foot, p.toe_radius, p.friction, p.twist_radius);
+  contact_ = std::make_shared<GroundContact>(world, m.foot, m.toe_in_foot, p.toe_radius, p.friction, p.twist_radius);
 
-  core_->setpoints.leg_length = p.rest_length;
-  core_->setpoints.heading = heading_;
-  std::shared_ptr<Core> core = core_;
-  world.setController([core](double t, std::vector<RigidBody>& bodies) {
-    computeHopperForces(core->model, core->setpoints, t, bodies);
-  });
-  World* w = &world;
-  world.setContactHandler([core, w](double, std::vector<RigidBody>&) { core->contact->update(*w); });
+  mem_.setpoints.leg_length = p.rest_length;
+  mem_.setpoints.heading = mem_.heading;
+}
+
+void Hopper::applyForces(World& world, double t) { computeHopperForces(model_, mem_.setpoints, t, world.bodies()); }
+
+void Hopper::restoreState(const std::any& s) {
+  mem_ = std::any_cast<const Memory&>(s);
+  params_.command = mem_.command;
 }
 
 std::string Hopper::setCommand(const HopperCommand& command) {
   if (std::string e = checkRanges(command, "hopper.command"); !e.empty()) return e;
   params_.command = command;
+  mem_.command = command;
   return "";
 }
 
 HopperCommand Hopper::commandAt(double t) const {
-  HopperCommand c = params_.command;
+  HopperCommand c = mem_.command;
   for (const HopperCommandKey& k : params_.script) {
     if (k.t > t + 1e-12) break;
     c = HopperCommand{k.vx, k.vy, k.height, k.heading};
@@ -233,13 +247,13 @@ HopperCommand Hopper::commandAt(double t) const {
 double Hopper::mass() const { return params_.body_mass + params_.upper_mass + params_.foot_mass; }
 
 Eigen::Vector3d Hopper::centerOfMass(const World& world) const {
-  const HopperModel& m = core_->model;
+  const HopperModel& m = model_;
   const RigidBody &b = world.body(m.body), &u = world.body(m.upper), &f = world.body(m.foot);
   return (b.mass * b.x + u.mass * u.x + f.mass * f.x) / (b.mass + u.mass + f.mass);
 }
 
 Eigen::Vector3d Hopper::centerOfMassVelocity(const World& world) const {
-  const HopperModel& m = core_->model;
+  const HopperModel& m = model_;
   const RigidBody &b = world.body(m.body), &u = world.body(m.upper), &f = world.body(m.foot);
   return (b.mass * b.v + u.mass * u.v + f.mass * f.v) / (b.mass + u.mass + f.mass);
 }
@@ -266,73 +280,73 @@ Eigen::Vector3d Hopper::centerOfMassVelocity(const World& world) const {
 void Hopper::think(World& world) {
   if (!built() || !world.ok()) return;
   const double now = world.time();
-  const double dt = last_time_ < 0.0 ? 0.0 : now - last_time_;
-  last_time_ = now;
+  const double dt = mem_.last_time < 0.0 ? 0.0 : now - mem_.last_time;
+  mem_.last_time = now;
   const HopperParams& p = params_;
   const HopperCommand cmd = commandAt(now);
-  const RigidBody& body = world.body(core_->model.body);
+  const RigidBody& body = world.body(model_.body);
   const LegState leg = this->leg(world);
-  const bool contact = core_->contact->inContact();
+  const bool contact = contact_->inContact();
   const double g = std::max(1e-9, -world.params().gravity.z());
 
   const auto liftoff = [&] {
-    phase_ = HopperPhase::Flight;
-    stance_time_ = std::clamp(now - touchdown_time_, 0.05, 1.0);
-    liftoff_time_ = now;
-    liftoff_length_ = leg.length;
+    mem_.phase = HopperPhase::Flight;
+    mem_.stance_time = std::clamp(now - mem_.touchdown_time, 0.05, 1.0);
+    mem_.liftoff_time = now;
+    mem_.liftoff_length = leg.length;
     // The leg's direction in the body frame at liftoff: the swing starts from here.
-    liftoff_placement_ = Eigen::Vector2d(leg.axis.dot(axisOf(body, 0)), leg.axis.dot(axisOf(body, 1)));
-    flight_max_z_ = body.x.z();
-    ++hops_;
+    mem_.liftoff_placement = Eigen::Vector2d(leg.axis.dot(axisOf(body, 0)), leg.axis.dot(axisOf(body, 1)));
+    mem_.flight_max_z = body.x.z();
+    ++mem_.hops;
   };
-  switch (phase_) {
+  switch (mem_.phase) {
     case HopperPhase::Flight:
-      flight_max_z_ = std::max(flight_max_z_, body.x.z());
+      mem_.flight_max_z = std::max(mem_.flight_max_z, body.x.z());
       if (contact) {
-        phase_ = HopperPhase::Loading;
-        touchdown_time_ = now;
-        if (touchdowns_ > 0) {
-          last_apex_ = flight_max_z_;
+        mem_.phase = HopperPhase::Loading;
+        mem_.touchdown_time = now;
+        if (mem_.touchdowns > 0) {
+          mem_.last_apex = mem_.flight_max_z;
           // Per-hop trim of the thrust from the apex error (integral action on the losses the
           // energy estimate below does not know: damping, the foot's impact, a ponytail).
-          height_trim_ = std::clamp(height_trim_ + p.height_gain * (cmd.height - last_apex_), -p.thrust_max,
+          mem_.height_trim = std::clamp(mem_.height_trim + p.height_gain * (cmd.height - mem_.last_apex), -p.thrust_max,
                                     p.thrust_max);
         }
         // Per-hop integral of the speed error on the foot placement (the neutral point
         // x' T_s / 2 is only approximately where the hopper neither speeds up nor slows down).
         const Eigen::Vector3d v = centerOfMassVelocity(world);
         const double trim_limit = 0.25 * p.rest_length * std::sin(p.max_leg_angle * kDeg);
-        speed_trim_ += p.speed_integral_gain * (v.head<2>() - desired_velocity_);
-        if (speed_trim_.norm() > trim_limit) speed_trim_ *= trim_limit / speed_trim_.norm();
-        ++touchdowns_;
+        mem_.speed_trim += p.speed_integral_gain * (v.head<2>() - mem_.desired_velocity);
+        if (mem_.speed_trim.norm() > trim_limit) mem_.speed_trim *= trim_limit / mem_.speed_trim.norm();
+        ++mem_.touchdowns;
       }
       break;
     case HopperPhase::Loading:
       if (!contact) {
         liftoff();
       } else if (leg.length < p.rest_length - p.load_depth) {
-        phase_ = HopperPhase::Compression;
+        mem_.phase = HopperPhase::Compression;
       }
       break;
     case HopperPhase::Compression:
       if (!contact) {
         liftoff();
       } else if (leg.rate >= 0.0) {
-        phase_ = HopperPhase::Thrust;
+        mem_.phase = HopperPhase::Thrust;
         // Energy to reach the commanded apex from here (vertical part): the spring, extended to
         // r0 + delta, must release 1/2 k (r0 + delta - r)^2 = M g (h_d - z) - 1/2 M z'^2.
         const double m_total = mass();
         const double needed =
             std::max(0.0, m_total * g * (cmd.height - body.x.z()) - 0.5 * m_total * body.v.z() * body.v.z());
         const double feedforward = std::sqrt(2.0 * needed / p.leg_stiffness) - (p.rest_length - leg.length);
-        thrust_ = std::clamp(feedforward + height_trim_, -0.5 * (p.rest_length - p.min_length), p.thrust_max);
+        mem_.thrust = std::clamp(feedforward + mem_.height_trim, -0.5 * (p.rest_length - p.min_length), p.thrust_max);
       }
       break;
     case HopperPhase::Thrust:
       if (!contact) {
         liftoff();
-      } else if (leg.length > p.rest_length + thrust_ - p.unload_margin) {
-        phase_ = HopperPhase::Unloading;
+      } else if (leg.length > p.rest_length + mem_.thrust - p.unload_margin) {
+        mem_.phase = HopperPhase::Unloading;
       }
       break;
     case HopperPhase::Unloading:
@@ -345,36 +359,36 @@ void Hopper::think(World& world) {
 void Hopper::updateSetpoints(const World& world, const HopperCommand& cmd, double dt) {
   const HopperParams& p = params_;
   const double now = world.time();
-  HopperSetpoints& s = core_->setpoints;
-  const RigidBody& body = world.body(core_->model.body);
+  HopperSetpoints& s = mem_.setpoints;
+  const RigidBody& body = world.body(model_.body);
 
   // Heading setpoint slews toward the command (a step of 180 degrees would sit on the servo's
   // unstable equilibrium).
   const double target = cmd.heading * kDeg;
   const double step = p.max_yaw_rate * kDeg * dt;
-  heading_ += std::clamp(std::remainder(target - heading_, 2.0 * std::numbers::pi), -step, step);
-  s.heading = heading_;
+  mem_.heading += std::clamp(std::remainder(target - mem_.heading, 2.0 * std::numbers::pi), -step, step);
+  s.heading = mem_.heading;
   // Desired velocity slews toward the command at max_acceleration (a step in speed asks for
   // one big foot placement error at once).
   const Eigen::Vector2d v_cmd(cmd.vx, cmd.vy);
-  const Eigen::Vector2d dv = v_cmd - desired_velocity_;
+  const Eigen::Vector2d dv = v_cmd - mem_.desired_velocity;
   const double max_dv = p.max_acceleration * dt;
-  desired_velocity_ += dv.norm() > max_dv ? Eigen::Vector2d(dv * (max_dv / dv.norm())) : dv;
+  mem_.desired_velocity += dv.norm() > max_dv ? Eigen::Vector2d(dv * (max_dv / dv.norm())) : dv;
 
-  switch (phase_) {
+  switch (mem_.phase) {
     case HopperPhase::Flight: {
       // Rising: the leg is pulled in below its liftoff length (the foot, resting on the ground
       // when the normal force reached zero, must be lifted, not pushed back down).
-      s.leg_length = body.v.z() > 0.0 ? std::min(p.rest_length, liftoff_length_) - p.flight_retract : p.rest_length;
+      s.leg_length = body.v.z() > 0.0 ? std::min(p.rest_length, mem_.liftoff_length) - p.flight_retract : p.rest_length;
       s.place_weight = 1.0;
       s.attitude_weight = 0.0;
       // Foot placement (Raibert): neutral point plus the speed correction, both axes.
       const Eigen::Vector3d v = centerOfMassVelocity(world);
-      Eigen::Vector2d xf = v.head<2>() * stance_time_ / 2.0 +
-                           p.speed_gain * (v.head<2>() - desired_velocity_) + speed_trim_;
+      Eigen::Vector2d xf = v.head<2>() * mem_.stance_time / 2.0 +
+                           p.speed_gain * (v.head<2>() - mem_.desired_velocity) + mem_.speed_trim;
       // x_f is measured from the centre of mass; the leg pivots at the hip, which a pitched or
       // rolled body carries off to the side (hip_offset sin(tilt)).
-      const Eigen::Vector3d hip = body.pointToWorld(core_->model.hip_in_body);
+      const Eigen::Vector3d hip = body.pointToWorld(model_.hip_in_body);
       xf += centerOfMass(world).head<2>() - hip.head<2>();
       const double limit = p.rest_length * std::sin(p.max_leg_angle * kDeg);
       if (xf.norm() > limit) xf *= limit / xf.norm();
@@ -385,9 +399,9 @@ void Hopper::updateSetpoints(const World& world, const HopperCommand& cmd, doubl
       // The swing waits swing_delay after liftoff (the retracting foot clears the ground first;
       // a leg swung forward at once sweeps its foot into the ground), then blends in over
       // swing_delay more.
-      const double blend = hops_ == 0 ? 1.0 : std::clamp((now - liftoff_time_) / p.swing_delay - 1.0, 0.0, 1.0);
-      s.placement_x = (1.0 - blend) * liftoff_placement_.x() + blend * za_d.dot(axisOf(body, 0));
-      s.placement_y = (1.0 - blend) * liftoff_placement_.y() + blend * za_d.dot(axisOf(body, 1));
+      const double blend = mem_.hops == 0 ? 1.0 : std::clamp((now - mem_.liftoff_time) / p.swing_delay - 1.0, 0.0, 1.0);
+      s.placement_x = (1.0 - blend) * mem_.liftoff_placement.x() + blend * za_d.dot(axisOf(body, 0));
+      s.placement_y = (1.0 - blend) * mem_.liftoff_placement.y() + blend * za_d.dot(axisOf(body, 1));
       break;
     }
     case HopperPhase::Loading:
@@ -401,12 +415,12 @@ void Hopper::updateSetpoints(const World& world, const HopperCommand& cmd, doubl
       s.attitude_weight = 1.0;
       break;
     case HopperPhase::Thrust:
-      s.leg_length = p.rest_length + thrust_;
+      s.leg_length = p.rest_length + mem_.thrust;
       s.place_weight = 0.0;
       s.attitude_weight = 1.0;
       break;
     case HopperPhase::Unloading:
-      s.leg_length = p.rest_length + thrust_;
+      s.leg_length = p.rest_length + mem_.thrust;
       s.place_weight = 0.0;
       s.attitude_weight = 0.0;
       break;
@@ -414,7 +428,7 @@ void Hopper::updateSetpoints(const World& world, const HopperCommand& cmd, doubl
 }
 
 Eigen::Vector3d Hopper::attitude(const World& world) const {
-  const Eigen::Matrix3d r = world.body(core_->model.body).rotation();
+  const Eigen::Matrix3d r = world.body(model_.body).rotation();
   const double yaw = std::atan2(r(1, 0), r(0, 0));
   const double pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
   const double roll = std::atan2(r(2, 1), r(2, 2));
@@ -422,7 +436,7 @@ Eigen::Vector3d Hopper::attitude(const World& world) const {
 }
 
 double Hopper::tilt(const World& world) const {
-  const Eigen::Vector3d zb = axisOf(world.body(core_->model.body), 2);
+  const Eigen::Vector3d zb = axisOf(world.body(model_.body), 2);
   return std::acos(std::clamp(zb.z(), -1.0, 1.0));
 }
 
@@ -435,11 +449,11 @@ double jointError(const World& world, int joint) {
 }
 }  // namespace
 
-double Hopper::kneeError(const World& world) const { return jointError(world, core_->model.knee_joint); }
-double Hopper::hipError(const World& world) const { return jointError(world, core_->model.hip_joint); }
+double Hopper::kneeError(const World& world) const { return jointError(world, model_.knee_joint); }
+double Hopper::hipError(const World& world) const { return jointError(world, model_.hip_joint); }
 
 HopperShape Hopper::shape(const World& world) const {
-  const HopperModel& m = core_->model;
+  const HopperModel& m = model_;
   const RigidBody &b = world.body(m.body), &u = world.body(m.upper), &f = world.body(m.foot);
   HopperShape s;
   s.body_x = b.x;

@@ -6,15 +6,14 @@
 //   foot ── ground: GroundContact (0, 1, 3 or 4 rows: physics/contact.h)
 //
 // Control follows the method's split (seed 000, "Think" / "ComputeControllerForces"):
-//   Hopper::think(world)   once per step, before World::step(): the state machine over the hop
+//   Hopper::think(world)   once per step, first in World::step(): the state machine over the hop
 //                          (FLIGHT, LOADING, COMPRESSION, THRUST, UNLOADING) and Raibert's three
 //                          parts; it only changes setpoints (HopperSetpoints).
 //   computeHopperForces()  the muscles: soft constraints (leg spring with thrust setpoint and end
 //                          stops, hip servos) from the current state, time and setpoints only;
-//                          smooth, stateless, callable at any time (RK4 stages). Installed with
-//                          World::setController.
-// The World must stay where it is (not be moved) while the hopper lives: the contact stage keeps
-// a pointer to it.
+//                          smooth, stateless, callable at any time (RK4 stages).
+// A Hopper is one of its World's controllers (physics/controller.h) and its foot contact one of
+// the World's contact sets: World::step runs both; any number of hoppers share one World.
 #pragma once
 
 #include <Eigen/Core>
@@ -23,6 +22,7 @@
 #include <string>
 
 #include "physics/contact.h"
+#include "physics/controller.h"
 #include "physics/hopper_params.h"
 #include "physics/world.h"
 
@@ -73,38 +73,47 @@ struct HopperShape {
   Eigen::Vector3d toe = Eigen::Vector3d::Zero();  // toe sphere centre
 };
 
-class Hopper {
+class Hopper final : public Controller {
+  struct Key {};  // only add() builds a Hopper
+
  public:
-  // Builds the bodies, joints, contact and controller into `world`. Invalid params: the world
-  // stops with the message (world.status()) and nothing is built.
-  Hopper(World& world, const HopperParams& params);
+  // Builds the bodies, joints and the foot's ground contact into `world` and adds the hopper as
+  // a controller (think + muscles) and its contact as a contact set: world.step() then runs it.
+  // Invalid params: the world stops with the message (world.status()), nothing is built, and
+  // built() is false.
+  static std::shared_ptr<Hopper> add(World& world, const HopperParams& params);
+  Hopper(Key, World& world, const HopperParams& params);
 
-  // Think (seed 000): the state machine; once per step, before world.step().
-  void think(World& world);
+  // Think (seed 000): the state machine; World::step calls it once per step, first.
+  void think(World& world) override;
+  // ComputeControllerForces: computeHopperForces with the current setpoints.
+  void applyForces(World& world, double t) override;
+  std::any saveState() const override { return mem_; }
+  void restoreState(const std::any& s) override;
 
-  bool built() const { return core_ != nullptr; }
+  bool built() const { return contact_ != nullptr; }
   const HopperParams& params() const { return params_; }
-  const HopperModel& model() const { return core_->model; }
-  const HopperSetpoints& setpoints() const { return core_->setpoints; }
-  const GroundContact& contact() const { return *core_->contact; }
+  const HopperModel& model() const { return model_; }
+  const HopperSetpoints& setpoints() const { return mem_.setpoints; }
+  const GroundContact& contact() const { return *contact_; }
 
-  HopperPhase phase() const { return phase_; }
-  const char* phaseName() const { return enumName(phase_).data(); }
+  HopperPhase phase() const { return mem_.phase; }
+  const char* phaseName() const { return enumName(mem_.phase).data(); }
   // The command in force at time t (the script's last key with key.t <= t, else params.command).
   HopperCommand commandAt(double t) const;
   // Replaces params().command while it runs (the panel's velocity pad, height and heading): the
   // state machine keeps its phase, the next think() reads it. Returns "" or the range error
   // ("hopper.command.height = 9: must be ..."), leaving the command unchanged.
   std::string setCommand(const HopperCommand& command);
-  bool inContact() const { return core_->contact->inContact(); }
-  int hops() const { return hops_; }                     // liftoffs so far
-  double measuredStanceTime() const { return stance_time_; }
-  double lastApex() const { return last_apex_; }         // m, body height at the last apex
-  double thrust() const { return thrust_; }              // m, last thrust setpoint extension
-  Eigen::Vector2d desiredVelocity() const { return desired_velocity_; }  // m/s, slewed command
+  bool inContact() const { return contact_->inContact(); }
+  int hops() const { return mem_.hops; }                     // liftoffs so far
+  double measuredStanceTime() const { return mem_.stance_time; }
+  double lastApex() const { return mem_.last_apex; }         // m, body height at the last apex
+  double thrust() const { return mem_.thrust; }              // m, last thrust setpoint extension
+  Eigen::Vector2d desiredVelocity() const { return mem_.desired_velocity; }  // m/s, slewed command
 
-  LegState leg(const World& world) const { return legState(core_->model, world.bodies()); }
-  Eigen::Vector3d footPoint(const World& world) const { return core_->contact->point(world); }
+  LegState leg(const World& world) const { return legState(model_, world.bodies()); }
+  Eigen::Vector3d footPoint(const World& world) const { return contact_->point(world); }
   // Roll, pitch, yaw (rad) of the body: R = Rz(yaw) Ry(pitch) Rx(roll).
   Eigen::Vector3d attitude(const World& world) const;
   double tilt(const World& world) const;  // rad, body z from vertical
@@ -120,31 +129,33 @@ class Hopper {
   Eigen::Vector3d backPoint() const;
 
  private:
-  struct Core {
-    HopperModel model;
+  // What think() changes: the state machine's memory and the setpoints it leaves for the force law.
+  struct Memory {
     HopperSetpoints setpoints;
-    std::unique_ptr<GroundContact> contact;
+    HopperCommand command;  // in force when the script has no key yet (setCommand changes it)
+    HopperPhase phase = HopperPhase::Flight;
+    double last_time = -1.0;
+    double touchdown_time = 0.0;
+    double liftoff_time = 0.0;
+    double liftoff_length = 1e300;
+    Eigen::Vector2d liftoff_placement = Eigen::Vector2d::Zero();
+    double stance_time = 0.2;
+    double flight_max_z = -1e300;
+    double last_apex = 0.0;
+    double thrust = 0.0;
+    double height_trim = 0.0;
+    Eigen::Vector2d speed_trim = Eigen::Vector2d::Zero();  // m, integral part of the foot placement
+    double heading = 0.0;                                  // rad, slewed heading setpoint
+    Eigen::Vector2d desired_velocity = Eigen::Vector2d::Zero();  // m/s, slewed velocity command
+    int hops = 0;
+    int touchdowns = 0;
   };
   void updateSetpoints(const World& world, const HopperCommand& cmd, double dt);
 
   HopperParams params_;
-  std::shared_ptr<Core> core_;
-  HopperPhase phase_ = HopperPhase::Flight;
-  double last_time_ = -1.0;
-  double touchdown_time_ = 0.0;
-  double liftoff_time_ = 0.0;
-  double liftoff_length_ = 1e300;
-  Eigen::Vector2d liftoff_placement_ = Eigen::Vector2d::Zero();
-  double stance_time_ = 0.2;
-  double flight_max_z_ = -1e300;
-  double last_apex_ = 0.0;
-  double thrust_ = 0.0;
-  double height_trim_ = 0.0;
-  Eigen::Vector2d speed_trim_ = Eigen::Vector2d::Zero();  // m, integral part of the foot placement
-  double heading_ = 0.0;  // rad, slewed heading setpoint
-  Eigen::Vector2d desired_velocity_ = Eigen::Vector2d::Zero();  // m/s, slewed velocity command
-  int hops_ = 0;
-  int touchdowns_ = 0;
+  HopperModel model_;
+  std::shared_ptr<GroundContact> contact_;
+  Memory mem_;
 };
 
 }  // namespace ponyhop

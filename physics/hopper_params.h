@@ -111,17 +111,12 @@ struct HopperParams {
   HopperCommand command;                      // used when no script key applies
   std::vector<HopperCommandKey> script;       // a course: each key holds from its t on
 
-  // Drawing.
-  Eigen::Vector3d body_color{0.86, 0.33, 0.16};
-  Eigen::Vector3d leg_color{0.62, 0.65, 0.70};
-  Eigen::Vector3d foot_color{0.12, 0.12, 0.13};
-
   template <class V>
   void reflect(V& v) {
     v("body_mass", body_mass, {.unit = "kg", .min = 0.01, .max = 1e4, .help = "Mass of the body", .log = true});
     v("body_inertia", body_inertia,
       {.unit = "kg m^2", .min = 1e-5, .max = 1e4, .help = "Principal inertia of the body (x fwd, z up)"});
-    v("body_size", body_size, {.unit = "m", .min = 0.01, .max = 10, .help = "Drawn size of the body"});
+    v("body_size", body_size, {.unit = "m", .min = 0.01, .max = 10, .help = "Size of the body (x fwd, z up): drawn, and where a ponytail hangs"});
     v("hip_offset", hip_offset, {.unit = "m", .min = 0, .max = 5, .help = "Hip below the body's centre of mass"});
     v("upper_mass", upper_mass, {.unit = "kg", .min = 1e-3, .max = 1e3, .help = "Mass of the upper leg", .log = true});
     v("upper_length", upper_length, {.unit = "m", .min = 0.01, .max = 10, .help = "Length of the upper leg"});
@@ -166,9 +161,6 @@ struct HopperParams {
     v("velocity", velocity, {.unit = "m/s", .min = -100, .max = 100, .help = "Body velocity at t = 0"});
     v("command", command, {.help = "Command when no script key applies"});
     v("script", script, {.help = "Scripted course: commands from time t on"});
-    v("body_color", body_color, {.unit = "rgb", .min = 0, .max = 1, .help = "Body colour"});
-    v("leg_color", leg_color, {.unit = "rgb", .min = 0, .max = 1, .help = "Upper leg colour"});
-    v("foot_color", foot_color, {.unit = "rgb", .min = 0, .max = 1, .help = "Foot colour"});
   }
 };
 

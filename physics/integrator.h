@@ -21,13 +21,6 @@
 
 namespace ponyhop {
 
-struct BodyState {
-  Eigen::Vector3d x = Eigen::Vector3d::Zero();
-  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();  // renormalized after each step
-  Eigen::Vector3d v = Eigen::Vector3d::Zero();
-  Eigen::Vector3d w = Eigen::Vector3d::Zero();  // world frame
-};
-
 struct BodyAcceleration {
   Eigen::Vector3d a = Eigen::Vector3d::Zero();
   Eigen::Vector3d alpha = Eigen::Vector3d::Zero();  // world frame

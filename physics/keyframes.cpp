@@ -186,7 +186,6 @@ bool solveSpline(const std::vector<double>& s, Rows6& Y, const std::vector<int>&
 struct KeyframeTrack::Data {
   LoopMode mode = LoopMode::Clamp;
   double speed = 1.0;
-  int keys = 0;
   double tFirst = 0, tLast = 0, period = 0;
   bool constant = false;
   Eigen::Quaterniond q0 = Eigen::Quaterniond::Identity();
@@ -258,7 +257,6 @@ std::optional<KeyframeTrack> KeyframeTrack::fromSamples(const std::vector<PoseSa
   auto d = std::make_shared<Data>();
   d->mode = opt.mode;
   d->speed = opt.speed;
-  d->keys = static_cast<int>(in.size());
   d->tFirst = in.front().t;
   d->tLast = in.back().t;
   d->q0 = in.front().rotation.normalized();
@@ -358,7 +356,6 @@ double KeyframeTrack::startTime() const { return d_->tFirst; }
 double KeyframeTrack::endTime() const { return d_->tLast; }
 double KeyframeTrack::period() const { return d_->period; }
 LoopMode KeyframeTrack::mode() const { return d_->mode; }
-int KeyframeTrack::keyCount() const { return d_->keys; }
 
 KinematicState KeyframeTrack::evaluate(double t) const {
   const Data& d = *d_;

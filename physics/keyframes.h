@@ -80,8 +80,6 @@ class KeyframeTrack {
   double endTime() const;
   double period() const;
   LoopMode mode() const;
-  // Number of keys given (not counting an automatic closing key or the free knots of clamp mode).
-  int keyCount() const;
 
  private:
   struct Data;

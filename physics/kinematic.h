@@ -23,10 +23,3 @@ struct KinematicState {
 using KinematicMotion = std::function<KinematicState(double t)>;
 
 }  // namespace ponyhop
-
-namespace ponyhop {
-
-// A body held still at a pose (zero velocity and acceleration).
-KinematicMotion staticMotion(const Eigen::Vector3d& x, const Eigen::Quaterniond& q);
-
-}  // namespace ponyhop

@@ -42,34 +42,44 @@ inline Eigen::Vector3d rotationVector(const Eigen::Quaterniond& q_in) {
   return 2.0 * std::atan2(s, q.w()) * q.vec() / s;
 }
 
-struct RigidBody {
+// What does not change while the world runs: kind, name, mass properties, the prescribed motion.
+struct BodyProperties {
   enum class Kind { Dynamic, Kinematic };
 
   Kind kind = Kind::Dynamic;
   std::string name;  // for status messages ("link 3", "head")
+  double mass = 1.0;                                  // kg (dynamic bodies)
+  Eigen::Vector3d inertia = Eigen::Vector3d::Ones();  // kg m^2, principal, body frame (dynamic bodies)
+  KinematicMotion motion;                             // kinematic bodies only
+};
 
-  // Mass properties (dynamic bodies).
-  double mass = 1.0;                                      // kg
-  Eigen::Vector3d inertia = Eigen::Vector3d::Ones();      // kg m^2, principal, body frame
-
-  // State.
+// What a step changes: the pose and velocity. Snapshots, restores and the integrators' states are
+// vectors of these, copied whole (one assignment per body).
+struct BodyState {
   Eigen::Vector3d x = Eigen::Vector3d::Zero();            // m, centre of mass
-  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();  // body to world
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();  // body to world (renormalized after each step)
   Eigen::Vector3d v = Eigen::Vector3d::Zero();            // m/s
   Eigen::Vector3d w = Eigen::Vector3d::Zero();            // rad/s, world frame
+};
 
+// What one force evaluation computes from the state (scratch, recomputed every evaluation).
+struct BodyForces {
   // Accumulators, world frame, cleared at the start of each force evaluation.
-  Eigen::Vector3d force = Eigen::Vector3d::Zero();        // N, external + controller
-  Eigen::Vector3d torque = Eigen::Vector3d::Zero();       // N m, about the centre of mass
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();              // N, external + controller
+  Eigen::Vector3d torque = Eigen::Vector3d::Zero();             // N m, about the centre of mass
   Eigen::Vector3d constraint_force = Eigen::Vector3d::Zero();   // N, J^T lambda (linear)
   Eigen::Vector3d constraint_torque = Eigen::Vector3d::Zero();  // N m, J^T lambda (angular)
-
   // Accelerations, world frame: computed for dynamic bodies (after the joint-force stage),
   // prescribed for kinematic bodies.
-  Eigen::Vector3d a = Eigen::Vector3d::Zero();            // m/s^2
-  Eigen::Vector3d alpha = Eigen::Vector3d::Zero();        // rad/s^2
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();      // m/s^2
+  Eigen::Vector3d alpha = Eigen::Vector3d::Zero();  // rad/s^2
+};
 
-  KinematicMotion motion;  // kinematic bodies only
+// A body of the world: its properties, its state and its per-evaluation forces, each a part of
+// its own (b.x is the state's x; `BodyState& s = b` is the state alone).
+struct RigidBody : BodyProperties, BodyState, BodyForces {
+  BodyState& state() { return *this; }
+  const BodyState& state() const { return *this; }
 
   bool isDynamic() const { return kind == Kind::Dynamic; }
 

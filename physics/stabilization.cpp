@@ -42,8 +42,9 @@ ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constrai
 }
 
 std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints,
-                              ConstraintSystem& system, ConstraintSolver& solver) {
+                              ConstraintSystem& system, ConstraintSolver& solver, Eigen::VectorXd* impulses) {
   system.evaluate(bodies, constraints);
+  if (impulses) impulses->resize(0);
   if (system.rows() == 0) return "";
   std::vector<Vector6d> vel(bodies.size());
   for (size_t i = 0; i < bodies.size(); ++i) vel[i] << bodies[i].v, bodies[i].w;
@@ -58,6 +59,7 @@ std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints&
     b.v += dv[i].head<3>();
     b.w += dv[i].tail<3>();
   }
+  if (impulses) *impulses = y;
   return "";
 }
 

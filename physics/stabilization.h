@@ -33,8 +33,10 @@ ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constrai
                                   int max_iterations = 10);
 
 // Velocities of the dynamic bodies onto J v = -J_k v_k (kinematic bodies' velocities as they
-// are). Returns "" or what failed.
+// are). Returns "" or what failed. `impulses` (optional): the multiplier y of every row (N s),
+// dv = M^-1 J^T y; a contact reads its own rows' impulse from it.
 std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints,
-                              ConstraintSystem& system, ConstraintSolver& solver);
+                              ConstraintSystem& system, ConstraintSolver& solver,
+                              Eigen::VectorXd* impulses = nullptr);
 
 }  // namespace ponyhop

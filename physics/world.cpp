@@ -72,6 +72,10 @@ int World::addJoint(std::unique_ptr<Constraint> joint) {
   return static_cast<int>(joints_.size()) - 1;
 }
 
+void World::addController(std::shared_ptr<Controller> controller) { controllers_.push_back(std::move(controller)); }
+
+void World::addContactSet(std::shared_ptr<ContactSet> contacts) { contacts_.push_back(std::move(contacts)); }
+
 int World::addForceElement(std::unique_ptr<ForceElement> element) {
   forces_.push_back(std::move(element));
   return static_cast<int>(forces_.size()) - 1;
@@ -84,6 +88,8 @@ int World::addForceElement(std::unique_ptr<ForceElement> element) {
 
 void World::step() {
   if (!ok()) return;
+  think();  // controllers' state machines: setpoints for this step (Think, seed 000)
+  if (!ok()) return;
   last_substeps_ = 0;
   last_error_ = 0.0;
   if (params_.tolerance > 0.0) {
@@ -92,8 +98,11 @@ void World::step() {
     int n = std::max(params_.substeps, tolerance_substeps_);
     const double h = params_.dt / n;
     for (int i = 0; i < n && ok(); ++i) advanceToTolerance(h, 0);
+    // A local error of order p + 1 grows 2^(p+1) x when the substep doubles: coarser only when
+    // that (with a margin of 2) still meets the tolerance.
     const int coarse = std::max(1, last_substeps_ / 2);
-    tolerance_substeps_ = last_error_ < params_.tolerance / 16.0 ? std::max(1, coarse / 2) : coarse;
+    const double growth = 2.0 * std::ldexp(1.0, methodOrder() + 1);
+    tolerance_substeps_ = last_error_ < params_.tolerance / growth ? std::max(1, coarse / 2) : coarse;
     return;
   }
   // Enough substeps that the fastest body turns at most max_step_rotation per substep at the
@@ -109,7 +118,9 @@ void World::step() {
 // not converge, or a body turned more than 2 max_step_rotation) the substep is undone and taken
 // as two half steps instead, up to kMaxSplits times.
 void World::substep(double h, int depth) {
-  const Snapshot start = snapshot();
+  if (substep_starts_.empty()) substep_starts_.resize(kMaxSplits + 1);  // never resized again
+  Snapshot& start = substep_starts_[depth];
+  snapshotInto(start);
   if (!takeStep(h)) {
     if (!ok()) return;
     if (depth < kMaxSplits) {
@@ -122,7 +133,7 @@ void World::substep(double h, int depth) {
                 "the joints were pulled apart faster than any step can follow (a teleported kinematic parent, "
                 "an extreme mass ratio, NaN-free but runaway forces): check the prescribed motion and parameters");
   }
-  resolveContacts();  // contact hook (the hopper's active set)
+  resolveContacts();  // contact sets (the hopper's foot: an active set)
   ++last_substeps_;
 }
 
@@ -134,7 +145,7 @@ bool World::takeStep(double h) {
     updateKinematicBodies(time_);  // prescribed bodies: pose, velocity, acceleration at t
     followTeleports(h);            // a prescribed body that jumps within the step carries its chain along
     applyExternalForces();         // gravity, joint damping, bending springs, air drag
-    applyControllerForces();       // controller hook (empty for chains; the hopper adds one)
+    applyControllerForces();       // controllers' force laws (none for chains; the hopper's muscles)
     solveJointForces();            // A lambda = b, F_c = J^T lambda, body accelerations
     watchStability(h);             // explicit methods: stop when h is beyond the stability limit
     integrate(h);                  // t += h (RK4 re-runs the four stages above at its stage times)
@@ -162,8 +173,11 @@ void World::advanceToTolerance(double h, int depth) {
   restore(start);
   bool fine_ok = takeStep(0.5 * h);
   if (fine_ok) fine_ok = takeStep(0.5 * h);
-  const double err = coarse_ok && fine_ok ? positionDistance(coarse, gatherState())
-                                          : std::numeric_limits<double>::infinity();
+  // The kept pair's error (Richardson): a method of order p makes the single step's error 2^p
+  // times the pair's, so the difference is (2^p - 1) times the pair's error.
+  const double err = coarse_ok && fine_ok
+                         ? positionDistance(coarse, gatherState()) / (std::ldexp(1.0, methodOrder()) - 1.0)
+                         : std::numeric_limits<double>::infinity();
   if (err > params_.tolerance && depth < kMaxSplits) {
     restore(start);
     advanceToTolerance(0.5 * h, depth + 1);
@@ -177,6 +191,7 @@ void World::advanceToTolerance(double h, int depth) {
     }
     return;
   }
+  if (err > params_.tolerance) ++tolerance_misses_;  // the deepest split still misses: counted, not hidden
   last_error_ = std::max(last_error_, err);
   resolveContacts();
   last_substeps_ += 2;
@@ -223,6 +238,12 @@ void World::followTeleports(double h) {
   }
 }
 
+void World::snapshotInto(Snapshot& s) const {
+  gatherStateInto(s.state);
+  s.time = time_;
+  s.monitor = monitor_;
+}
+
 void World::restore(const Snapshot& s) {
   scatterState(s.state);
   time_ = s.time;
@@ -230,6 +251,17 @@ void World::restore(const Snapshot& s) {
   monitor_ = s.monitor;
   split_reason_.clear();
   status_.clear();  // only called on a world that was running when the snapshot was taken
+}
+
+int World::methodOrder() const {
+  switch (params_.integrator) {
+    case Integrator::RK4:
+      return 4;
+    case Integrator::Rattle:
+      return 2;
+    default:
+      return 1;  // symplectic and linearly implicit Euler
+  }
 }
 
 double World::positionDistance(const State& a, const State& b) const {
@@ -253,7 +285,9 @@ double World::maxAngularSpeed() const {
 void World::watchStability(double h) {
   if (!ok() || params_.integrator == Integrator::ImplicitEuler) return;
   const double limit = params_.integrator == Integrator::RK4 ? 2.83 : 2.0;
-  if (!monitor_.observe(h, gatherState(), gatherAccelerations(), limit)) return;
+  gatherStateInto(state_scratch_);
+  gatherAccelerationsInto(acc_scratch_);
+  if (!monitor_.observe(h, state_scratch_, acc_scratch_, limit)) return;
   char what[160];
   std::snprintf(what, sizeof what,
                 "the step is unstable: h rho = %.3g > %.3g (stiffness estimate rho = %.3g 1/s) and the state "
@@ -263,6 +297,10 @@ void World::watchStability(double h) {
                       ") on forces too stiff for the step (stiff springs, servos, stops or damping): reduce dt, raise "
                       "substeps, or use integrator = implicit_euler";
   stop("integrate", what, cause.c_str());
+}
+
+void World::think() {
+  for (const auto& c : controllers_) c->think(*this);
 }
 
 void World::updateKinematicBodies(double t) {
@@ -294,8 +332,8 @@ void World::applyExternalForces() {
 
 void World::applyControllerForces() {
   const auto timed = clock_.time(Stage::Controller);
-  if (!ok() || !controller_) return;
-  controller_(stage_time_, bodies_);
+  if (!ok() || controllers_.empty()) return;
+  for (const auto& c : controllers_) c->applyForces(*this, stage_time_);
   for (const RigidBody& b : bodies_) {
     if (b.isDynamic() && (!b.force.allFinite() || !b.torque.allFinite())) {
       return stop("controller forces", "non-finite force on '" + b.name + "'",
@@ -342,13 +380,15 @@ void World::integrate(double h) {
     checkBodies("integrate", false);
     return;
   }
-  State state = gatherState();
+  State& state = state_scratch_;
+  gatherStateInto(state);
+  gatherAccelerationsInto(acc_scratch_);
   switch (params_.integrator) {
     case Integrator::SymplecticEuler:
-      symplecticEulerStep(h, gatherAccelerations(), state);
+      symplecticEulerStep(h, acc_scratch_, state);
       break;
     case Integrator::RK4:
-      rk4Step(time_, h, gatherAccelerations(),
+      rk4Step(time_, h, acc_scratch_,
               [this](double t, const State& s, Accelerations& out) { accelerationsAt(t, s, out); }, state);
       break;
     default:
@@ -383,8 +423,8 @@ void World::stabilize() {
 
 void World::resolveContacts() {
   const auto timed = clock_.time(Stage::Contact);
-  if (!ok() || !contact_) return;
-  contact_(time_, bodies_);
+  if (!ok() || contacts_.empty()) return;
+  for (const auto& c : contacts_) c->update(*this);
   checkBodies("contact", false);
 }
 
@@ -440,34 +480,67 @@ void World::evaluate() {
 void World::projectVelocities() {
   if (!ok()) return;
   updateKinematicBodies(time_);
-  if (std::string e = ponyhop::projectVelocities(bodies_, joints_, system_, *solver_); !e.empty()) {
-    stop("velocity projection", e, "redundant or duplicate joints");
-  }
+  if (std::string e = projectVelocitiesOntoJoints(); !e.empty()) stop("velocity projection", e, "redundant or duplicate joints");
+}
+
+ProjectionResult World::projectPositionsOntoJoints() { return ponyhop::projectPositions(bodies_, joints_, system_, *solver_); }
+
+std::string World::projectVelocitiesOntoJoints(Eigen::VectorXd* impulses) {
+  return ponyhop::projectVelocities(bodies_, joints_, system_, *solver_, impulses);
+}
+
+World::SavedState World::saveState() const {
+  SavedState s;
+  s.bodies.reserve(bodies_.size());
+  for (const RigidBody& b : bodies_) s.bodies.push_back(b.state());
+  s.time = time_;
+  for (const auto& c : controllers_) s.controllers.push_back(c->saveState());
+  for (const auto& c : contacts_) s.contacts.push_back(c->saveState());
+  s.monitor = monitor_;
+  s.tolerance_substeps = tolerance_substeps_;
+  s.status = status_;
+  return s;
+}
+
+void World::restoreState(const SavedState& s) {
+  for (size_t i = 0; i < bodies_.size() && i < s.bodies.size(); ++i) bodies_[i].state() = s.bodies[i];
+  time_ = stage_time_ = s.time;
+  for (size_t i = 0; i < controllers_.size() && i < s.controllers.size(); ++i) controllers_[i]->restoreState(s.controllers[i]);
+  for (size_t i = 0; i < contacts_.size() && i < s.contacts.size(); ++i) contacts_[i]->restoreState(s.contacts[i]);
+  monitor_ = s.monitor;
+  tolerance_substeps_ = s.tolerance_substeps;
+  status_ = s.status;
+  split_reason_.clear();
 }
 
 State World::gatherState() const {
-  State s(dynamic_.size());
-  for (size_t k = 0; k < dynamic_.size(); ++k) {
-    const RigidBody& b = bodies_[dynamic_[k]];
-    s[k] = {b.x, b.q, b.v, b.w};
-  }
+  State s;
+  gatherStateInto(s);
   return s;
+}
+
+void World::gatherStateInto(State& s) const {
+  s.resize(dynamic_.size());
+  for (size_t k = 0; k < dynamic_.size(); ++k) s[k] = bodies_[dynamic_[k]].state();
 }
 
 void World::scatterState(const State& state) {
   for (size_t k = 0; k < dynamic_.size(); ++k) {
-    RigidBody& b = bodies_[dynamic_[k]];
-    b.x = state[k].x;
-    b.q = state[k].q.normalized();  // RK4 stage quaternions are not unit
-    b.v = state[k].v;
-    b.w = state[k].w;
+    BodyState& s = bodies_[dynamic_[k]].state();
+    s = state[k];
+    s.q.normalize();  // RK4 stage quaternions are not unit
   }
 }
 
 Accelerations World::gatherAccelerations() const {
-  Accelerations a(dynamic_.size());
-  for (size_t k = 0; k < dynamic_.size(); ++k) a[k] = {bodies_[dynamic_[k]].a, bodies_[dynamic_[k]].alpha};
+  Accelerations a;
+  gatherAccelerationsInto(a);
   return a;
+}
+
+void World::gatherAccelerationsInto(Accelerations& a) const {
+  a.resize(dynamic_.size());
+  for (size_t k = 0; k < dynamic_.size(); ++k) a[k] = {bodies_[dynamic_[k]].a, bodies_[dynamic_[k]].alpha};
 }
 
 bool World::checkBodies(const char* stage, bool accelerations) {

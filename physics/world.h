@@ -4,6 +4,7 @@
 // stops and status() says when, in which stage, and the likely cause.
 #pragma once
 
+#include <any>
 #include <functional>
 #include <memory>
 #include <string>
@@ -11,6 +12,7 @@
 
 #include "physics/constraint.h"
 #include "physics/constraint_solver.h"
+#include "physics/controller.h"
 #include "physics/featherstone.h"
 #include "physics/force_elements.h"
 #include "physics/integrator.h"
@@ -18,18 +20,12 @@
 #include "physics/rigid_body.h"
 #include "physics/stage_times.h"
 #include "physics/stability_monitor.h"
+#include "physics/stabilization.h"
 
 namespace ponyhop {
 
 class World {
  public:
-  // Adds controller forces to the bodies' accumulators. Contract (seed 000): uses only the
-  // current state and time, keeps no state, may be called at any time (RK4 calls it at each
-  // stage), smooth in the state.
-  using Controller = std::function<void(double t, std::vector<RigidBody>& bodies)>;
-  // Resolves contacts after stabilization (may change positions and velocities).
-  using ContactHandler = std::function<void(double t, std::vector<RigidBody>& bodies)>;
-
   explicit World(const PhysicsParams& params);  // bad params: !ok(), status() says why
 
   // Building. Each returns the new index.
@@ -37,8 +33,10 @@ class World {
   int addKinematicBody(KinematicMotion motion, std::string name);  // state set at time()
   int addJoint(std::unique_ptr<Constraint> joint);
   int addForceElement(std::unique_ptr<ForceElement> element);
-  void setController(Controller controller) { controller_ = std::move(controller); }
-  void setContactHandler(ContactHandler handler) { contact_ = std::move(handler); }
+  // Controllers (think + controller forces) and contact sets (the contact stage), any number,
+  // called in the order added (physics/controller.h).
+  void addController(std::shared_ptr<Controller> controller);
+  void addContactSet(std::shared_ptr<ContactSet> contacts);
   // Potential energy reported = gravity + springs - reference (builders set the zero).
   void addPotentialReference(double joules) { potential_reference_ += joules; }
   // Stops the world with a message (builders: invalid parameters).
@@ -51,13 +49,38 @@ class World {
   // estimated position error of one of them (m; tolerance mode only, else 0).
   int lastSubsteps() const { return last_substeps_; }
   double lastErrorEstimate() const { return last_error_; }
+  // Tolerance mode: substeps accepted since the start whose estimate was still above the
+  // tolerance at the deepest split (the promise not kept; 0 when it always was).
+  int toleranceMisses() const { return tolerance_misses_; }
+  // The order of the method in use (1 symplectic/implicit Euler, 2 RATTLE, 4 RK4).
+  int methodOrder() const;
 
   // The force stages at the current state and time, without stepping: fills every dynamic
   // body's a, alpha and constraint force/torque, and lambda(). For tests and drawing forces.
   void evaluate();
   // Velocities of the dynamic bodies onto the joints' velocity constraints (J v = -J_k v_k) in
-  // the mass metric: the least-kinetic-energy consistent velocities (Kelvin).
+  // the mass metric: the least-kinetic-energy consistent velocities (Kelvin). Stops the world
+  // when it fails.
   void projectVelocities();
+  // The projections of physics/stabilization.h through this world's solver (dense, tree, ...),
+  // at the bodies' current state, for contact sets (impacts). They do not stop the world:
+  // "" or what failed. `impulses`: the velocity projection's multiplier of every row (N s).
+  ProjectionResult projectPositionsOntoJoints();
+  std::string projectVelocitiesOntoJoints(Eigen::VectorXd* impulses = nullptr);
+
+  // A complete snapshot: every body's state, the time, the controllers' and contact sets' own
+  // state and the step control's; restoreState(saveState()) continues bit for bit as before.
+  struct SavedState {
+    std::vector<BodyState> bodies;
+    double time = 0.0;
+    std::vector<std::any> controllers;
+    std::vector<std::any> contacts;
+    StabilityMonitor monitor;
+    int tolerance_substeps = 0;
+    std::string status;  // "" while running; a restore of a running state revives a stopped world
+  };
+  SavedState saveState() const;
+  void restoreState(const SavedState& s);
 
   double time() const { return time_; }
   const PhysicsParams& params() const { return params_; }
@@ -90,6 +113,7 @@ class World {
 
  private:
   // The stages of a step, in the method's order.
+  void think();
   void updateKinematicBodies(double t);
   void applyExternalForces();
   void applyControllerForces();
@@ -111,12 +135,17 @@ class World {
     StabilityMonitor monitor;
   };
   Snapshot snapshot() const { return {gatherState(), time_, monitor_}; }
+  // The same into `s`, reusing its storage (substep(): a steady step allocates nothing).
+  void snapshotInto(Snapshot& s) const;
   void restore(const Snapshot& s);
   double positionDistance(const State& a, const State& b) const;
   void accelerationsAt(double t, const State& state, Accelerations& out);
   State gatherState() const;
   void scatterState(const State& state);
   Accelerations gatherAccelerations() const;
+  // The same into existing storage (a steady step allocates nothing).
+  void gatherStateInto(State& out) const;
+  void gatherAccelerationsInto(Accelerations& out) const;
   bool checkBodies(const char* stage, bool accelerations);
   void stop(const char* stage, const std::string& what, const char* cause);
 
@@ -125,8 +154,8 @@ class World {
   std::vector<int> dynamic_;  // indices of the dynamic bodies, in state order
   Constraints joints_;
   ForceElements forces_;
-  Controller controller_;
-  ContactHandler contact_;
+  std::vector<std::shared_ptr<Controller>> controllers_;
+  std::vector<std::shared_ptr<ContactSet>> contacts_;
   std::unique_ptr<ConstraintSolver> solver_;
   std::unique_ptr<ArticulatedSystem> reduced_;  // featherstone only
   ConstraintSystem system_;
@@ -141,6 +170,10 @@ class World {
   int last_substeps_ = 0;
   double last_error_ = 0.0;
   int tolerance_substeps_ = 0;  // tolerance mode: substeps to start the next dt with
+  int tolerance_misses_ = 0;    // substeps accepted above the tolerance at the deepest split
+  std::vector<Snapshot> substep_starts_;  // substep()'s snapshot per split depth
+  State state_scratch_;                   // watchStability() and integrate()
+  Accelerations acc_scratch_;
 };
 
 }  // namespace ponyhop

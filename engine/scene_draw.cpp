@@ -1,0 +1,90 @@
+#include "engine/scene_draw.h"
+
+namespace ponyhop {
+namespace {
+
+Material material(const Eigen::Vector3f& color, float specular, float shininess) {
+  Material m;
+  m.color = color;
+  m.specular = specular;
+  m.shininess = shininess;
+  return m;
+}
+Material material(const Eigen::Vector3d& color, float specular, float shininess) {
+  return material(Eigen::Vector3f(color.cast<float>()), specular, shininess);
+}
+
+// The hopper: a rounded body (a fat capsule along x with a cap and two side pods), a ball at the
+// hip, the upper leg as a tapered tube and the foot as a thin rod ending in a rubber toe.
+void drawHopper(const Hopper& hopper, const HopperSection& p, const World& world, Renderer& renderer) {
+  const HopperShape s = hopper.shape(world);
+  const Material paint = material(p.body_color, 0.35f, 48.0f);
+  const Material metal = material(p.leg_color, 0.7f, 90.0f);
+  const Material dark = material(Eigen::Vector3f(0.18f, 0.19f, 0.21f), 0.4f, 60.0f);
+  const Material rubber = material(p.foot_color, 0.08f, 12.0f);
+
+  const Eigen::Vector3d half = 0.5 * p.body_size;
+  const auto at = [&](double x, double y, double z) { return Eigen::Vector3d(s.body_x + s.body_q * Eigen::Vector3d(x, y, z)); };
+  const double rz = half.z();
+  const double ry = 0.75 * half.y();
+  // Main hull: a capsule along the body's x axis, squashed look from two overlapping capsules.
+  renderer.drawCapsule(at(-(half.x() - rz), 0.0, 0.0), at(half.x() - rz, 0.0, 0.0), rz, paint);
+  renderer.drawCapsule(at(-(half.x() - rz) * 0.8, 0.0, 0.15 * rz), at((half.x() - rz) * 0.8, 0.0, 0.15 * rz), 0.9 * rz, paint);
+  // Side pods (the body's mass is spread out: its inertia is large) and a sensor dome on top.
+  renderer.drawTaperedCapsule(at(-0.55 * half.x(), ry + 0.3 * rz, -0.1 * rz), at(0.35 * half.x(), ry + 0.3 * rz, -0.1 * rz),
+                              0.55 * rz, 0.45 * rz, dark);
+  renderer.drawTaperedCapsule(at(-0.55 * half.x(), -(ry + 0.3 * rz), -0.1 * rz), at(0.35 * half.x(), -(ry + 0.3 * rz), -0.1 * rz),
+                              0.55 * rz, 0.45 * rz, dark);
+  renderer.drawSphere(at(0.25 * half.x(), 0.0, 0.85 * rz), 0.45 * rz, metal);
+  // Hip ball, upper leg (tube), foot (rod) and toe.
+  renderer.drawSphere(s.hip, 1.35 * p.upper_radius, dark);
+  renderer.drawTaperedCapsule(s.hip, s.upper_bottom, p.upper_radius, 0.8 * p.upper_radius, metal);
+  renderer.drawTaperedCapsule(s.foot_top, s.toe, p.foot_radius, 0.8 * p.foot_radius, metal);
+  renderer.drawSphere(s.toe, p.toe_radius, rubber);
+}
+
+}  // namespace
+
+void SceneDraw::upload(const Sim& sim, Renderer& renderer) {
+  if (renderer_ == &renderer) return;
+  release();
+  renderer_ = &renderer;
+  if (sim.head()) head_ = renderer.upload(sim.head()->mesh);
+}
+
+void SceneDraw::release() {
+  if (renderer_ && head_.valid()) renderer_->release(head_);
+  head_ = MeshHandle{};
+  renderer_ = nullptr;
+}
+
+void SceneDraw::draw(const Sim& sim, Renderer& renderer) const {
+  const Scene& scene = sim.scene();
+  const World& world = sim.world();
+  for (size_t i = 0; i < sim.hoppers().size(); ++i) {
+    const bool listed = !(scene.hopper && i == 0);
+    const HopperSection& look = listed ? scene.hoppers[i - (scene.hopper ? 1 : 0)] : *scene.hopper;
+    if (sim.hoppers()[i]->built()) drawHopper(*sim.hoppers()[i], look, world, renderer);
+  }
+  if (sim.headBody() >= 0 && head_.valid()) {
+    const RigidBody& b = world.body(sim.headBody());
+    Eigen::Affine3d pose = Eigen::Affine3d::Identity();
+    pose.translate(b.x);
+    pose.rotate(b.q);
+    // A head drawn with its file's colours (sim/mesh_data.h) is not tinted by head.color.
+    const Eigen::Vector3d tint = sim.head()->mesh.colors.empty() ? scene.head->color : Eigen::Vector3d::Ones();
+    renderer.drawMesh(head_, pose * sim.head()->mesh_to_body, material(tint, 0.18f, 24.0f));
+  }
+  if (const Chain* chain = sim.chain()) {
+    const Material hair = material(scene.chain->color, 0.35f, 60.0f);
+    for (const CapsuleSegment& s : chain->segments(world)) {
+      renderer.drawTaperedCapsule(s.top, s.bottom, s.radius_top, s.radius_bottom, hair);
+    }
+    if (sim.anchorBody() >= 0) {
+      renderer.drawSphere(chain->anchor(world), 0.8 * chain->radii.front() + 0.004,
+                          material(Eigen::Vector3f(0.25f, 0.27f, 0.30f), 0.6f, 80.0f));
+    }
+  }
+}
+
+}  // namespace ponyhop

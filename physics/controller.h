@@ -1,0 +1,43 @@
+// What acts on a world besides its joints and force elements, called by World::step at the
+// method's places (Hecker, seed 000, "Simulation Loop - Control"):
+//
+//   Controller   think(world)            once per step, before anything moves: a state machine
+//                                        that changes only setpoints (the hopper's Think);
+//                applyForces(world, t)   at every force evaluation (RK4 and RATTLE call it at
+//                                        their stage times): adds forces and torques to the
+//                                        bodies' accumulators from the current state, t and the
+//                                        setpoints only; smooth, keeps no state.
+//   ContactSet   update(world)           after every accepted substep (the contact stage): adds,
+//                                        changes or drops its constraint rows (an active set),
+//                                        may project positions and velocities (impacts).
+//
+// A World holds any number of each (World::addController, World::addContactSet) and hands them
+// itself by reference: nothing keeps a pointer to a World, so a World may move.
+// saveState/restoreState carry what think()/update() change, so that World::saveState() is a
+// complete snapshot.
+#pragma once
+
+#include <any>
+
+namespace ponyhop {
+
+class World;
+
+class Controller {
+ public:
+  virtual ~Controller() = default;
+  virtual void think(World& /*world*/) {}
+  virtual void applyForces(World& world, double t) = 0;
+  virtual std::any saveState() const { return {}; }
+  virtual void restoreState(const std::any& /*state*/) {}
+};
+
+class ContactSet {
+ public:
+  virtual ~ContactSet() = default;
+  virtual void update(World& world) = 0;
+  virtual std::any saveState() const { return {}; }
+  virtual void restoreState(const std::any& /*state*/) {}
+};
+
+}  // namespace ponyhop

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Long runs stay bounded: each shipped scene is simulated (`ponyhop sim`, physics only) for about
+# SECONDS of wall time; the peak resident memory (VmHWM) is read at 1 minute and at the end, and
+# every value of the CSV must be finite. Usage: scripts/soak.sh PONYHOP [SECONDS] [SCENE...]
+# (`make soak`: every shipped scene, 600 s each, two at a time on two cores).
+set -euo pipefail
+PONYHOP=${1:?usage: soak.sh PONYHOP [SECONDS] [SCENE...]}
+SECONDS_EACH=${2:-600}
+shift $(( $# >= 2 ? 2 : 1 ))
+SCENES=("$@")
+if [ ${#SCENES[@]} -eq 0 ]; then SCENES=(assets/scenes/*.json); fi
+PARALLEL=${SOAK_PARALLEL:-2}
+WORK=$(mktemp -d /tmp/ponyhop-soak.XXXXXX)
+trap 'rm -rf "$WORK"' EXIT
+
+hwm_mb() { awk '/^VmHWM/ {printf "%.0f", $2 / 1024}' "/proc/$1/status" 2>/dev/null || echo "?"; }
+
+soak_one() {
+  local scene=$1 name csv speed duration pid start now hwm1="?" hwm_end="?" rc bad rows
+  name=$(basename "$scene" .json)
+  csv="$WORK/$name.csv"
+  # Calibrate: simulated seconds per wall second from a 2 s run, then a run of SECONDS_EACH.
+  start=$(date +%s.%N)
+  "$PONYHOP" sim "$scene" --duration 2 --csv "$csv" 2>/dev/null
+  speed=$(awk -v s="$start" -v e="$(date +%s.%N)" 'BEGIN { printf "%.6f", 2 / (e - s) }')
+  duration=$(awk -v v="$speed" -v t="$SECONDS_EACH" 'BEGIN { printf "%.3f", v * t }')
+  "$PONYHOP" sim "$scene" --duration "$duration" --csv "$csv" 2>"$WORK/$name.log" &
+  pid=$!
+  start=$(date +%s)
+  while kill -0 "$pid" 2>/dev/null; do
+    now=$(( $(date +%s) - start ))
+    h=$(hwm_mb "$pid")
+    [ "$h" != "?" ] && hwm_end=$h
+    if [ "$now" -ge 60 ] && [ "$hwm1" = "?" ]; then hwm1=$h; fi
+    sleep 2
+  done
+  rc=0; wait "$pid" || rc=$?
+  now=$(( $(date +%s) - start ))
+  rows=$(($(wc -l < "$csv") - 1))
+  bad=$(tail -n +2 "$csv" | grep -ciE 'nan|inf' || true)
+  printf "soak: %-16s %6.0f s simulated in %4d s wall, exit %d, max RSS %s MB at 1 min, %s MB at the end, %d rows, %d with a non-finite value\n" \
+    "$name" "$duration" "$now" "$rc" "$hwm1" "$hwm_end" "$rows" "$bad"
+  rm -f "$csv"
+  [ "$rc" -eq 0 ] && [ "$bad" -eq 0 ]
+}
+
+echo "soak: ${#SCENES[@]} scenes, ${SECONDS_EACH} s each, $PARALLEL at a time ($(nproc) cores)"
+fail=0
+running=0
+for s in "${SCENES[@]}"; do
+  soak_one "$s" &
+  running=$((running + 1))
+  if [ "$running" -ge "$PARALLEL" ]; then
+    wait -n || fail=1
+    running=$((running - 1))
+  fi
+done
+while [ "$running" -gt 0 ]; do
+  wait -n || fail=1
+  running=$((running - 1))
+done
+exit $fail

@@ -1,0 +1,249 @@
+// A scene file says what exists; the engine builds exactly that and nothing else.
+// Sections that are absent from the file (head, anchor, chain, hopper) are not built, stepped or
+// drawn. Every field has a default and a unit; see docs/SCENES.md for the format.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "physics/chain_params.h"
+#include "physics/hopper_params.h"
+#include "physics/keyframe_params.h"
+#include "physics/physics_params.h"
+#include "physics/reflect.h"
+
+namespace ponyhop {
+
+enum class CameraMode { Fixed, Orbit, Follow };
+template <>
+struct EnumNames<CameraMode> {
+  static constexpr std::array<std::string_view, 3> names{"fixed", "orbit", "follow"};
+};
+
+struct CameraParams {
+  CameraMode mode = CameraMode::Fixed;
+  Eigen::Vector3d position{0.9, -1.4, 0.55};  // m (fixed mode)
+  Eigen::Vector3d target{0.0, 0.0, 0.0};      // m (fixed and orbit: the point looked at)
+  double fov = 35.0;             // deg, vertical field of view
+  double orbit_distance = 1.6;   // m (orbit, follow)
+  double orbit_height = 0.35;    // m above the target (orbit, follow)
+  double orbit_speed = 10.0;     // deg/s around the target (orbit)
+  double orbit_angle = -60.0;    // deg, azimuth at t = 0 (orbit, follow), from +x toward +y
+  std::string follow = "";       // follow mode: "head", "hopper" or "chain" (its first link)
+
+  template <class V>
+  void reflect(V& v) {
+    v("mode", mode, {.help = "fixed position, orbit around the target, or follow a body"});
+    v("position", position, {.unit = "m", .min = -1e4, .max = 1e4, .help = "Camera position (fixed)"});
+    v("target", target, {.unit = "m", .min = -1e4, .max = 1e4, .help = "Point looked at"});
+    v("fov", fov, {.unit = "deg", .min = 5, .max = 120, .help = "Vertical field of view"});
+    v("orbit_distance", orbit_distance,
+      {.unit = "m", .min = 0.05, .max = 1e3, .help = "Distance to the target (orbit, follow)", .log = true});
+    v("orbit_height", orbit_height,
+      {.unit = "m", .min = -1e3, .max = 1e3, .help = "Height above the target (orbit, follow)"});
+    v("orbit_speed", orbit_speed, {.unit = "deg/s", .min = -360, .max = 360, .help = "Orbit rate"});
+    v("orbit_angle", orbit_angle, {.unit = "deg", .min = -360, .max = 360, .help = "Azimuth at t = 0"});
+    v("follow", follow, {.help = "Body followed in follow mode: head, hopper or chain"});
+  }
+};
+
+struct LightParams {
+  Eigen::Vector3d direction{-0.5, 0.6, -1.0};   // toward which the key light shines (world)
+  Eigen::Vector3d color{1.0, 0.96, 0.9};        // rgb 0..1
+  double intensity = 2.6;                        // key light multiplier
+  double ambient = 0.28;                         // hemispheric ambient / fill strength
+  double fill = 0.35;                            // second, shadowless fill light from the camera side
+  int shadow_size = 2048;                        // px, shadow map resolution
+  double shadow_softness = 1.5;                  // texels, PCF filter radius
+
+  template <class V>
+  void reflect(V& v) {
+    v("direction", direction, {.min = -1, .max = 1, .help = "Direction the key light shines"});
+    v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Key light colour"});
+    v("intensity", intensity, {.min = 0, .max = 20, .help = "Key light strength"});
+    v("ambient", ambient, {.min = 0, .max = 5, .help = "Sky/ground ambient strength"});
+    v("fill", fill, {.min = 0, .max = 5, .help = "Fill light strength"});
+    v("shadow_size", shadow_size, {.unit = "px", .min = 256, .max = 8192, .help = "Shadow map size", .log = true});
+    v("shadow_softness", shadow_softness, {.unit = "texel", .min = 0, .max = 8, .help = "Shadow blur radius"});
+  }
+};
+
+// How much work a frame gets (docs/RENDERING.md, "Quality"). final: the picture as configured;
+// draft: no anti-aliasing, a shadow map a quarter the size with a plain 5-tap filter (no contact
+// hardening): a quick preview of a long video, and the window while something moves.
+enum class RenderQuality { Draft, Final };
+template <>
+struct EnumNames<RenderQuality> {
+  static constexpr std::array<std::string_view, 2> names{"draft", "final"};
+};
+// Anti-aliasing when samples > 1: a post-process edge filter on the finished frame (one cheap
+// full-screen pass), or multisampling with `samples` samples (costly on a software rasterizer).
+enum class AntiAlias { Post, Msaa };
+template <>
+struct EnumNames<AntiAlias> {
+  static constexpr std::array<std::string_view, 2> names{"post", "msaa"};
+};
+
+struct RenderParams {
+  int width = 1280;           // px
+  int height = 720;           // px
+  double fps = 30.0;          // frames per second of output
+  int frames = 150;           // frames rendered by `ponyhop render` without --frames
+  int samples = 4;            // anti-aliasing: 1 = off; > 1 = on (MSAA samples with antialias = msaa)
+  AntiAlias antialias = AntiAlias::Post;
+  RenderQuality quality = RenderQuality::Final;
+  Eigen::Vector3d background{0.80, 0.84, 0.88};  // rgb 0..1 (top of the gradient)
+  Eigen::Vector3d ground_color{0.72, 0.72, 0.70};  // rgb 0..1
+  double grid_spacing = 0.25;  // m, ground checker size (0: plain)
+  bool ground = true;          // draw the ground plane
+  double ground_height = 0.0;  // m, height of the drawn ground plane (z)
+  bool transparent = false;    // no background: PNGs with alpha (the ground is drawn when `ground`)
+
+  template <class V>
+  void reflect(V& v) {
+    v("width", width, {.unit = "px", .min = 16, .max = 8192, .help = "Image width"});
+    v("height", height, {.unit = "px", .min = 16, .max = 8192, .help = "Image height"});
+    v("fps", fps, {.unit = "1/s", .min = 1, .max = 1000, .help = "Frames per second of output"});
+    v("frames", frames, {.min = 1, .max = 1000000, .help = "Frames rendered by default"});
+    v("samples", samples, {.min = 1, .max = 16, .help = "Anti-aliasing: 1 = off, more = on (MSAA: samples per pixel)"});
+    v("antialias", antialias, {.help = "post: an edge filter on the finished frame (cheap); msaa: multisampling"});
+    v("quality", quality, {.help = "final: as configured; draft: no AA, smaller plainer shadows (previews)"});
+    v("background", background, {.unit = "rgb", .min = 0, .max = 1, .help = "Background colour"});
+    v("ground_color", ground_color, {.unit = "rgb", .min = 0, .max = 1, .help = "Ground colour"});
+    v("grid_spacing", grid_spacing, {.unit = "m", .min = 0, .max = 100, .help = "Ground checker size (0: plain)"});
+    v("ground", ground, {.help = "Draw the ground plane"});
+    v("ground_height", ground_height, {.unit = "m", .min = -1e3, .max = 1e3, .help = "Height of the ground plane"});
+    v("transparent", transparent, {.help = "No background: PNG frames with alpha (set ground false for the object alone)"});
+  }
+};
+
+enum class UpAxis { Y, Z, Auto };
+template <>
+struct EnumNames<UpAxis> {
+  static constexpr std::array<std::string_view, 3> names{"y", "z", "auto"};
+};
+
+// Where the head body's origin (the pivot its keyframes turn about) sits in the mesh.
+enum class HeadPivot { Auto, Mesh, Bounds };
+template <>
+struct EnumNames<HeadPivot> {
+  static constexpr std::array<std::string_view, 3> names{"auto", "mesh", "bounds"};
+};
+
+// How head.anchor_in_bounds / head.anchor give the ponytail's anchor.
+enum class AnchorSpace { Bounds, Mesh };
+template <>
+struct EnumNames<AnchorSpace> {
+  static constexpr std::array<std::string_view, 2> names{"bounds", "mesh"};
+};
+
+// Colours of the head: the file's materials or head.color.
+enum class HeadMaterials { Auto, File, Color };
+template <>
+struct EnumNames<HeadMaterials> {
+  static constexpr std::array<std::string_view, 3> names{"auto", "file", "color"};
+};
+
+// The head: a mesh (any format assimp reads) on a kinematic body driven by keyframes.
+// Head coordinates are the mesh file's own, before scale/rotation/offset. Placement comes from the
+// head itself (engine/head_fit.h): the up axis, the head's own part of a whole-body mesh, its
+// bounds, the pivot and the anchor.
+struct HeadParams {
+  std::string mesh = "assets/head/head.gltf";  // path, relative to the repository or the scene file
+  UpAxis up_axis = UpAxis::Auto;  // the mesh's up axis (auto: from the format, else the shape)
+  double height = 0.25;           // m, rescale so the head (not a whole body) is this tall (0: use `scale`)
+  double scale = 1.0;             // mesh units to m (when height is 0)
+  Eigen::Vector3d offset{0.0, 0.0, 0.0};    // m, added after scale and rotation (body frame)
+  Eigen::Vector3d rotation{0.0, 0.0, 0.0};  // deg, Euler x, y, z applied after the up-axis fix
+  HeadPivot pivot = HeadPivot::Auto;  // auto: the mesh origin when it lies near the head's centre, else the centre
+  AnchorSpace anchor_space = AnchorSpace::Bounds;
+  // Ponytail anchor, fractions of the head's bounds (x: right 0 .. left 1, y: face 0 .. back 1,
+  // z: bottom 0 .. top 1); the anchor is the head's surface point nearest to it.
+  Eigen::Vector3d anchor_in_bounds{0.5, 1.0, 0.75};
+  // Ponytail anchor, head coordinates (mesh units), used when anchor_space is "mesh": the default
+  // head's bun (assets/head/README.md).
+  Eigen::Vector3d anchor{0.0, 0.0906, -0.1140};
+  HeadMaterials materials = HeadMaterials::Auto;
+  Eigen::Vector3d color{0.93, 0.78, 0.67};  // rgb 0..1, skin
+  AnimationParams animation;
+
+  template <class V>
+  void reflect(V& v) {
+    v("mesh", mesh, {.help = "Mesh file (OBJ, glTF/GLB, FBX, PLY, STL, ...)"});
+    v("up_axis", up_axis, {.help = "The mesh's up axis (auto: glTF/Collada/X y, Quake/3DS/Blender z, else the longer of y and z)"});
+    v("height", height, {.unit = "m", .min = 0, .max = 100, .help = "Rescale so the head (above the neck of a whole body) is this tall (0: use scale)"});
+    v("scale", scale, {.min = 1e-6, .max = 1e6, .help = "Mesh units to metres", .log = true});
+    v("offset", offset, {.unit = "m", .min = -1e3, .max = 1e3, .help = "Offset in the body frame"});
+    v("rotation", rotation, {.unit = "deg", .min = -360, .max = 360, .help = "Mesh rotation, Euler x, y, z"});
+    v("pivot", pivot, {.help = "Head body origin: auto (the mesh origin if near the head's centre), mesh, bounds (centre)"});
+    v("anchor_space", anchor_space, {.help = "Ponytail anchor from anchor_in_bounds (bounds) or anchor (mesh)"});
+    v("anchor_in_bounds", anchor_in_bounds,
+      {.min = 0, .max = 1, .help = "Anchor as fractions of the head's bounds: x right..left, y face..back, z bottom..top"});
+    v("anchor", anchor, {.min = -1e6, .max = 1e6, .help = "Ponytail anchor in the mesh's coordinates (anchor_space mesh)"});
+    v("materials", materials, {.help = "auto: the file's textures/vertex colours/colours when it has more than one plain colour"});
+    v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Skin colour"});
+    v("animation", animation, {.help = "Keyframed motion of the head"});
+  }
+};
+
+// The scene file's chain and hopper sections: the physics parameters (physics/) plus how they
+// are drawn, under the same keys (`chain.color` sits beside `chain.links`). Physics reads only
+// the base; engine/scene_draw.h reads the rest.
+struct ChainSection : ChainParams {
+  Eigen::Vector3d color{0.36, 0.22, 0.12};  // rgb 0..1, hair brown
+
+  template <class V>
+  void reflect(V& v) {
+    ChainParams::reflect(v);
+    v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Hair colour"});
+  }
+};
+
+struct HopperSection : HopperParams {
+  Eigen::Vector3d body_color{0.86, 0.33, 0.16};  // rgb 0..1
+  Eigen::Vector3d leg_color{0.62, 0.65, 0.70};
+  Eigen::Vector3d foot_color{0.12, 0.12, 0.13};
+
+  template <class V>
+  void reflect(V& v) {
+    HopperParams::reflect(v);
+    v("body_color", body_color, {.unit = "rgb", .min = 0, .max = 1, .help = "Body colour"});
+    v("leg_color", leg_color, {.unit = "rgb", .min = 0, .max = 1, .help = "Upper leg colour"});
+    v("foot_color", foot_color, {.unit = "rgb", .min = 0, .max = 1, .help = "Foot colour"});
+  }
+};
+
+struct Scene {
+  std::string path;     // the file it was read from ("" when built in code)
+  std::string name;     // a short title
+  double duration = 5.0;  // s, simulated by `ponyhop sim` without --duration
+  RenderParams render;
+  CameraParams camera;
+  LightParams light;
+  PhysicsParams physics;
+  std::optional<HeadParams> head;
+  std::optional<AnchorParams> anchor;
+  std::optional<ChainSection> chain;
+  std::optional<HopperSection> hopper;
+  std::vector<HopperSection> hoppers;  // more hoppers in the same world (each with its own position)
+  std::vector<std::string> notes;  // what the reader chose for the user (not a field), shown on stderr
+
+  template <class V>
+  void reflect(V& v) {
+    v("name", name, {.help = "Title of the scene"});
+    v("duration", duration, {.unit = "s", .min = 0, .max = 1e6, .help = "Simulated time for `ponyhop sim`"});
+    v("render", render, {.help = "Output image settings"});
+    v("camera", camera, {.help = "Camera"});
+    v("light", light, {.help = "Lighting"});
+    v("physics", physics, {.help = "Simulation settings"});
+    v("head", head, {.help = "Keyframed kinematic head"});
+    v("anchor", anchor, {.help = "Prescribed anchor point of a chain scene"});
+    v("chain", chain, {.help = "Chain of links (the ponytail)"});
+    v("hopper", hopper, {.help = "Raibert hopper (body, leg, ground contact, controller)"});
+    v("hoppers", hoppers, {.help = "More hoppers in the same world, each a hopper section"});
+  }
+};
+
+}  // namespace ponyhop

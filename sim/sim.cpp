@@ -1,0 +1,184 @@
+#include "sim/sim.h"
+
+#include <cmath>
+
+#include "physics/anchor_motion.h"
+#include "physics/keyframes.h"
+#include "sim/head_fit.h"
+#include "sim/scene_io.h"
+
+namespace ponyhop {
+
+Sim::Sim(const Scene& scene, const AssetLoader* assets) : scene_(scene), world_(scene.physics) {
+  if (!world_.ok()) throw SceneError(scene_.path + ": physics: " + world_.status());
+  if (scene_.head) buildHead(assets);
+  buildHoppers();
+  if (scene_.chain) buildChain();
+  if (!world_.ok()) throw SceneError(scene_.path + ": " + world_.status());
+}
+
+void Sim::buildHead(const AssetLoader* assets) {
+  const HeadParams& h = *scene_.head;
+  const std::string mesh_path = resolveScenePath(h.mesh, scene_.path);
+  if (mesh_path.empty()) throw SceneError(scene_.path + ": head.mesh: " + h.mesh + ": file not found");
+  if (!assets) throw SceneError(scene_.path + ": head.mesh: this program reads no meshes (no asset loader)");
+  head_ = assets->loadHead(h, mesh_path, scene_.path);
+
+  // The head's motion: a clip file, the mesh file's own animation, or inline keys.
+  const TrackOptions options = trackOptions(h.animation);
+  std::optional<KeyframeTrack> track;
+  std::string source;
+  std::string err;
+  if (h.animation.clip == "mesh") {
+    source = mesh_path;
+    track = assets->loadMeshAnimation(h, mesh_path, options, &err);
+  } else {
+    std::vector<Keyframe> keys = h.animation.keys;
+    source = "head.animation.keys";
+    if (!h.animation.clip.empty()) {
+      source = resolveClipPath(h.animation.clip, scene_.path);
+      if (source.empty()) throw SceneError(scene_.path + ": head.animation.clip: no clip \"" + h.animation.clip + "\"");
+      keys = loadClipFile(source).keys;
+    }
+    if (keys.empty()) keys.push_back(Keyframe{});  // no animation: the head holds still at the origin
+    track = KeyframeTrack::fromKeyframes(keys, options, &err);
+  }
+  if (!track) throw SceneError(scene_.path + ": head.animation (" + source + "): " + err);
+  head_body_ = world_.addKinematicBody(makeMotion(*track), "head");
+}
+
+// An anchor from the head's bounds, moved off the surface as far as the hanging ponytail needs to
+// clear the head (sim/head_fit.h).
+Eigen::Vector3d Sim::standOffAnchor(const ChainParams& c) const {
+  const RigidBody& head = world_.body(head_body_);
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(head_->mesh.positions.size());
+  for (const auto& p : head_->mesh.positions) points.push_back(head.pointToWorld(head_->mesh_to_body * p.cast<double>()));
+  std::vector<double> radii;
+  for (int i = 0; i < c.links; ++i) {
+    const double s = c.links > 1 ? double(i) / (c.links - 1) : 0.0;
+    radii.push_back(c.radius * (1.0 + (c.taper - 1.0) * s));
+  }
+  const Eigen::Vector3d out = (head_->anchor - head_->centre).normalized();
+  const double push =
+      anchorStandOff(points, head.pointToWorld(head_->anchor), head.q * out, c.direction, c.length, radii);
+  return head_->anchor + push * out;
+}
+
+void Sim::buildHoppers() {
+  std::vector<const HopperParams*> all;
+  if (scene_.hopper) all.push_back(&*scene_.hopper);
+  for (const HopperSection& p : scene_.hoppers) all.push_back(&p);
+  for (size_t i = 0; i < all.size(); ++i) {
+    hoppers_.push_back(Hopper::add(world_, *all[i]));
+    if (!world_.ok()) {
+      const bool listed = !(scene_.hopper && i == 0);
+      const std::string which = listed ? "hoppers." + std::to_string(i - (scene_.hopper ? 1 : 0)) + ": " : "";
+      throw SceneError(scene_.path + ": " + which + world_.status());
+    }
+  }
+}
+
+void Sim::buildChain() {
+  const ChainParams& c = *scene_.chain;
+  int parent = -1;
+  Eigen::Vector3d anchor_local = Eigen::Vector3d::Zero();
+  Eigen::Vector3d v0 = Eigen::Vector3d::Zero();
+  switch (c.attach) {
+    case ChainAttach::Anchor: {
+      const AnchorParams& a = *scene_.anchor;
+      anchor_body_ = world_.addKinematicBody(anchorMotion(a), "anchor");
+      parent = anchor_body_;
+      // Constant velocity: the chain starts at rest in the anchor's frame (Galilean invariance).
+      if (a.motion == AnchorMotion::ConstantVelocity) v0 = a.velocity;
+      break;
+    }
+    case ChainAttach::Head:
+      parent = head_body_;
+      anchor_local = head_->anchor;
+      if (scene_.head->anchor_space == AnchorSpace::Bounds) anchor_local = standOffAnchor(c);
+      break;
+    case ChainAttach::Hopper: {
+      const Hopper* h = hopper();
+      if (!h || !h->built()) throw SceneError(scene_.path + ": chain.attach: \"hopper\" needs a hopper section");
+      // Two-way coupled: the chain hangs from the hopper's body, at the back.
+      parent = h->model().body;
+      anchor_local = h->backPoint();
+      v0 = world_.body(parent).v;
+      break;
+    }
+  }
+  chain_ = addChain(world_, c, parent, anchor_local, v0);
+}
+
+bool Sim::step() {
+  world_.step();  // the method's step order, controllers' Think first (physics/world.h)
+  return world_.ok();
+}
+
+bool Sim::advanceTo(double t) {
+  const double dt = scene_.physics.dt;
+  // Half a step of slack: frame times that are multiples of dt land on a step, not one short.
+  while (world_.ok() && world_.time() + 0.5 * dt <= t) step();
+  return world_.ok();
+}
+
+double Sim::chainEnergy() const {
+  if (!chain_) return 0.0;
+  return chain_->kineticEnergy(world_) + chain_->potentialEnergy(world_);
+}
+
+Eigen::Vector3d Sim::followPoint(const std::string& f) const {
+  const Hopper* h = hopper();
+  const int hopper_body = h && h->built() ? h->model().body : -1;
+  if (f == "chain" && chain_ && !chain_->empty()) return world_.body(chain_->links.front()).x;
+  if (f == "hopper" && hopper_body >= 0) return world_.body(hopper_body).x;
+  if (head_body_ >= 0 && (f.empty() || f == "head")) return world_.body(head_body_).x;
+  if (hopper_body >= 0) return world_.body(hopper_body).x;
+  if (chain_) return chain_->anchor(world_);
+  return Eigen::Vector3d::Zero();
+}
+
+Eigen::Vector3d Sim::trackedPoint() const {
+  if (chain_ && !chain_->empty()) return chain_->tip(world_);
+  if (const Hopper* h = hopper(); h && h->built()) return world_.body(h->model().body).x;
+  return Eigen::Vector3d::Zero();
+}
+
+Eigen::Vector3d Sim::trackedVelocity() const {
+  if (chain_ && !chain_->empty()) {
+    const RigidBody& b = world_.body(chain_->links.back());
+    return b.velocityAt(chain_->tip(world_));
+  }
+  if (const Hopper* h = hopper(); h && h->built()) return world_.body(h->model().body).v;
+  return Eigen::Vector3d::Zero();
+}
+
+SimSnapshot Sim::snapshot() const { return {world_.saveState()}; }
+
+void Sim::restore(const SimSnapshot& s) { world_.restoreState(s.world); }
+
+bool Sim::carryStateFrom(const Sim& from_sim, double time_shift) {
+  const World& from = from_sim.world();
+  if (!from.ok() || from.bodyCount() != world_.bodyCount() || from.joints().size() != world_.joints().size()) return false;
+  // Reduced coordinates (physics.solver = featherstone) keep their own state: not carried.
+  if (from.reduced() || world_.reduced()) return false;
+  for (int i = 0; i < world_.bodyCount(); ++i) {
+    if (from.body(i).isDynamic() != world_.body(i).isDynamic()) return false;
+  }
+  for (int i = 0; i < world_.bodyCount(); ++i) {
+    RigidBody& b = world_.body(i);
+    if (b.isDynamic()) {
+      b.state() = from.body(i).state();
+    } else if (b.motion) {
+      // The new world starts at its t = 0: its prescribed motions continue from time_shift.
+      KinematicMotion m = b.motion;
+      b.motion = [m, time_shift](double s) { return m(s + time_shift); };
+      b.setKinematicState(b.motion(0.0));
+    }
+  }
+  // The copied pose must still satisfy the joints (an edit that moved an attachment does not).
+  return world_.maxJointError() < 1e-4;
+}
+
+}  // namespace ponyhop

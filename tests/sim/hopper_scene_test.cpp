@@ -1,0 +1,96 @@
+// The hopper's scenes built by the sim layer: the course runs its script; the ponytail hangs from
+// the hopper's body, pulls on it, and the hopper still hops; a chain attached to a missing hopper
+// and a bad hopper section are refused.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <set>
+#include <sstream>
+
+#include "sim/scene_io.h"
+#include "sim/sim.h"
+
+namespace ponyhop {
+namespace {
+
+TEST(HopperScene, CourseSceneRunsItsScript) {
+  Scene scene = loadScene("assets/scenes/hopper.json");
+  ASSERT_TRUE(scene.hopper);
+  EXPECT_EQ(scene.camera.follow, "hopper");
+  Sim rt(scene);
+  ASSERT_NE(rt.hopper(), nullptr);
+  double max_tilt = 0.0;
+  while (rt.ok() && rt.time() < scene.duration - 1e-9) {
+    rt.step();
+    max_tilt = std::max(max_tilt, rt.hopper()->tilt(rt.world()));
+  }
+  ASSERT_TRUE(rt.ok()) << rt.status();
+  const RigidBody& b = rt.world().body(rt.hopper()->model().body);
+  std::printf("[ course ] %.0f s: ends at (%.2f, %.2f) m, speed %.3f m/s, max tilt %.2f deg, %d hops\n", scene.duration,
+              b.x.x(), b.x.y(), b.v.head<2>().norm(), max_tilt * 180.0 / std::numbers::pi, rt.hopper()->hops());
+  EXPECT_LT(max_tilt * 180.0 / std::numbers::pi, 15.0);
+  EXPECT_GT(b.x.head<2>().norm(), 1.0) << "the course goes somewhere";
+  EXPECT_EQ(rt.followPoint(), b.x);
+}
+
+TEST(HopperScene, PonytailOnTheHopperHopsForThirtySeconds) {
+  Scene scene = loadScene("assets/scenes/ponytail_hopper.json");
+  ASSERT_TRUE(scene.hopper && scene.chain);
+  Sim rt(scene);
+  const Chain* chain = rt.chain();
+  ASSERT_NE(chain, nullptr);
+  ASSERT_EQ(chain->parent, rt.hopper()->model().body);
+  // The chain's first joint's multipliers are the force the chain exerts on the body.
+  double chain_mass = 0.0;
+  for (int i : chain->links) chain_mass += rt.world().body(i).mass;
+  double max_tilt = 0.0, min_z = 1e9, max_joint = 0.0, pull_sum = 0.0;
+  int samples = 0;
+  while (rt.ok() && rt.time() < 30.0 - 1e-9) {
+    rt.step();
+    if (!rt.ok()) break;
+    max_tilt = std::max(max_tilt, rt.hopper()->tilt(rt.world()));
+    min_z = std::min(min_z, rt.world().body(rt.hopper()->model().body).x.z());
+    max_joint = std::max(max_joint, rt.maxJointError());
+    // lambda is from the last force evaluation (the contact stage's, or RK4's last stage).
+    int r = 0;
+    for (int j = 0; j < chain->joints.front(); ++j) r += rt.world().joints()[j]->dimension();
+    pull_sum += rt.world().lambda().segment(r, 3).norm();
+    ++samples;
+  }
+  ASSERT_TRUE(rt.ok()) << rt.status();
+  const double mean_pull = pull_sum / samples;
+  std::printf("[ ponytail hopper ] 30 s: max tilt %.2f deg, lowest body %.3f m, max joint error %.2e, "
+              "mean pull of the chain on the body %.2f N (its weight %.2f N), %d hops\n",
+              max_tilt * 180.0 / std::numbers::pi, min_z, max_joint, mean_pull, chain_mass * 9.81, rt.hopper()->hops());
+  EXPECT_LT(max_tilt * 180.0 / std::numbers::pi, 15.0) << "the hopper must not fall";
+  EXPECT_GT(min_z, 0.6);
+  EXPECT_LT(max_joint, 1e-9);
+  EXPECT_GT(mean_pull, 0.5 * chain_mass * 9.81) << "the chain must pull on the body (two-way coupling)";
+  EXPECT_GT(rt.hopper()->hops(), 40);
+}
+
+TEST(HopperScene, SceneChecksTheHopperSection) {
+  const nlohmann::json no_hopper = {{"chain", {{"attach", "hopper"}}}};
+  try {
+    parseScene(no_hopper, "test.json", {});
+    ADD_FAILURE() << "a chain attached to a missing hopper must be refused";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("needs a hopper section"), std::string::npos) << e.what();
+  }
+  const nlohmann::json bad = {{"hopper", {{"min_length", 0.85}}}};
+  try {
+    parseScene(bad, "test.json", {});
+    ADD_FAILURE() << "min_length above rest_length must be refused";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("hopper"), std::string::npos) << e.what();
+  }
+  const Scene ok = parseScene(nlohmann::json{{"hopper", nlohmann::json::object()}, {"chain", {{"attach", "hopper"}}}},
+                              "test.json", {{"hopper.command.vx", "0.5"}});
+  ASSERT_TRUE(ok.hopper.has_value());
+  EXPECT_DOUBLE_EQ(ok.hopper->command.vx, 0.5);
+}
+
+}  // namespace
+}  // namespace ponyhop
