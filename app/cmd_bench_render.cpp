@@ -19,7 +19,7 @@
 
 #include "app/commands.h"
 #include "engine/render_session.h"
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 namespace {
