@@ -30,7 +30,7 @@ struct BenchRenderArgs {
   std::vector<std::string> scenes{"assets/scenes/ponytail.json", "assets/scenes/ponytail_hopper.json"};
   std::vector<std::string> sizes{"1280x720", "1920x1080"};
   int frames = 20;
-  std::string out = "docs/bench/render.md";
+  std::string out = "docs/bench/render_table.md";
 };
 
 struct Variant {
@@ -165,7 +165,7 @@ void addBenchRenderCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--scenes", args->scenes, "Scenes to render (default ponytail, ponytail_hopper)")->delimiter(',');
   cmd->add_option("--sizes", args->sizes, "Frame sizes, e.g. 1280x720,1920x1080")->delimiter(',');
   cmd->add_option("--frames", args->frames, "Timed frames per configuration (default 20)")->check(CLI::Range(1, 10000));
-  cmd->add_option("--out", args->out, "Markdown table to write (default docs/bench/render.md; empty: print only)");
+  cmd->add_option("--out", args->out, "Markdown table to write (default docs/bench/render_table.md; empty: print only)");
   cmd->callback([args, &exit_code] {
     try {
       exit_code = runBenchRender(*args);
