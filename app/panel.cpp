@@ -661,6 +661,10 @@ void Panel::drawReadouts() {
   }
   if (r.show_wall_clock) {
     ImGui::TextDisabled("Frame: physics %.2f  render %.2f  panel %.2f ms", r.physics_ms, r.render_ms, r.panel_ms);
+    ImGui::TextDisabled("View: %s  (shadow %.1f  main %.1f  AA %.1f ms)", r.view_draft ? "draft, moving" : "final",
+                        r.shadow_ms, r.main_ms, r.aa_ms);
+  } else {
+    ImGui::TextDisabled("View: %s", r.view_draft ? "draft, moving" : "final");
   }
 }
 

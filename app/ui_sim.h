@@ -68,6 +68,9 @@ struct Readouts {
   // false: the panel shows no wall-clock figure (step time, frame times), so that two frames of
   // the same scene are the same picture (snapshot and sensitivity tests); true for people.
   bool show_wall_clock = true;
+  // The scene view's last frame: draft while something moves, final when all is still; its passes (ms).
+  bool view_draft = false;
+  double shadow_ms = 0.0, main_ms = 0.0, aa_ms = 0.0;
   void clear();
 };
 
