@@ -70,7 +70,7 @@ void SceneDraw::draw(const Sim& sim, Renderer& renderer) const {
     pose.translate(b.x);
     pose.rotate(b.q);
     // A head drawn with its file's colours (sim/mesh_data.h) is not tinted by head.color.
-    const Eigen::Vector3d tint = sim.head()->mesh.colors.empty() ? scene.head->color : Eigen::Vector3d::Ones();
+    const Eigen::Vector3d tint = sim.head()->mesh.colors.empty() ? scene.head->color : Eigen::Vector3d(1.0, 1.0, 1.0);
     renderer.drawMesh(head_, pose * sim.head()->mesh_to_body, material(tint, 0.18f, 24.0f));
   }
   if (const Chain* chain = sim.chain()) {
