@@ -64,21 +64,22 @@ std::vector<BakeMesh> bodyMeshes(const Sim& rt, std::vector<int>& mesh_of_body) 
   for (const auto& hp : rt.hoppers()) {
     const Hopper* h = hp.get();
     const HopperParams& p = h->params();
+    const HopperSection look = scene.hopper ? *scene.hopper : HopperSection{};  // colours
     const HopperShape s = h->shape(w);
     const HopperModel& m = h->model();
     const Eigen::Vector3d half = 0.5 * p.body_size;
     const float rz = float(half.z()), ex = float(half.x() - half.z());
-    add(m.body, BakeMesh{"hopper body", makeCapsuleMesh({-ex, 0, 0}, rz, {ex, 0, 0}, rz), p.body_color.cast<float>()});
+    add(m.body, BakeMesh{"hopper body", makeCapsuleMesh({-ex, 0, 0}, rz, {ex, 0, 0}, rz), look.body_color.cast<float>()});
     const RigidBody& upper = w.body(m.upper);
     add(m.upper, BakeMesh{"hopper upper leg",
                           makeCapsuleMesh(toBody(upper, s.hip), float(p.upper_radius), toBody(upper, s.upper_bottom),
                                           float(0.8 * p.upper_radius)),
-                          p.leg_color.cast<float>()});
+                          look.leg_color.cast<float>()});
     const RigidBody& foot = w.body(m.foot);
     add(m.foot, BakeMesh{"hopper foot",
                          makeCapsuleMesh(toBody(foot, s.foot_top), float(p.foot_radius), toBody(foot, s.toe),
                                          float(p.toe_radius)),
-                         p.foot_color.cast<float>()});
+                         look.foot_color.cast<float>()});
   }
   return meshes;
 }
