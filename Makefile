@@ -63,7 +63,7 @@ TSAN_TESTS := frame_writer_test render_command_test output_safety_test
 test-tsan: setup
 	@cmake -S . -B $(TSAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPONYHOP_TSAN=ON -DPONYHOP_WINDOW=OFF >/dev/null
 	@cmake --build $(TSAN_BUILD) -j$(JOBS) --target ponyhop $(TSAN_TESTS)
-	@cd $(TSAN_BUILD) && TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
+	@cd $(TSAN_BUILD) && TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/tests/tsan.supp \
 	  ctest --output-on-failure -j$(JOBS) -R '^(FrameWriter|Video|RenderCommand|OutputSafety)\.'
 
 # What a user gets from a plain `cmake -DCMAKE_BUILD_TYPE=Release` (GCC at -O3, warnings as

@@ -106,7 +106,8 @@ class BulletSim final : public PeerSim {
 std::vector<Peer> bulletPeers() {
   Peer p;
   p.name = "bullet/multibody";
-  p.version = "Bullet " + std::to_string(btGetVersion()) +
+  const int v = btGetVersion();  // 324 for 3.24
+  p.version = "Bullet " + std::to_string(v / 100) + "." + std::to_string(v % 100) +
               " btMultiBody, double precision (BT_USE_DOUBLE_PRECISION, the -float64 libraries): spherical joints, "
               "its semi-implicit Euler, damping 0, no sleeping, no collision shapes";
   p.make = [](const PeerChain& chain, double dt, std::string&) -> std::unique_ptr<PeerSim> {

@@ -154,6 +154,7 @@ int runRender(const RenderArgs& args) {
   FrameWriter writer(staging, 2, 4);
   Progress progress(frames);
   double sim_ms = 0.0, render_ms = 0.0, wait_ms = 0.0;
+  RenderStats passes;  // summed per-pass times (engine/renderer.h)
   const auto t_start = Clock::now();
   std::string err;
   for (int i = 0; i < frames; ++i) {
@@ -179,6 +180,12 @@ int runRender(const RenderArgs& args) {
       session->renderFrame(t, rgba);
     }
     render_ms += msSince(t0);
+    const RenderStats& st = ui ? ui->renderer().stats() : session->stats();
+    passes.shadow_ms += st.shadow_ms;
+    passes.main_ms += st.main_ms;
+    passes.resolve_ms += st.resolve_ms;
+    passes.readback_ms += st.readback_ms;
+    passes.timed_on_gpu = st.timed_on_gpu;
     t0 = Clock::now();
     if (!writer.push(i, out_w, out_h, std::move(rgba), &err)) break;
     wait_ms += msSince(t0);
@@ -203,6 +210,7 @@ int runRender(const RenderArgs& args) {
     const auto t0 = Clock::now();
     VideoOptions vo;
     vo.fps = scene.render.fps;
+    vo.container = videoContainer(args.video, nullptr);  // of the final name, not of video_tmp's
     const bool encoded = encodeVideo(staging, video_tmp, vo, &err);
     if (const int sig = InterruptGuard::signal()) {
       fs::remove(video_tmp, ec);
@@ -234,6 +242,9 @@ int runRender(const RenderArgs& args) {
                "encode %.1f on 2 worker threads (overlapped; the render loop waited %.1f ms/frame for it)\n",
                frames, out_w, out_h, scene.render.samples, total_s, 1000.0 * total_s / frames,
                sim_ms / frames, render_ms / frames, writer.meanEncodeMs(), wait_ms / frames);
+  std::fprintf(stderr, "render: per pass (ms/frame, %s): shadow %.1f, main %.1f, resolve %.1f, read-back %.1f\n",
+               passes.timed_on_gpu ? "GPU timer queries" : "glFinish-bracketed", passes.shadow_ms / frames,
+               passes.main_ms / frames, passes.resolve_ms / frames, passes.readback_ms / frames);
   std::fprintf(stderr, "render: frames in %s/\n", out.c_str());
   if (!args.video.empty()) std::fprintf(stderr, "render: video %s (%.1f s to encode)\n", args.video.c_str(), video_s);
   return 0;

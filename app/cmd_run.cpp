@@ -26,6 +26,8 @@ void addRunCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--screenshot", args->window.screenshot, "Write the last frame to this PNG before closing");
   cmd->add_option("--size", args->size, "Window size WIDTHxHEIGHT, scene view + panel (default 1280x720)");
   cmd->add_flag("--no-vsync", args->no_vsync, "Do not wait for the display's refresh (frame-time measurements)");
+  cmd->add_option("--quality-log", args->window.quality_log,
+                  "Write one line per frame: the scene view's quality (draft/final) and why (tests)");
   cmd->callback([args, &exit_code] {
     try {
       const Scene scene = args->scene.load();

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   ponyhop::addExportCommand(app, exit_code);
   ponyhop::addVideoCommand(app, exit_code);
   ponyhop::addBenchCommand(app, exit_code);
+  ponyhop::addBenchRenderCommand(app, exit_code);
 #ifdef PONYHOP_WINDOW
   ponyhop::addRunCommand(app, exit_code);
 #endif

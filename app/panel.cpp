@@ -653,13 +653,19 @@ void Panel::drawReadouts() {
   };
   plot("##joint", r.joint_error, "max joint error %.3g mm", 1000.0);
   plot("##energy", r.energy, "energy %.4g J", 1.0);
-  plot("##step", r.step_us, "physics step %.0f us", 1.0);
+  if (r.show_wall_clock) plot("##step", r.step_us, "physics step %.0f us", 1.0);
   if (sim_.hopperBody() >= 0) {
     plot("##height", r.hopper_height, "hopper height %.3f m", 1.0);
     plot("##speed", r.hopper_speed, "hopper speed %.2f m/s", 1.0);
     ImGui::Text("Hopper phase: %s", sim_.hopperPhase().c_str());
   }
-  ImGui::TextDisabled("Frame: physics %.2f  render %.2f  panel %.2f ms", r.physics_ms, r.render_ms, r.panel_ms);
+  if (r.show_wall_clock) {
+    ImGui::TextDisabled("Frame: physics %.2f  render %.2f  panel %.2f ms", r.physics_ms, r.render_ms, r.panel_ms);
+    ImGui::TextDisabled("View: %s  (shadow %.1f  main %.1f  AA %.1f ms)", r.view_draft ? "draft, moving" : "final",
+                        r.shadow_ms, r.main_ms, r.aa_ms);
+  } else {
+    ImGui::TextDisabled("View: %s", r.view_draft ? "draft, moving" : "final");
+  }
 }
 
 void Panel::drawPresets() {

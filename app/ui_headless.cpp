@@ -7,13 +7,29 @@
 
 namespace ponyhop {
 
-void renderSceneView(Renderer& renderer, LiveSim& sim, const Camera& camera, int width, int height) {
+RenderQuality viewQuality(const LiveSim& sim) {
+  if (sim.applied().render.quality == RenderQuality::Draft) return RenderQuality::Draft;
+  const ImGuiIO& io = ImGui::GetIO();
+  const bool mouse = io.MouseDown[0] || io.MouseDown[1] || io.MouseDown[2] || io.MouseWheel != 0.0f;
+  const bool moving = (sim.running() && sim.ok()) || ImGui::IsAnyItemActive() || mouse;
+  return moving ? RenderQuality::Draft : RenderQuality::Final;
+}
+
+void renderSceneView(Renderer& renderer, LiveSim& sim, const Camera& camera, int width, int height,
+                     RenderQuality quality) {
   RenderParams rp = sim.applied().render;
   rp.width = std::max(width, 1);
   rp.height = std::max(height, 1);
+  rp.quality = quality;
   renderer.beginFrame(camera, sim.applied().light, rp);
   sim.draw(renderer);
   renderer.endFrame();
+  Readouts& r = sim.readouts();
+  const RenderStats& st = renderer.stats();
+  r.view_draft = st.draft;
+  r.shadow_ms = st.shadow_ms;
+  r.main_ms = st.main_ms;
+  r.aa_ms = st.resolve_ms;
 }
 
 HeadlessUi::HeadlessUi(const Scene& scene, int scene_width, int height, int panel_width) {
@@ -56,9 +72,12 @@ void HeadlessUi::frame(const UiInput& in_raw, std::vector<uint8_t>* rgba, std::o
   feedInput(in);
   ImGui::NewFrame();
   panel_->build(layout_, !sim_time.has_value());
+  // Video frames (sim_time) are rendered at the scene's own quality; interactive frames follow
+  // the motion, as in the window.
+  const RenderQuality quality = sim_time ? sim_->applied().render.quality : viewQuality(*sim_);
   ImGui::Render();
   const auto t0 = Clock::now();
-  renderSceneView(*renderer_, *sim_, panel_->camera(), layout_.sceneWidth(), layout_.height);
+  renderSceneView(*renderer_, *sim_, panel_->camera(), layout_.sceneWidth(), layout_.height, quality);
   gl_->compose(*renderer_, target_->fbo(), layout_.width, layout_.height, layout_.sceneWidth());
   if (rgba) target_->readPixels(*rgba);
   panel_->setRenderMs(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());

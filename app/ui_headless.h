@@ -47,7 +47,15 @@ class HeadlessUi {
   std::unique_ptr<Panel> panel_;
 };
 
-// Draws the scene view of one frame: the applied scene's light and look, at the given size.
-void renderSceneView(Renderer& renderer, LiveSim& sim, const Camera& camera, int width, int height);
+// The quality the scene view needs now (call between ImGui::NewFrame and ImGui::Render): draft
+// while something moves (the simulation plays, a widget is held or edited, a mouse button is down
+// or the wheel turns: orbit, pan, zoom, pull), final once everything is still, so a drag stays
+// interactive on a software rasterizer and the still picture refines. A scene set to draft stays draft.
+RenderQuality viewQuality(const LiveSim& sim);
+
+// Draws the scene view of one frame: the applied scene's light and look, at the given size and
+// quality; records the quality and the pass times in sim.readouts().
+void renderSceneView(Renderer& renderer, LiveSim& sim, const Camera& camera, int width, int height,
+                     RenderQuality quality);
 
 }  // namespace ponyhop

@@ -65,6 +65,12 @@ struct Readouts {
   History rtf;            // achieved real-time factor (simulated s per wall s / requested speed)
   // Smoothed per-stage wall times of a displayed frame (ms).
   double physics_ms = 0.0, render_ms = 0.0, panel_ms = 0.0, frame_ms = 0.0;
+  // false: the panel shows no wall-clock figure (step time, frame times), so that two frames of
+  // the same scene are the same picture (snapshot and sensitivity tests); true for people.
+  bool show_wall_clock = true;
+  // The scene view's last frame: draft while something moves, final when all is still; its passes (ms).
+  bool view_draft = false;
+  double shadow_ms = 0.0, main_ms = 0.0, aa_ms = 0.0;
   void clear();
 };
 

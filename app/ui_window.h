@@ -13,6 +13,7 @@ struct WindowOptions {
   int frames = 0;                  // > 0: close after this many frames (tests, measurements)
   std::string screenshot;          // PNG of the last frame, written before closing
   bool vsync = true;               // swap interval 1 (off when measuring)
+  std::string quality_log;         // a line per frame: its number, the view's quality, what moved (tests)
 };
 
 // Runs until the window is closed (or `frames` are shown). Returns the exit code; prints the

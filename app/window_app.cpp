@@ -60,6 +60,7 @@ bool screenshot(const std::string& path, int w, int h) {
 
 struct FrameStats {
   std::vector<double> frame_ms;
+  std::vector<double> draft_ms, final_ms;  // the same frames split by the view's quality
   double physics = 0, panel = 0, render = 0, compose = 0;
   int n = 0;
 };
@@ -86,6 +87,13 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
   glfwMakeContextCurrent(window);
   glfwSwapInterval(o.vsync ? 1 : 0);
   int code = 0;
+  FILE* quality_log = nullptr;
+  if (!o.quality_log.empty() && !(quality_log = std::fopen(o.quality_log.c_str(), "w"))) {
+    std::fprintf(stderr, "ponyhop run: --quality-log %s: cannot write\n", o.quality_log.c_str());
+    glfwDestroyWindow(window);
+    glfwTerminate();
+    return 1;
+  }
   {
     std::string err;
     if (!loadGL(glfwGetProcAddress, &err)) {
@@ -127,11 +135,19 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
         ImGui_ImplGlfw_NewFrame();
         ImGui::NewFrame();
         panel.build(layout);  // edits, playback (physics), mouse
+        const RenderQuality quality = viewQuality(sim);
+        if (quality_log) {
+          const ImGuiIO& io = ImGui::GetIO();
+          std::fprintf(quality_log, "frame %d %s running=%d item_active=%d mouse_down=%d\n", frame,
+                       quality == RenderQuality::Draft ? "draft" : "final", sim.running() ? 1 : 0,
+                       ImGui::IsAnyItemActive() ? 1 : 0, (io.MouseDown[0] || io.MouseDown[1] || io.MouseDown[2]) ? 1 : 0);
+          std::fflush(quality_log);
+        }
         ImGui::Render();
         const double build_ms = msSince(t0);
 
         t0 = Clock::now();
-        renderSceneView(renderer, sim, panel.camera(), scene_fb_w, fb_h);
+        renderSceneView(renderer, sim, panel.camera(), scene_fb_w, fb_h, quality);
         const double render_ms = msSince(t0);
         panel.setRenderMs(render_ms);
 
@@ -145,6 +161,7 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
         const double frame_ms = msSince(t_frame);
         if (frame >= 5) {  // warm-up frames (font texture, shaders, first shadow map) are not typical
           stats.frame_ms.push_back(frame_ms);
+          (quality == RenderQuality::Draft ? stats.draft_ms : stats.final_ms).push_back(frame_ms);
           stats.physics += sim.readouts().physics_ms;
           stats.panel += build_ms - sim.readouts().physics_ms;
           stats.render += render_ms;
@@ -169,10 +186,19 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
                      1000.0 / mean, stats.physics / stats.n, stats.panel / stats.n, stats.render / stats.n,
                      stats.compose / stats.n);
       }
+      for (const auto& [name, v] : {std::pair<const char*, const std::vector<double>&>{"draft (moving)", stats.draft_ms},
+                                    {"final (still)", stats.final_ms}}) {
+        if (v.empty()) continue;
+        double sum = 0;
+        for (double x : v) sum += x;
+        std::fprintf(stderr, "run: %zu %s frames: mean %.1f ms = %.1f fps\n", v.size(), name, sum / double(v.size()),
+                     1000.0 * double(v.size()) / sum);
+      }
       if (!sim.ok()) std::fprintf(stderr, "run: the simulation stopped: %s\n", sim.stopMessage().c_str());
     }  // GL objects go while the context is current
     ImGui_ImplGlfw_Shutdown();
   }
+  if (quality_log) std::fclose(quality_log);
   glfwDestroyWindow(window);
   glfwTerminate();
   return code;

@@ -20,6 +20,9 @@ double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
+// The ground's shadow texture has shadow_size / this texels a side (renderer.cpp, endFrame).
+constexpr int kGroundShadowDivisor = 8;
+
 // Angular radius of the key light (rad) for the penumbra of the soft shadows.
 constexpr double kKeyLightAngularRadius = 1.5 * 3.14159265358979 / 180.0;
 
@@ -137,23 +140,28 @@ void unpremultiplyAlpha(std::vector<uint8_t>& rgba) {
 
 struct Renderer::Impl {
   // Programs.
-  GLuint prog_mesh = 0, prog_hull = 0, prog_ground = 0, prog_bg = 0, prog_lines = 0;
-  GLuint prog_mesh_depth = 0, prog_hull_depth = 0;
+  GLuint prog_mesh = 0, prog_hull = 0, prog_backdrop = 0, prog_ground_shadow = 0, prog_lines = 0;
+  GLuint prog_mesh_depth = 0, prog_hull_depth = 0, prog_post = 0, prog_bg = 0;
   GLuint prog_mesh_mat = 0;
   // Static geometry.
   GLuint hull_vao = 0, hull_vbo = 0, hull_ebo = 0, hull_instances = 0;
   GLsizei hull_index_count = 0;
   size_t hull_triangles = 0;
-  GLuint ground_vao = 0, ground_vbo = 0;
   GLuint empty_vao = 0;
   GLuint lines_vao = 0, lines_vbo = 0;
   std::vector<GpuMesh> meshes;  // index = MeshHandle::id; vao == 0: released
   int box_mesh = -1;
   // Targets.
-  GLuint msaa_fbo = 0, msaa_color = 0, msaa_depth = 0;
+  // Main pass target: MSAA renderbuffers (samples > 1, antialias = msaa) or a single-sample colour
+  // texture (read by the post-process filter, or directly without anti-aliasing).
+  GLuint msaa_fbo = 0, msaa_color = 0, msaa_depth = 0, main_color_tex = 0;
   GLuint resolve_fbo = 0, resolve_color = 0;
+  GLuint output_fbo = 0;  // where the finished frame is: resolve_fbo, or msaa_fbo without AA
+  bool target_post = false;
   GLuint shadow_fbo = 0, shadow_tex = 0;
   GLuint raw_depth_sampler = 0;  // reads shadow_tex without comparison (blocker search)
+  GLuint ground_shadow_fbo = 0, ground_shadow_tex = 0;  // R8, shadowFactor on the ground plane
+  int ground_shadow_size = 0;
   LightFrustum frustum;
   int target_w = 0, target_h = 0, target_samples = -1, shadow_size = 0;
   int max_samples = 1;
@@ -168,14 +176,69 @@ struct Renderer::Impl {
   std::vector<HullInstance> hulls;
   std::vector<LineVertex> lines;
   bool in_frame = false;
+  bool draft = false;  // this frame is RenderQuality::Draft
+  // Per-pass timing (RenderStats): software rasterizers are timed with glFinish + the wall clock,
+  // hardware GPUs with GL_TIME_ELAPSED queries, double-buffered and read one frame late.
+  enum Pass { kShadowPass, kMainPass, kResolvePass, kPasses };
+  bool software_gl = true;
+  GLuint queries[2][kPasses] = {};
+  int queries_pending[2] = {0, 0};  // bit p: pass p's query of that slot awaits reading
+  int query_frame = 0;
+  Clock::time_point pass_t0;
+  void beginPass(Pass p);
+  void endPass(Pass p, RenderStats& st);
+  void collectGpuTimes(RenderStats& st);
 
-  void ensureTargets(int w, int h, int samples);
+  void ensureTargets(int w, int h, int samples, bool post);
   void ensureShadowMap(int size);
+  void ensureGroundShadow(int size);
+  void bindShadowTextures(bool ground_shadow);  // units 0, 1: the shadow map; 2: the ground's
   void setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_proj, const Eigen::Matrix4f& light_vp,
                          float normal_offset, bool shadows_on);
   void drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj, bool depth_only);
   void drawMaterialMeshes();
 };
+
+void Renderer::Impl::beginPass(Pass p) {
+  if (software_gl)
+    pass_t0 = Clock::now();
+  else
+    glBeginQuery(GL_TIME_ELAPSED, queries[query_frame][p]);
+}
+
+void Renderer::Impl::endPass(Pass p, RenderStats& st) {
+  if (!software_gl) {
+    glEndQuery(GL_TIME_ELAPSED);
+    queries_pending[query_frame] |= 1 << p;
+    return;
+  }
+  glFinish();  // llvmpipe rasterizes the pass's bins here: its whole cost lands in this pass
+  const double ms = msSince(pass_t0);
+  (p == kShadowPass ? st.shadow_ms : p == kMainPass ? st.main_ms : st.resolve_ms) += ms;
+}
+
+// The previous frame's queries (same slot two frames ago is reused, so read before re-begin).
+void Renderer::Impl::collectGpuTimes(RenderStats& st) {
+  if (software_gl) return;
+  const int prev = query_frame ^ 1;
+  st.timed_on_gpu = true;
+  double* out[kPasses] = {&st.shadow_ms, &st.main_ms, &st.resolve_ms};
+  for (int p = 0; p < kPasses; ++p) {
+    if (!(queries_pending[prev] & (1 << p))) continue;
+    GLuint64 ns = 0;
+    glGetQueryObjectui64v(queries[prev][p], GL_QUERY_RESULT, &ns);
+    *out[p] = double(ns) * 1e-6;
+  }
+  queries_pending[prev] = 0;
+}
+
+// The bound 2D texture: bilinear, clamped at its edges.
+static void linearClampToEdge() {
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+}
 
 static GLint loc(GLuint prog, const char* name) { return glGetUniformLocation(prog, name); }
 static void setMat4(GLuint prog, const char* name, const Eigen::Matrix4f& m) {
@@ -190,20 +253,23 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
 Renderer::~Renderer() {
   if (!glDeleteProgram) return;  // GL never loaded: nothing was created
   Impl& I = *impl_;
-  for (GLuint p : {I.prog_mesh, I.prog_mesh_mat, I.prog_hull, I.prog_ground, I.prog_bg, I.prog_lines, I.prog_mesh_depth,
-                   I.prog_hull_depth})
+  for (GLuint p : {I.prog_mesh, I.prog_mesh_mat, I.prog_hull, I.prog_backdrop, I.prog_ground_shadow, I.prog_lines,
+                   I.prog_mesh_depth, I.prog_hull_depth, I.prog_post, I.prog_bg})
     if (p) glDeleteProgram(p);
   for (int i = 0; i < int(I.meshes.size()); ++i) release(MeshHandle{i});
-  GLuint vaos[] = {I.hull_vao, I.ground_vao, I.empty_vao, I.lines_vao};
-  glDeleteVertexArrays(4, vaos);
-  GLuint bufs[] = {I.hull_vbo, I.hull_ebo, I.hull_instances, I.ground_vbo, I.lines_vbo};
-  glDeleteBuffers(5, bufs);
-  GLuint fbos[] = {I.msaa_fbo, I.resolve_fbo, I.shadow_fbo};
-  glDeleteFramebuffers(3, fbos);
+  GLuint vaos[] = {I.hull_vao, I.empty_vao, I.lines_vao};
+  glDeleteVertexArrays(3, vaos);
+  GLuint bufs[] = {I.hull_vbo, I.hull_ebo, I.hull_instances, I.lines_vbo};
+  glDeleteBuffers(4, bufs);
+  GLuint fbos[] = {I.msaa_fbo, I.resolve_fbo, I.shadow_fbo, I.ground_shadow_fbo};
+  glDeleteFramebuffers(4, fbos);
   GLuint rbs[] = {I.msaa_color, I.msaa_depth, I.resolve_color};
   glDeleteRenderbuffers(3, rbs);
+  if (I.main_color_tex) glDeleteTextures(1, &I.main_color_tex);
   if (I.shadow_tex) glDeleteTextures(1, &I.shadow_tex);
+  if (I.ground_shadow_tex) glDeleteTextures(1, &I.ground_shadow_tex);
   if (I.raw_depth_sampler) glDeleteSamplers(1, &I.raw_depth_sampler);
+  if (I.queries[0][0]) glDeleteQueries(2 * Impl::kPasses, &I.queries[0][0]);
 }
 
 bool Renderer::init(std::string* err) {
@@ -222,11 +288,13 @@ bool Renderer::init(std::string* err) {
   const P progs[] = {{&I.prog_mesh, "mesh", kMeshVS, kLitFS},
                      {&I.prog_mesh_mat, "mesh with materials", kMeshMatVS, kMeshMatFS},
                      {&I.prog_hull, "hull", kCapsuleVS, kLitFS},
-                     {&I.prog_ground, "ground", kGroundVS, kGroundFS},
-                     {&I.prog_bg, "background", kFullscreenVS, kBackgroundFS},
+                     {&I.prog_backdrop, "backdrop", kBackdropVS, kBackdropFS},
+                     {&I.prog_ground_shadow, "ground shadow", kFullscreenVS, kGroundShadowFS},
                      {&I.prog_lines, "lines", kLinesVS, kLinesFS},
                      {&I.prog_mesh_depth, "mesh depth", kMeshVS, kDepthFS},
-                     {&I.prog_hull_depth, "hull depth", kCapsuleVS, kDepthFS}};
+                     {&I.prog_hull_depth, "hull depth", kCapsuleVS, kDepthFS},
+                     {&I.prog_post, "post AA", kFullscreenVS, kPostAaFS},
+                     {&I.prog_bg, "background", kFullscreenVS, kBackgroundFS}};
   for (const P& p : progs)
     if (!(*p.out = buildProgram(p.name, p.vs, p.fs, err))) return false;
 
@@ -264,16 +332,6 @@ bool Renderer::init(std::string* err) {
     glVertexAttribDivisor(a.index, 1);
   }
 
-  // Ground: one quad (-1..1), placed and sized by uniforms.
-  const float quad[] = {-1, -1, 1, -1, 1, 1, -1, -1, 1, 1, -1, 1};
-  glGenVertexArrays(1, &I.ground_vao);
-  glBindVertexArray(I.ground_vao);
-  glGenBuffers(1, &I.ground_vbo);
-  glBindBuffer(GL_ARRAY_BUFFER, I.ground_vbo);
-  glBufferData(GL_ARRAY_BUFFER, sizeof(quad), quad, GL_STATIC_DRAW);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 2 * sizeof(float), nullptr);
-
   glGenSamplers(1, &I.raw_depth_sampler);
   glSamplerParameteri(I.raw_depth_sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glSamplerParameteri(I.raw_depth_sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
@@ -295,6 +353,12 @@ bool Renderer::init(std::string* err) {
   glBindVertexArray(0);
 
   I.box_mesh = upload(makeBoxMesh(Eigen::Vector3f(1, 1, 1))).id;
+  {
+    const std::string name = glRendererName();
+    I.software_gl = name.find("llvmpipe") != std::string::npos || name.find("softpipe") != std::string::npos ||
+                    name.find("swrast") != std::string::npos;
+    if (!I.software_gl) glGenQueries(2 * Impl::kPasses, &I.queries[0][0]);
+  }
   glGetIntegerv(GL_MAX_SAMPLES, &I.max_samples);
   if (GLenum e = glGetError(); e != GL_NO_ERROR) {
     if (err) *err = "Renderer::init: GL error " + std::to_string(e);
@@ -461,35 +525,42 @@ void Renderer::drawLines(const std::vector<DebugLine>& lines) {
   for (const DebugLine& l : lines) drawLine(l.a, l.b, l.color);
 }
 
-void Renderer::Impl::ensureTargets(int w, int h, int samples) {
-  if (w == target_w && h == target_h && samples == target_samples) return;
+void Renderer::Impl::ensureTargets(int w, int h, int samples, bool post) {
+  if (w == target_w && h == target_h && samples == target_samples && post == target_post) return;
   if (!msaa_fbo) {
     glGenFramebuffers(1, &msaa_fbo);
     glGenRenderbuffers(1, &msaa_color);
     glGenRenderbuffers(1, &msaa_depth);
+    glGenTextures(1, &main_color_tex);
     glGenFramebuffers(1, &resolve_fbo);
     glGenRenderbuffers(1, &resolve_color);
   }
-  glBindRenderbuffer(GL_RENDERBUFFER, msaa_color);
-  if (samples > 1)
+  glBindFramebuffer(GL_FRAMEBUFFER, msaa_fbo);
+  if (samples > 1) {
+    glBindRenderbuffer(GL_RENDERBUFFER, msaa_color);
     glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA8, w, h);
-  else
-    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, msaa_color);
+  } else {
+    glBindTexture(GL_TEXTURE_2D, main_color_tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+    linearClampToEdge();
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, main_color_tex, 0);
+  }
   glBindRenderbuffer(GL_RENDERBUFFER, msaa_depth);
   if (samples > 1)
     glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, w, h);
   else
     glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, w, h);
-  glBindFramebuffer(GL_FRAMEBUFFER, msaa_fbo);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, msaa_color);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, msaa_depth);
   glBindRenderbuffer(GL_RENDERBUFFER, resolve_color);
   glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
   glBindFramebuffer(GL_FRAMEBUFFER, resolve_fbo);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, resolve_color);
+  output_fbo = (samples > 1 || post) ? resolve_fbo : msaa_fbo;
   target_w = w;
   target_h = h;
   target_samples = samples;
+  target_post = post;
 }
 
 void Renderer::Impl::ensureShadowMap(int size) {
@@ -501,10 +572,7 @@ void Renderer::Impl::ensureShadowMap(int size) {
   glBindTexture(GL_TEXTURE_2D, shadow_tex);
   glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, size, size, 0, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, nullptr);
   // Linear + compare mode: each lookup is a bilinearly weighted 2x2 depth test (hardware PCF).
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  linearClampToEdge();
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
   glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
@@ -512,6 +580,31 @@ void Renderer::Impl::ensureShadowMap(int size) {
   glDrawBuffer(GL_NONE);
   glReadBuffer(GL_NONE);
   shadow_size = size;
+}
+
+void Renderer::Impl::ensureGroundShadow(int size) {
+  if (size == ground_shadow_size) return;
+  if (!ground_shadow_fbo) {
+    glGenFramebuffers(1, &ground_shadow_fbo);
+    glGenTextures(1, &ground_shadow_tex);
+  }
+  glBindTexture(GL_TEXTURE_2D, ground_shadow_tex);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_R8, size, size, 0, GL_RED, GL_UNSIGNED_BYTE, nullptr);
+  linearClampToEdge();
+  glBindFramebuffer(GL_FRAMEBUFFER, ground_shadow_fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, ground_shadow_tex, 0);
+  ground_shadow_size = size;
+}
+
+void Renderer::Impl::bindShadowTextures(bool ground_shadow) {
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, shadow_tex);
+  glActiveTexture(GL_TEXTURE1);  // same texture, through a sampler without comparison
+  glBindTexture(GL_TEXTURE_2D, shadow_tex);
+  glBindSampler(1, raw_depth_sampler);
+  glActiveTexture(GL_TEXTURE2);
+  glBindTexture(GL_TEXTURE_2D, ground_shadow ? ground_shadow_tex : 0);
+  glActiveTexture(GL_TEXTURE0);
 }
 
 void Renderer::Impl::setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_proj, const Eigen::Matrix4f& light_vp,
@@ -548,6 +641,7 @@ void Renderer::Impl::setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_
   glUniform1f(loc(prog, "u_shadowSoftness"), float(std::clamp(light.shadow_softness, 0.0, 8.0)));
   glUniform1f(loc(prog, "u_normalOffset"), normal_offset);
   glUniform1i(loc(prog, "u_shadowsOn"), shadows_on ? 1 : 0);
+  glUniform1i(loc(prog, "u_shadowDraft"), draft ? 1 : 0);
   glUniform1i(loc(prog, "u_shadowDepth"), 1);
   glUniform1f(loc(prog, "u_lightDepthRange"), float(frustum.depth_range));
   glUniform1f(loc(prog, "u_texelWorld"), float(std::max(frustum.texel_world, 1e-9)));
@@ -629,12 +723,21 @@ void Renderer::endFrame() {
   Impl& I = *impl_;
   const auto t0 = Clock::now();
   const int w = std::clamp(I.params.width, 1, 16384), h = std::clamp(I.params.height, 1, 16384);
-  const int samples = std::clamp(I.params.samples, 1, std::max(I.max_samples, 1));
-  I.ensureTargets(w, h, samples);
+  // Quality: draft drops anti-aliasing and takes a quarter-size shadow map with a plain filter.
+  const bool draft = I.params.quality == RenderQuality::Draft;
+  const bool aa = !draft && I.params.samples > 1;
+  const bool msaa = aa && I.params.antialias == AntiAlias::Msaa;
+  const bool post = aa && !msaa;
+  const int samples = msaa ? std::clamp(I.params.samples, 1, std::max(I.max_samples, 1)) : 1;
+  I.ensureTargets(w, h, samples, post);
+  I.draft = draft;
   width_ = w;
   height_ = h;
   stats_ = RenderStats{};
   stats_.samples = samples;
+  stats_.post_aa = post;
+  stats_.draft = draft;
+  I.collectGpuTimes(stats_);
 
   // Upload this frame's instance data once; both passes use it.
   if (!I.hulls.empty()) {
@@ -650,7 +753,9 @@ void Renderer::endFrame() {
   const bool shadows_on = !casters.isEmpty() && I.light.intensity > 0.0;
   LightFrustum lf;
   if (shadows_on) {
-    I.ensureShadowMap(std::clamp(I.light.shadow_size, 64, 8192));
+    I.beginPass(Impl::kShadowPass);
+    const int size = std::clamp(I.light.shadow_size, 64, 8192);
+    I.ensureShadowMap(draft ? std::max(256, size / 4) : size);
     lf = fitLightFrustum(ld, casters, I.shadow_size, I.light.shadow_softness);
     I.frustum = lf;
     glBindFramebuffer(GL_FRAMEBUFFER, I.shadow_fbo);
@@ -667,6 +772,28 @@ void Renderer::endFrame() {
     glPolygonOffset(1.5f, 2.0f);
     I.drawGeometry(I.prog_mesh_depth, I.prog_hull_depth, lf.view_proj.cast<float>(), true);
     glDisable(GL_POLYGON_OFFSET_FILL);
+    if (I.params.ground) {
+      // The ground's shadow once per frame into a texture over the shadow map's square, instead of
+      // a blocker search + PCF per screen pixel of ground: the ground receives nothing else, and a
+      // soft shadow needs far fewer texels than the screen has ground pixels.
+      const int gs = std::max(64, I.shadow_size / kGroundShadowDivisor);
+      I.ensureGroundShadow(gs);
+      glBindFramebuffer(GL_FRAMEBUFFER, I.ground_shadow_fbo);
+      glViewport(0, 0, gs, gs);
+      glDisable(GL_DEPTH_TEST);
+      glDepthMask(GL_FALSE);
+      I.bindShadowTextures(false);  // the ground texture is the target here
+      const Eigen::Matrix4f lvp = lf.view_proj.cast<float>();
+      I.setCommonUniforms(I.prog_ground_shadow, lvp, lvp, float(1.5 * lf.texel_world), true);
+      setMat4(I.prog_ground_shadow, "u_invLightViewProj", lf.view_proj.inverse().cast<float>());
+      glUniform1f(loc(I.prog_ground_shadow, "u_groundZ"), 0.0f);
+      glUniform2f(loc(I.prog_ground_shadow, "u_groundShadowSize"), float(gs), float(gs));
+      glBindVertexArray(I.empty_vao);
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+      glBindVertexArray(0);
+      glDepthMask(GL_TRUE);
+    }
+    I.endPass(Impl::kShadowPass, stats_);
   }
 
   // --- Main pass into the MSAA target. ---
@@ -692,43 +819,46 @@ void Renderer::endFrame() {
   const Eigen::Matrix4f light_vp = lf.view_proj.cast<float>();
   const float normal_offset = float(1.5 * lf.texel_world);
 
+  I.beginPass(Impl::kMainPass);
   glBindFramebuffer(GL_FRAMEBUFFER, I.msaa_fbo);
   glViewport(0, 0, w, h);
   glDepthMask(GL_TRUE);
   glClearColor(0, 0, 0, I.params.transparent ? 0 : 1);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  glActiveTexture(GL_TEXTURE0);
-  glBindTexture(GL_TEXTURE_2D, I.shadow_tex);
-  glActiveTexture(GL_TEXTURE1);  // same texture, through a sampler without comparison
-  glBindTexture(GL_TEXTURE_2D, I.shadow_tex);
-  glBindSampler(1, I.raw_depth_sampler);
-  glActiveTexture(GL_TEXTURE0);
+  I.bindShadowTextures(true);
 
-  // Background: the gradient, no depth (none when transparent: alpha 0 where nothing is drawn).
-  glDisable(GL_DEPTH_TEST);
+  // Background and ground in one full-screen pass: every pixel shaded once; it writes the ground's
+  // depth (or the far plane) so objects below the ground stay hidden. Without a ground, the
+  // gradient alone (none when transparent: alpha 0 where nothing is drawn).
   stats_.draw_calls = 0;
-  if (!I.params.transparent) {
-    I.setCommonUniforms(I.prog_bg, view_proj, light_vp, normal_offset, shadows_on);
-    glBindVertexArray(I.empty_vao);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    stats_.draw_calls = 1;
-  }
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-
-  if (I.params.ground) {
-    I.setCommonUniforms(I.prog_ground, view_proj, light_vp, normal_offset, shadows_on);
-    const GLuint p = I.prog_ground;
-    glUniform3f(loc(p, "u_groundCenter"), float(cam.target.x()), float(cam.target.y()), 0.0f);
-    glUniform1f(loc(p, "u_groundHalf"), float(ground_half));
+  if (!I.params.ground) {
+    glDisable(GL_DEPTH_TEST);
+    if (!I.params.transparent) {
+      I.setCommonUniforms(I.prog_bg, view_proj, light_vp, normal_offset, shadows_on);
+      glBindVertexArray(I.empty_vao);
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+      stats_.draw_calls = 1;
+    }
+    glEnable(GL_DEPTH_TEST);
+  } else {
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_ALWAYS);
+    const GLuint p = I.prog_backdrop;
+    I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
+    setMat4(p, "u_invViewProj", view_proj.inverse());
+    glUniform1i(loc(p, "u_groundOn"), I.params.ground ? 1 : 0);
+    glUniform1i(loc(p, "u_transparent"), I.params.transparent ? 1 : 0);
+    glUniform1f(loc(p, "u_groundZ"), 0.0f);
     setVec3(p, "u_groundAlbedo", srgbToLinear(I.params.ground_color.cast<float>()));
     glUniform1f(loc(p, "u_gridSpacing"), float(std::max(I.params.grid_spacing, 0.0)));
     glUniform3f(loc(p, "u_fadeCenter"), float(cam.target.x()), float(cam.target.y()), 0.0f);
     glUniform2f(loc(p, "u_fade"), float(fade_start), float(fade_end));
-    glBindVertexArray(I.ground_vao);
-    glDrawArrays(GL_TRIANGLES, 0, 6);
-    ++stats_.draw_calls;
+    glUniform1i(loc(p, "u_groundShadow"), 2);
+    glBindVertexArray(I.empty_vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    stats_.draw_calls = 1;
   }
+  glDepthFunc(GL_LESS);
 
   I.setCommonUniforms(I.prog_mesh, view_proj, light_vp, normal_offset, shadows_on);
   I.setCommonUniforms(I.prog_mesh_mat, view_proj, light_vp, normal_offset, shadows_on);
@@ -748,19 +878,44 @@ void Renderer::endFrame() {
     ++stats_.draw_calls;
   }
   glBindVertexArray(0);
+  I.endPass(Impl::kMainPass, stats_);
 
-  // --- Resolve the samples into the single-sample target. ---
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, I.msaa_fbo);
-  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, I.resolve_fbo);
-  glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  // --- Anti-aliasing into the output target: MSAA resolve, or the post-process filter. ---
+  if (msaa || post) {
+    I.beginPass(Impl::kResolvePass);
+    if (msaa) {
+      glBindFramebuffer(GL_READ_FRAMEBUFFER, I.msaa_fbo);
+      glBindFramebuffer(GL_DRAW_FRAMEBUFFER, I.resolve_fbo);
+      glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    } else {
+      glBindFramebuffer(GL_FRAMEBUFFER, I.resolve_fbo);
+      glDisable(GL_DEPTH_TEST);
+      glUseProgram(I.prog_post);
+      glActiveTexture(GL_TEXTURE3);
+      glBindTexture(GL_TEXTURE_2D, I.main_color_tex);
+      glActiveTexture(GL_TEXTURE0);
+      glUniform1i(loc(I.prog_post, "u_frame"), 3);
+      glUniform2f(loc(I.prog_post, "u_texel"), 1.0f / float(w), 1.0f / float(h));
+      glBindVertexArray(I.empty_vao);
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+      glBindVertexArray(0);
+      glActiveTexture(GL_TEXTURE3);
+      glBindTexture(GL_TEXTURE_2D, 0);  // the main pass renders into it next frame
+      glActiveTexture(GL_TEXTURE0);
+      glEnable(GL_DEPTH_TEST);
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    I.endPass(Impl::kResolvePass, stats_);
+  }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (!I.software_gl) I.query_frame ^= 1;
   I.in_frame = false;
   stats_.submit_ms = msSince(t0);
 }
 
 void Renderer::readPixels(std::vector<uint8_t>& rgba) {
   const auto t0 = Clock::now();
-  readFramebufferRGBA(impl_->resolve_fbo, width_, height_, rgba);
+  readFramebufferRGBA(impl_->output_fbo, width_, height_, rgba);
   // Transparent: edge pixels hold colour * coverage (the samples over a clear of 0); PNG wants
   // straight alpha.
   if (impl_->params.transparent) unpremultiplyAlpha(rgba);
@@ -768,7 +923,7 @@ void Renderer::readPixels(std::vector<uint8_t>& rgba) {
 }
 
 void Renderer::blitTo(unsigned fbo, int w, int h) const {
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, impl_->resolve_fbo);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, impl_->output_fbo);
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo);
   glBlitFramebuffer(0, 0, width_, height_, 0, 0, w, h, GL_COLOR_BUFFER_BIT,
                     (w == width_ && h == height_) ? GL_NEAREST : GL_LINEAR);

@@ -25,6 +25,7 @@ uniform float u_shadowTexel;     // 1 / shadow map size
 uniform float u_shadowSoftness;  // PCF radius, texels
 uniform float u_normalOffset;    // m, receiver offset along the normal (about 1.5 texels)
 uniform int u_shadowsOn;
+uniform int u_shadowDraft;       // 1: plain PCF (draft quality), 0: soft shadows with contact hardening
 uniform sampler2D u_shadowDepth;       // the same depth texture, raw depths (blocker search)
 uniform float u_lightDepthRange;       // m per unit of shadow-map depth
 uniform float u_texelWorld;            // m per shadow texel
@@ -72,6 +73,13 @@ float shadowFactor(vec3 P, vec3 N) {
   vec4 s = u_lightViewProj * vec4(Po, 1.0);
   vec3 c = s.xyz / s.w * 0.5 + 0.5;
   if (c.x <= 0.0 || c.x >= 1.0 || c.y <= 0.0 || c.y >= 1.0 || c.z >= 1.0) return 1.0;
+  if (u_shadowDraft != 0) {  // draft quality: 5 bilinear compares over the minimum radius
+    float rd = max(u_shadowSoftness, 1.0) * u_shadowTexel;
+    return 0.2 * (texture(u_shadowMap, c) + texture(u_shadowMap, vec3(c.xy + vec2(rd, rd), c.z)) +
+                  texture(u_shadowMap, vec3(c.xy + vec2(-rd, rd), c.z)) +
+                  texture(u_shadowMap, vec3(c.xy + vec2(rd, -rd), c.z)) +
+                  texture(u_shadowMap, vec3(c.xy - vec2(rd, rd), c.z)));
+  }
   // 1) Blockers within the largest penumbra we allow.
   float searchR = u_maxPenumbraTexels * u_shadowTexel;
   float sumB = 0.0, nB = 0.0;
@@ -242,25 +250,37 @@ void main() {
 )GLSL";
 
 // ---------------------------------------------------------------------------------------------
-const char* const kGroundVS = R"GLSL(
-layout(location = 0) in vec2 a_xy;  // -1..1
-uniform mat4 u_viewProj;
-uniform vec3 u_groundCenter;  // xy centre, z = 0
-uniform float u_groundHalf;   // m
-out vec3 v_pos;
+// ---------------------------------------------------------------------------------------------
+// Background and ground in one full-screen pass (no overdraw: each pixel is shaded once). The
+// vertex shader carries the pixel's points on the near and far planes as homogeneous world
+// coordinates (linear in screen space, so interpolation is exact); the fragment shader intersects
+// the eye ray with the ground plane, shades the ground there or the background gradient, and
+// writes the hit's depth so objects drawn later are hidden below the ground as before.
+const char* const kBackdropVS = R"GLSL(
+uniform mat4 u_invViewProj;
+out vec4 v_near;
+out vec4 v_far;
 void main() {
-  v_pos = vec3(u_groundCenter.xy + a_xy * u_groundHalf, 0.0);
-  gl_Position = u_viewProj * vec4(v_pos, 1.0);
+  vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
+  v_near = u_invViewProj * vec4(p, -1.0, 1.0);
+  v_far = u_invViewProj * vec4(p, 1.0, 1.0);
+  gl_Position = vec4(p, 1.0, 1.0);
 }
 )GLSL";
 
-const char* const kGroundFS = R"GLSL(
-in vec3 v_pos;
+const char* const kBackdropFS = R"GLSL(
+in vec4 v_near;
+in vec4 v_far;
 out vec4 o_color;
+uniform mat4 u_viewProj;
+uniform int u_groundOn;
+uniform int u_transparent;     // 1: no background (alpha 0 where there is no ground)
+uniform float u_groundZ;
 uniform vec3 u_groundAlbedo;   // linear
 uniform float u_gridSpacing;   // m (0: plain)
 uniform vec3 u_fadeCenter;     // point the fade distance is measured from
 uniform vec2 u_fade;           // start, end of the fade into the background (m)
+uniform sampler2D u_groundShadow;  // shadowFactor() on the ground, in light-space xy
 
 // Box-filtered checker (integral of the square wave over the pixel footprint): no moire and no
 // shimmering towards the horizon, without a texture.
@@ -270,18 +290,115 @@ float filteredChecker(vec2 p) {
   return 0.5 - 0.5 * i.x * i.y;  // 0 or 1 per square, blended at edges
 }
 
-void main() {
-  vec3 N = vec3(0.0, 0.0, 1.0);
-  vec3 albedo = u_groundAlbedo;
-  if (u_gridSpacing > 0.0) {
-    float k = filteredChecker(v_pos.xy / u_gridSpacing);
-    albedo *= mix(0.93, 1.05, k);  // subtle: about +-6 %
+// shade() of kCommonFS for the plane (N = +z, specular 0.04, shininess 16, no rim), with the
+// shadow read from the per-frame ground shadow texture instead of a search per pixel.
+vec3 shadeGround(vec3 P, vec3 albedo) {
+  vec3 V = normalize(u_eye - P);
+  vec3 L = -u_lightDir;
+  float ndl = max(L.z, 0.0);
+  float sh = 0.0;
+  if (ndl > 0.0) {
+    sh = 1.0;
+    if (u_shadowsOn != 0) {
+      vec4 s = u_lightViewProj * vec4(P, 1.0);
+      vec2 c = s.xy / s.w * 0.5 + 0.5;
+      if (c.x > 0.0 && c.x < 1.0 && c.y > 0.0 && c.y < 1.0) sh = texture(u_groundShadow, c).r;
+    }
   }
-  vec3 c = linearToSrgb(toneMap(shade(v_pos, N, albedo, 0.04, 16.0, 0.0)));
-  float d = length(v_pos.xy - u_fadeCenter.xy);
-  float f = smoothstep(u_fade.x, u_fade.y, d);
+  vec3 H = normalize(L + V);
+  float spec = 0.04 * 3.0 * pow(max(H.z, 0.0), 16.0) * ndl;
+  vec3 key = u_lightColor * sh * (albedo * ndl + vec3(spec));
+  vec3 fill = u_fillColor * albedo * max(-u_fillDir.z, 0.0);
+  return key + fill + albedo * u_skyAmbient;
+}
+
+void main() {
   vec3 bg = background(gl_FragCoord.y / u_viewport.y);
+  vec3 pn = v_near.xyz / v_near.w, pf = v_far.xyz / v_far.w;
+  float dz = pf.z - pn.z;
+  float t = abs(dz) > 1e-12 ? (u_groundZ - pn.z) / dz : -1.0;
+  vec3 P = pn + t * (pf - pn);
+  float d = length(P.xy - u_fadeCenter.xy);
+  float f = smoothstep(u_fade.x, u_fade.y, d);
+  // Derivatives below are taken in uniform control flow; the choice is made after.
+  vec2 gp = u_gridSpacing > 0.0 ? P.xy / u_gridSpacing : vec2(0.0);
+  float k = filteredChecker(gp);
+  if (u_groundOn == 0 || t <= 0.0 || t >= 1.0 || f >= 1.0) {
+    o_color = u_transparent != 0 ? vec4(0.0) : vec4(bg, 1.0);
+    gl_FragDepth = 1.0;
+    return;
+  }
+  vec3 albedo = u_groundAlbedo;
+  if (u_gridSpacing > 0.0) albedo *= mix(0.93, 1.05, k);  // subtle: about +-6 %
+  vec3 c = linearToSrgb(toneMap(shadeGround(P, albedo)));
   o_color = vec4(mix(c, bg, f), 1.0);
+  vec4 clip = u_viewProj * vec4(P, 1.0);
+  gl_FragDepth = clamp(0.5 * clip.z / clip.w + 0.5, 0.0, 1.0);
+}
+)GLSL";
+
+// The background alone (frames without a ground): the gradient, no depth.
+const char* const kBackgroundFS = R"GLSL(
+out vec4 o_color;
+void main() {
+  o_color = vec4(background(gl_FragCoord.y / u_viewport.y), 1.0);
+}
+)GLSL";
+
+// The ground's shadow, once per frame, into a small texture laid over the shadow map's square:
+// the texel at light-space (x, y) holds shadowFactor() of the ground point on that light ray.
+const char* const kGroundShadowFS = R"GLSL(
+out vec4 o_color;
+uniform mat4 u_invLightViewProj;
+uniform float u_groundZ;
+uniform vec2 u_groundShadowSize;
+void main() {
+  vec2 ndc = gl_FragCoord.xy / u_groundShadowSize * 2.0 - 1.0;
+  vec4 a = u_invLightViewProj * vec4(ndc, -1.0, 1.0), b = u_invLightViewProj * vec4(ndc, 1.0, 1.0);
+  a.xyz /= a.w;
+  b.xyz /= b.w;
+  float t = abs(b.z - a.z) > 1e-12 ? (u_groundZ - a.z) / (b.z - a.z) : 0.0;
+  vec3 P = mix(a.xyz, b.xyz, t);
+  o_color = vec4(shadowFactor(P, vec3(0.0, 0.0, 1.0)), 0.0, 0.0, 1.0);
+}
+)GLSL";
+
+// ---------------------------------------------------------------------------------------------
+// Post-process anti-aliasing of the finished (display-encoded) frame, after the idea of Lottes'
+// FXAA: where the local luma contrast is high, the edge's direction is estimated from the 2x2
+// corner lumas and the pixel is replaced by bilinear taps along that edge; a 4-tap average is
+// kept when it stays inside the local luma range, a 2-tap one otherwise (so thin features are
+// not washed out). Flat pixels pass through unchanged.
+const char* const kPostAaFS = R"GLSL(
+out vec4 o_color;
+uniform sampler2D u_frame;
+uniform vec2 u_texel;  // 1 / size
+float luma(vec3 c) { return dot(c, vec3(0.299, 0.587, 0.114)); }
+void main() {
+  // Unfiltered fetches for the 2x2 corners and the centre (a software rasterizer pays for every
+  // bilinear tap); the corners are clamped to the frame.
+  vec2 uv = gl_FragCoord.xy * u_texel;
+  ivec2 p = ivec2(gl_FragCoord.xy), hi = textureSize(u_frame, 0) - 1;
+  vec4 cM = texelFetch(u_frame, p, 0);  // alpha < 1 only in transparent frames (premultiplied)
+  float lM = luma(cM.rgb);
+  float lNW = luma(texelFetch(u_frame, clamp(p + ivec2(-1, 1), ivec2(0), hi), 0).rgb);
+  float lNE = luma(texelFetch(u_frame, clamp(p + ivec2(1, 1), ivec2(0), hi), 0).rgb);
+  float lSW = luma(texelFetch(u_frame, clamp(p + ivec2(-1, -1), ivec2(0), hi), 0).rgb);
+  float lSE = luma(texelFetch(u_frame, clamp(p + ivec2(1, -1), ivec2(0), hi), 0).rgb);
+  float lMin = min(lM, min(min(lNW, lNE), min(lSW, lSE)));
+  float lMax = max(lM, max(max(lNW, lNE), max(lSW, lSE)));
+  if (lMax - lMin < max(1.0 / 24.0, lMax * 0.125)) {  // no edge here
+    o_color = cM;
+    return;
+  }
+  vec2 dir = vec2(-((lNW + lNE) - (lSW + lSE)), (lNW + lSW) - (lNE + lSE));
+  float reduce = max((lNW + lNE + lSW + lSE) * 0.25 * 0.125, 1.0 / 128.0);
+  float scale = 1.0 / (min(abs(dir.x), abs(dir.y)) + reduce);
+  dir = clamp(dir * scale, vec2(-8.0), vec2(8.0)) * u_texel;
+  vec4 a = 0.5 * (texture(u_frame, uv + dir * (1.0 / 3.0 - 0.5)) + texture(u_frame, uv + dir * (2.0 / 3.0 - 0.5)));
+  vec4 b = 0.5 * a + 0.25 * (texture(u_frame, uv - dir * 0.5) + texture(u_frame, uv + dir * 0.5));
+  float lB = luma(b.rgb);
+  o_color = (lB < lMin || lB > lMax) ? a : b;
 }
 )GLSL";
 
@@ -290,13 +407,6 @@ const char* const kFullscreenVS = R"GLSL(
 void main() {
   vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
   gl_Position = vec4(p, 1.0, 1.0);
-}
-)GLSL";
-
-const char* const kBackgroundFS = R"GLSL(
-out vec4 o_color;
-void main() {
-  o_color = vec4(background(gl_FragCoord.y / u_viewport.y), 1.0);
 }
 )GLSL";
 

@@ -22,6 +22,7 @@ PACKAGES=(
   assimp-testmodels                    # third-party heads for the head-placement tests
   gnuplot-nox                          # bench plots
   xvfb xauth                           # window tests without a display
+  xdotool                              # the window test moves the mouse and presses keys in Xvfb
 )
 
 # `make fuzz` only (scripts/setup.sh --fuzz): libFuzzer comes with clang's runtime libraries.

@@ -70,12 +70,30 @@ struct LightParams {
   }
 };
 
+// How much work a frame gets (docs/RENDERING.md, "Quality"). final: the picture as configured;
+// draft: no anti-aliasing, a shadow map a quarter the size with a plain 5-tap filter (no contact
+// hardening): a quick preview of a long video, and the window while something moves.
+enum class RenderQuality { Draft, Final };
+template <>
+struct EnumNames<RenderQuality> {
+  static constexpr std::array<std::string_view, 2> names{"draft", "final"};
+};
+// Anti-aliasing when samples > 1: a post-process edge filter on the finished frame (one cheap
+// full-screen pass), or multisampling with `samples` samples (costly on a software rasterizer).
+enum class AntiAlias { Post, Msaa };
+template <>
+struct EnumNames<AntiAlias> {
+  static constexpr std::array<std::string_view, 2> names{"post", "msaa"};
+};
+
 struct RenderParams {
   int width = 1280;           // px
   int height = 720;           // px
   double fps = 30.0;          // frames per second of output
   int frames = 150;           // frames rendered by `ponyhop render` without --frames
-  int samples = 4;            // MSAA samples per pixel (1 = off)
+  int samples = 4;            // anti-aliasing: 1 = off; > 1 = on (MSAA samples with antialias = msaa)
+  AntiAlias antialias = AntiAlias::Post;
+  RenderQuality quality = RenderQuality::Final;
   Eigen::Vector3d background{0.80, 0.84, 0.88};  // rgb 0..1 (top of the gradient)
   Eigen::Vector3d ground_color{0.72, 0.72, 0.70};  // rgb 0..1
   double grid_spacing = 0.25;  // m, ground checker size (0: plain)
@@ -89,7 +107,9 @@ struct RenderParams {
     v("height", height, {.unit = "px", .min = 16, .max = 8192, .help = "Image height"});
     v("fps", fps, {.unit = "1/s", .min = 1, .max = 1000, .help = "Frames per second of output"});
     v("frames", frames, {.min = 1, .max = 1000000, .help = "Frames rendered by default"});
-    v("samples", samples, {.min = 1, .max = 16, .help = "Anti-aliasing samples per pixel"});
+    v("samples", samples, {.min = 1, .max = 16, .help = "Anti-aliasing: 1 = off, more = on (MSAA: samples per pixel)"});
+    v("antialias", antialias, {.help = "post: an edge filter on the finished frame (cheap); msaa: multisampling"});
+    v("quality", quality, {.help = "final: as configured; draft: no AA, smaller plainer shadows (previews)"});
     v("background", background, {.unit = "rgb", .min = 0, .max = 1, .help = "Background colour"});
     v("ground_color", ground_color, {.unit = "rgb", .min = 0, .max = 1, .help = "Ground colour"});
     v("grid_spacing", grid_spacing, {.unit = "m", .min = 0, .max = 100, .help = "Ground checker size (0: plain)"});
@@ -120,15 +140,15 @@ struct EnumNames<AnchorSpace> {
 };
 
 // Colours of the head: the file's materials or head.color.
-enum class HeadMaterials { Auto, File, Color };
+enum class HeadMaterials { Auto, Color };
 template <>
 struct EnumNames<HeadMaterials> {
-  static constexpr std::array<std::string_view, 3> names{"auto", "file", "color"};
+  static constexpr std::array<std::string_view, 2> names{"auto", "color"};
 };
 
 // The head: a mesh (any format assimp reads) on a kinematic body driven by keyframes.
 // Head coordinates are the mesh file's own, before scale/rotation/offset. Placement comes from the
-// head itself (engine/head_fit.h): the up axis, the head's own part of a whole-body mesh, its
+// head itself (sim/head_fit.h): the up axis, the head's own part of a whole-body mesh, its
 // bounds, the pivot and the anchor.
 struct HeadParams {
   std::string mesh = "assets/head/head.gltf";  // path, relative to the repository or the scene file
@@ -162,7 +182,7 @@ struct HeadParams {
     v("anchor_in_bounds", anchor_in_bounds,
       {.min = 0, .max = 1, .help = "Anchor as fractions of the head's bounds: x right..left, y face..back, z bottom..top"});
     v("anchor", anchor, {.min = -1e6, .max = 1e6, .help = "Ponytail anchor in the mesh's coordinates (anchor_space mesh)"});
-    v("materials", materials, {.help = "auto: the file's textures/vertex colours/colours when it has more than one plain colour"});
+    v("materials", materials, {.help = "auto: the file's textures, vertex colours, colours when it has more than one plain colour; color: head.color"});
     v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Skin colour"});
     v("animation", animation, {.help = "Keyframed motion of the head"});
   }
@@ -225,5 +245,11 @@ struct Scene {
     v("hoppers", hoppers, {.help = "More hoppers in the same world, each a hopper section"});
   }
 };
+
+// The section of the scene's i-th hopper, in the order Sim builds them: `hopper`, then `hoppers`.
+inline const HopperSection& hopperSection(const Scene& scene, size_t i) {
+  if (scene.hopper) return i == 0 ? *scene.hopper : scene.hoppers[i - 1];
+  return scene.hoppers[i];
+}
 
 }  // namespace ponyhop

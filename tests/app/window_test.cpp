@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
 #include "app/panel.h"
 #include "engine/frame_writer.h"
@@ -69,6 +70,85 @@ TEST(WindowTest, RunUnderXvfbShowsTheSceneAndThePanel) {
   EXPECT_GT(countColours(*img, 0, scene_w), 20) << "shaded head, hair and ground";
   EXPECT_GT(lumaStddev(*img, scene_w, 1280), 5.0) << "the panel shows something";
   EXPECT_GT(countColours(*img, scene_w, 1280), 12) << "text, sliders and headers";
+#endif
+}
+
+}  // namespace
+}  // namespace ponyhop
+
+namespace ponyhop {
+namespace {
+
+// The scene view renders draft while something moves and final when everything is still
+// (issue 14): the real window under Xvfb, driven by xdotool (play, pause with Space, drag in the
+// view), and `run --quality-log` telling per frame which quality it showed and what moved.
+// Asserts the mode, never the time.
+// Not yet working: under xvfb-run (no window manager) the synthetic Space never reaches the GLFW window,
+// so the run never pauses and every frame is draft. Disabled until the drive script can pause it.
+TEST(WindowTest, DISABLED_ViewIsDraftWhileMovingAndFinalWhenStill) {
+#ifndef PONYHOP_WINDOW
+  GTEST_SKIP() << "built without the window (-DPONYHOP_WINDOW=OFF): no `ponyhop run`";
+#else
+  if (std::system("command -v xvfb-run > /dev/null 2>&1 && command -v xdotool > /dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "xvfb-run or xdotool is missing (scripts/setup.sh installs both)";
+  }
+  const std::string dir = testing::scratch("window_quality");
+  const std::string qlog = dir + "/quality.log", script = dir + "/drive.sh";
+  {
+    std::ofstream f(script);
+    f << "EXE='" << PONYHOP_EXE << "'; QLOG='" << qlog << "'\n"
+      << R"SH(
+rm -f "$QLOG"
+"$EXE" run assets/scenes/ponytail.json --size 1280x720 --no-vsync --frames 90 --quality-log "$QLOG" &
+pid=$!
+lines() { if [ -f "$QLOG" ]; then wc -l < "$QLOG"; else echo 0; fi; }
+# Waits until the window has shown $1 more frames (or gave up after 60 s, or exited).
+waitfor() {
+  n=$(( $(lines) + $1 )); i=0
+  while [ "$(lines)" -lt "$n" ] && kill -0 $pid 2> /dev/null && [ $i -lt 600 ]; do sleep 0.1; i=$((i + 1)); done
+}
+waitfor 6                                   # the scene plays
+xdotool mousemove 440 360                   # no window manager: focus the window, then pause
+win=$(xdotool search --pid $pid 2> /dev/null | head -1)
+[ -n "$win" ] && xdotool windowfocus --sync "$win" 2> /dev/null
+xdotool key space
+waitfor 8                                   # still
+xdotool mousedown 1                         # orbit: drag in the scene view
+for k in 1 2 3 4 5 6; do xdotool mousemove_relative -- 12 3; waitfor 1; done
+xdotool mouseup 1
+wait $pid                                   # still again until the last frame
+)SH";
+  }
+  const std::string cmd = "xvfb-run -a -s '-screen 0 1280x720x24' sh " + script + " > " + dir + "/run.log 2>&1";
+  const int status = std::system(cmd.c_str());
+  const std::string log = testing::readFile(dir + "/run.log");
+  ASSERT_EQ(status, 0) << log;
+  std::ifstream in(qlog);
+  ASSERT_TRUE(in.good()) << "no quality log\n" << log;
+  int playing_draft = 0, dragging_draft = 0, still_final = 0, lines = 0;
+  bool last_final = false;
+  std::string line;
+  while (std::getline(in, line)) {
+    int frame = 0, running = 0, active = 0, mouse = 0;
+    char mode[16] = {};
+    ASSERT_EQ(std::sscanf(line.c_str(), "frame %d %15s running=%d item_active=%d mouse_down=%d", &frame, mode,
+                          &running, &active, &mouse),
+              5)
+        << line;
+    ++lines;
+    const bool moving = running || active || mouse;
+    EXPECT_STREQ(mode, moving ? "draft" : "final") << line;
+    playing_draft += running && std::string(mode) == "draft";
+    dragging_draft += !running && mouse && std::string(mode) == "draft";
+    still_final += !moving && std::string(mode) == "final";
+    last_final = std::string(mode) == "final";
+  }
+  EXPECT_EQ(lines, 90) << log;
+  EXPECT_GT(playing_draft, 0) << "draft while the simulation plays\n" << log;
+  EXPECT_GT(dragging_draft, 0) << "draft while the mouse drags in the view (paused)\n" << log;
+  EXPECT_GT(still_final, 0) << "final when nothing moves\n" << log;
+  EXPECT_TRUE(last_final) << "back to final once the drag ended\n" << log;
+  EXPECT_NE(log.find("final (still) frames"), std::string::npos) << "the run reports fps per quality\n" << log;
 #endif
 }
 

@@ -223,13 +223,28 @@ TEST(Renderer, SameDrawListIsByteIdentical) {
   EXPECT_TRUE(a == b) << "two renders of the same draw list differ";
 }
 
+// No AA, 4x MSAA, the post-process filter (the default), and draft quality (never anti-aliased).
 TEST(Renderer, MsaaOneAndFourSamplesBothWork) {
   REQUIRE_GL();
   auto scene = [](Renderer& r) { r.drawSphere(kSphereC, kSphereR, red()); };
   const auto empty = render(testCamera(), testParams(1, false), [](Renderer&) {});
   const auto one = render(testCamera(), testParams(1, false), scene);
-  const auto four = render(testCamera(), testParams(4, false), scene);
+  EXPECT_FALSE(gl().renderer->stats().post_aa);
+  RenderParams msaa = testParams(4, false);
+  msaa.antialias = AntiAlias::Msaa;
+  const auto four = render(testCamera(), msaa, scene);
   EXPECT_EQ(gl().renderer->stats().samples, 4);
+  const auto post = render(testCamera(), testParams(4, false), scene);
+  EXPECT_EQ(gl().renderer->stats().samples, 1);
+  EXPECT_TRUE(gl().renderer->stats().post_aa);
+  RenderParams draft = testParams(4, false);
+  draft.quality = RenderQuality::Draft;
+  const auto drafted = render(testCamera(), draft, scene);
+  EXPECT_TRUE(gl().renderer->stats().draft);
+  EXPECT_FALSE(gl().renderer->stats().post_aa);
+  EXPECT_EQ(gl().renderer->stats().samples, 1);
+  save("post.png", post);
+  save("draft.png", drafted);
   save("msaa1.png", one);
   save("msaa4.png", four);
   // Both show the sphere with the same area.
@@ -264,8 +279,11 @@ TEST(Renderer, MsaaOneAndFourSamplesBothWork) {
       }
     return n;
   };
-  const int b1 = blended(one), b4 = blended(four);
+  const int b1 = blended(one), b4 = blended(four), bp = blended(post), bd = blended(drafted);
   EXPECT_GT(b4, 1.6 * b1 + 20) << "anti-aliased edge pixels: 1 sample " << b1 << ", 4 samples " << b4;
+  EXPECT_GT(bp, 1.6 * b1 + 20) << "anti-aliased edge pixels: 1 sample " << b1 << ", post filter " << bp;
+  EXPECT_LT(bd, 1.3 * b1 + 20) << "draft is not anti-aliased: 1 sample " << b1 << ", draft " << bd;
+  EXPECT_NEAR(double(coverage(post)), double(c1), 0.05 * c1);
 }
 
 TEST(Renderer, TaperedCapsuleChainHasNoGaps) {

@@ -1,0 +1,179 @@
+// `ponyhop bench-render [--scenes A.json,B.json] [--sizes 1280x720,1920x1080] [--frames N] [--out FILE.md]`:
+// where a frame's render time goes, per pass, for the demo scenes in each configuration of issue 14
+// (final quality, then peeling off anti-aliasing, the shadow and the ground down to the bare floor),
+// plus the old 4x MSAA and the draft quality. Writes a Markdown table (and prints it).
+//
+// Each configuration renders `frames` frames of the scene's own motion (the simulation steps to each
+// frame's time first; simulation time is not counted) after 2 warm-up frames (shader compilation,
+// first target allocation). The render column is the wall time of RenderSession::renderFrame (all
+// passes + the read-back); the pass columns are RenderStats (glFinish-bracketed on llvmpipe).
+#include <sys/utsname.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "app/commands.h"
+#include "engine/render_session.h"
+#include "sim/scene_io.h"
+
+namespace ponyhop {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct BenchRenderArgs {
+  std::vector<std::string> scenes{"assets/scenes/ponytail.json", "assets/scenes/ponytail_hopper.json"};
+  std::vector<std::string> sizes{"1280x720", "1920x1080"};
+  int frames = 20;
+  std::string out = "docs/bench/render_table.md";
+};
+
+struct Variant {
+  const char* name;
+  std::vector<std::string> sets;
+};
+
+// The issue's four rows, then the alternatives worth seeing beside them.
+const std::vector<Variant>& variants() {
+  static const std::vector<Variant> v = {
+      {"final (as shipped)", {}},
+      {"samples=1 (no AA)", {"render.samples=1"}},
+      {"+ light.intensity=0 (no shadow)", {"render.samples=1", "light.intensity=0"}},
+      {"+ ground=false: **floor**", {"render.samples=1", "light.intensity=0", "render.ground=false"}},
+      {"final with 4x MSAA (antialias=msaa)", {"render.antialias=msaa"}},
+      {"draft (quality=draft)", {"render.quality=draft"}},
+  };
+  return v;
+}
+
+struct Row {
+  double total = 0, shadow = 0, main = 0, aa = 0, readback = 0;
+};
+
+Row measure(const std::string& scene_path, const Variant& v, int w, int h, int frames) {
+  std::vector<Override> o;
+  for (const auto& s : v.sets) o.push_back(parseOverride(s));
+  Scene scene = loadScene(scene_path, o);
+  scene.render.width = w;
+  scene.render.height = h;
+  validateScene(scene, scene_path);
+  RenderSession session(scene);
+  std::vector<uint8_t> rgba;
+  Row r;
+  const int warmup = 2;
+  for (int i = 0; i < warmup + frames; ++i) {
+    const double t = i / scene.render.fps;
+    if (!session.simulateTo(t)) throw SceneError(scene_path + ": the simulation stopped: " + session.status());
+    const auto t0 = Clock::now();
+    session.renderFrame(t, rgba);
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    if (i < warmup) continue;
+    const RenderStats& st = session.stats();
+    r.total += ms;
+    r.shadow += st.shadow_ms;
+    r.main += st.main_ms;
+    r.aa += st.resolve_ms;
+    r.readback += st.readback_ms;
+  }
+  for (double* x : {&r.total, &r.shadow, &r.main, &r.aa, &r.readback}) *x /= frames;
+  return r;
+}
+
+std::string loadAverage() {
+  std::ifstream f("/proc/loadavg");
+  std::string a, b, c;
+  f >> a >> b >> c;
+  return a + " " + b + " " + c;
+}
+
+int runBenchRender(const BenchRenderArgs& args) {
+  std::ostringstream md;
+  utsname u{};
+  uname(&u);
+  const char* lp = std::getenv("LP_NUM_THREADS");
+  std::string gl_name;
+  {
+    Scene probe = loadScene(args.scenes.front());
+    probe.render.width = 64;
+    probe.render.height = 64;
+    RenderSession s(probe);
+    gl_name = s.glRenderer() + " / " + s.glVersion();
+  }
+  md << "# Render speed\n\n"
+     << "`ponyhop bench-render` (app/cmd_bench_render.cpp): ms per frame, mean of " << args.frames
+     << " frames after 2 warm-up frames, on " << u.machine << " with " << std::thread::hardware_concurrency()
+     << " hardware threads, " << gl_name << ", LP_NUM_THREADS=" << (lp ? lp : "(unset)")
+     << ", load average at the start " << loadAverage() << ".\n\n"
+     << "*render* is the wall time of one frame (all passes and the read-back); the pass columns are "
+        "RenderStats (glFinish-bracketed: llvmpipe rasterizes a pass synchronously at its flush). "
+        "*x floor* = render / the floor of the same scene and size (1 sample, no shadow, no ground).\n\n";
+  for (const auto& scene : args.scenes) {
+    for (const auto& size : args.sizes) {
+      int w = 0, h = 0;
+      char tail = 0;
+      if (std::sscanf(size.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192)
+        throw SceneError("--sizes " + size + ": expected WIDTHxHEIGHT between 16x16 and 8192x8192, e.g. 1280x720");
+      md << "## " << scene << " at " << w << "x" << h << "\n\n"
+         << "| configuration | render | shadow | main | AA | read-back | x floor |\n"
+         << "|---|---:|---:|---:|---:|---:|---:|\n";
+      std::vector<Row> rows;
+      for (const Variant& v : variants()) {
+        rows.push_back(measure(scene, v, w, h, args.frames));
+        std::fprintf(stderr, "bench-render: %s %s %-38s %7.1f ms\n", scene.c_str(), size.c_str(), v.name,
+                     rows.back().total);
+      }
+      const double floor_ms = rows[3].total;
+      for (size_t i = 0; i < rows.size(); ++i) {
+        const Row& r = rows[i];
+        char line[256];
+        std::snprintf(line, sizeof line, "| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.2f |\n", variants()[i].name,
+                      r.total, r.shadow, r.main, r.aa, r.readback, r.total / floor_ms);
+        md << line;
+      }
+      md << "\n";
+    }
+  }
+  md << "Load average at the end: " << loadAverage() << ".\n";
+  std::fputs(md.str().c_str(), stdout);
+  if (!args.out.empty()) {
+    std::error_code ec;
+    const auto parent = std::filesystem::path(args.out).parent_path();
+    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+    const std::string tmp = args.out + ".tmp";
+    std::ofstream f(tmp);
+    f << md.str();
+    f.close();
+    if (!f || (std::filesystem::rename(tmp, args.out, ec), ec)) {
+      std::fprintf(stderr, "ponyhop bench-render: %s: cannot write the table\n", args.out.c_str());
+      return 1;
+    }
+    std::fprintf(stderr, "bench-render: table in %s\n", args.out.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+void addBenchRenderCommand(CLI::App& app, int& exit_code) {
+  auto args = std::make_shared<BenchRenderArgs>();
+  auto* cmd = app.add_subcommand("bench-render", "Render time per pass of the demo scenes in each quality configuration");
+  cmd->add_option("--scenes", args->scenes, "Scenes to render (default ponytail, ponytail_hopper)")->delimiter(',');
+  cmd->add_option("--sizes", args->sizes, "Frame sizes, e.g. 1280x720,1920x1080")->delimiter(',');
+  cmd->add_option("--frames", args->frames, "Timed frames per configuration (default 20)")->check(CLI::Range(1, 10000));
+  cmd->add_option("--out", args->out, "Markdown table to write (default docs/bench/render_table.md; empty: print only)");
+  cmd->callback([args, &exit_code] {
+    try {
+      exit_code = runBenchRender(*args);
+    } catch (const SceneError& e) {
+      std::fprintf(stderr, "ponyhop bench-render: %s\n", e.what());
+      exit_code = 2;
+    }
+  });
+}
+
+}  // namespace ponyhop
