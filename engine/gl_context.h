@@ -1,7 +1,7 @@
 // GL contexts and the GL loader. The renderer never cares where its context comes from: headless
 // (OSMesa, here) or a GLFW window (app/), as long as GL 3.3 core is current and loadGL() was
 // called with that context's own getProcAddress. We never link -lGL: with -lOSMesa in the same
-// program the two libraries' entry points collide (see ../shared/GUIDE.md, pitfalls), so every GL
+// program the two libraries' entry points collide (docs/RENDERING.md, "The GL loader story"), so every GL
 // call goes through glad's function pointers.
 #pragma once
 
