@@ -64,7 +64,9 @@ test-tsan: setup
 	@cmake -S . -B $(TSAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPONYHOP_TSAN=ON -DPONYHOP_WINDOW=OFF >/dev/null
 	@cmake --build $(TSAN_BUILD) -j$(JOBS) --target ponyhop $(TSAN_TESTS)
 	@cd $(TSAN_BUILD) && TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/tests/tsan.supp \
-	  ctest --output-on-failure -j$(JOBS) -R '^(FrameWriter|Video|RenderCommand|OutputSafety)\.'
+	  ctest --output-on-failure -j$(JOBS) -R '^(FrameWriter|Video|RenderCommand|OutputSafety)\.' -E 'FullDisk'
+# (The full-disk test is left out here: under RLIMIT_FSIZE the TSan runtime's own writes die with
+# SIGBUS before ponyhop's error path runs; it runs in make test and make test-asan.)
 
 # What a user gets from a plain `cmake -DCMAKE_BUILD_TYPE=Release` (GCC at -O3, warnings as
 # errors): it must build.
