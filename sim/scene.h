@@ -161,7 +161,7 @@ struct HeadParams {
   AnchorSpace anchor_space = AnchorSpace::Bounds;
   // Ponytail anchor, fractions of the head's bounds (x: right 0 .. left 1, y: face 0 .. back 1,
   // z: bottom 0 .. top 1); the anchor is the head's surface point nearest to it.
-  Eigen::Vector3d anchor_in_bounds{0.5, 1.0, 0.75};
+  Eigen::Vector3d anchor_in_bounds{0.5, 1.0, 0.6};
   // Ponytail anchor, head coordinates (mesh units), used when anchor_space is "mesh": the default
   // head's bun (assets/head/README.md).
   Eigen::Vector3d anchor{0.0, 0.0906, -0.1140};
