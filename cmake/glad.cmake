@@ -1,6 +1,6 @@
 # GL entry points are loaded through glad, fed by the context's own getProcAddress
 # (OSMesaGetProcAddress headless, glfwGetProcAddress in the window): never link -lGL
-# (see ../shared/GUIDE.md pitfalls). Generated at build time from Debian's python3-glad,
+# (docs/RENDERING.md, "The GL loader story"). Generated at build time from Debian's python3-glad,
 # offline (--reproducible uses the spec bundled with the package).
 find_program(GLAD_EXECUTABLE glad REQUIRED)
 set(GLAD_OUT ${CMAKE_BINARY_DIR}/glad)
