@@ -184,7 +184,8 @@ bool getArray(const std::string& s, size_t& at, std::vector<T>& v) {
   at += sizeof(n);
   if (n > (s.size() - at) / sizeof(T)) return false;
   v.resize(size_t(n));
-  std::memcpy(static_cast<void*>(v.data()), s.data() + at, size_t(n) * sizeof(T));
+  // An empty vector's data() may be null, and memcpy's arguments must never be (UBSan).
+  if (n > 0) std::memcpy(static_cast<void*>(v.data()), s.data() + at, size_t(n) * sizeof(T));
   at += size_t(n) * sizeof(T);
   return true;
 }
