@@ -98,40 +98,11 @@ std::string withUnit(const char* fmt, const char* unit) {
   return u.empty() ? std::string(fmt) : std::string(fmt) + " " + u;
 }
 
-// Slider ranges for dragging, where the file's allowed range is far wider than anything useful
-// to drag through (values beyond stay reachable with Ctrl+click, up to the allowed range).
-struct SoftRange {
-  const char* key;
-  double lo, hi;
-};
-constexpr SoftRange kSoftRanges[] = {
-    {"chain.links", 1, 128},  // the dense solver is O(n^3): beyond ~100 links a step takes long
-    {"physics.substeps", 1, 64},
-    {"duration", 0, 120},
-    {"render.frames", 1, 3000},
-    {"render.width", 16, 3840},
-    {"render.height", 16, 2160},
-    {"render.fps", 1, 240},
-};
-// Coefficients whose useful values span decades although their meta is linear.
-constexpr const char* kLogKeys[] = {"chain.damping", "chain.stiffness", "chain.drag"};
-
-bool isLogKey(const std::string& key) {
-  for (const char* k : kLogKeys) {
-    if (key == k) return true;
-  }
-  return false;
-}
-
-void rangeFor(const std::string& key, const FieldMeta& meta, double& lo, double& hi) {
-  lo = meta.min;
-  hi = meta.max;
-  for (const SoftRange& r : kSoftRanges) {
-    if (key == r.key) {
-      lo = std::max(lo, r.lo);
-      hi = std::min(hi, r.hi);
-    }
-  }
+// The slider's range: the field's soft range where it has one (values beyond stay reachable with
+// Ctrl+click, up to the allowed range), else its allowed range.
+void rangeFor(const FieldMeta& meta, double& lo, double& hi) {
+  lo = std::isnan(meta.soft_min) ? meta.min : std::max(meta.min, meta.soft_min);
+  hi = std::isnan(meta.soft_max) ? meta.max : std::min(meta.max, meta.soft_max);
 }
 
 void tooltip(const std::string& key, const FieldMeta& meta, const std::string& default_text) {
@@ -298,15 +269,15 @@ class FieldWidgets {
     ImGui::EndDisabled();
   }
 
-  void widget(const std::string& key, double& v, const FieldMeta& meta) {
+  void widget(const std::string&, double& v, const FieldMeta& meta) {
     double lo, hi;
-    rangeFor(key, meta, lo, hi);
+    rangeFor(meta, lo, hi);
     if (!std::isfinite(lo) || !std::isfinite(hi)) {
       ImGui::DragScalar("##v", ImGuiDataType_Double, &v, float(std::max(std::abs(v) * 0.01, 1e-3)), nullptr, nullptr,
                         withUnit("%.4g", meta.unit).c_str());
       return;
     }
-    const bool log = meta.log || isLogKey(key) || (lo >= 0.0 && hi >= 1e3 * std::max(lo, 1e-300) && hi >= 1e3);
+    const bool log = meta.log || (lo >= 0.0 && hi >= 1e3 * std::max(lo, 1e-300) && hi >= 1e3);
     ImGuiSliderFlags flags = log ? ImGuiSliderFlags_Logarithmic : 0;
     // A logarithmic slider that starts at 0 treats values below 10^-precision as 0: give it digits.
     const char* fmt = (log && lo <= 0.0) ? "%.6g" : "%.4g";
@@ -314,9 +285,9 @@ class FieldWidgets {
     ImGui::SliderScalar("##v", ImGuiDataType_Double, &v, &lo, &hi, withUnit(fmt, meta.unit).c_str(), flags);
   }
 
-  void widget(const std::string& key, int& v, const FieldMeta& meta) {
+  void widget(const std::string&, int& v, const FieldMeta& meta) {
     double lo_d, hi_d;
-    rangeFor(key, meta, lo_d, hi_d);
+    rangeFor(meta, lo_d, hi_d);
     const int lo = std::isfinite(lo_d) ? int(lo_d) : -1000000, hi = std::isfinite(hi_d) ? int(hi_d) : 1000000;
     ImGui::SliderScalar("##v", ImGuiDataType_S32, &v, &lo, &hi, withUnit("%d", meta.unit).c_str(),
                         meta.log ? ImGuiSliderFlags_Logarithmic : 0);

@@ -27,16 +27,6 @@ bool startsWith(const std::string& s, const std::string& p) {
   return s.size() >= p.size() && s.compare(0, p.size(), p) == 0 && (s.size() == p.size() || s[p.size()] == '.');
 }
 
-// Fields that only mean something at t = 0 or that move a body's attachment: a change restarts.
-const char* const kRestartKeys[] = {
-    "chain.links",   "chain.length",  "chain.direction", "chain.attach",  "anchor",
-    "head.mesh",     "head.up_axis",  "head.height",     "head.scale",    "head.offset",
-    "head.rotation", "head.anchor",   "head.animation",  "hopper.position", "hopper.velocity",
-    "hopper.script",
-};
-// Fields nothing in the world depends on: the next frame shows them.
-const char* const kLiveKeys[] = {"name", "duration", "camera", "light", "render"};
-
 // True when the only differences are in hopper.command.*.
 bool onlyHopperCommand(const Scene& a, const Scene& b) {
   for (const std::string& k : changedKeys(a, b)) {
@@ -155,14 +145,14 @@ ApplyKind LiveSim::classify(const Scene& from, const Scene& to) const {
       from.anchor.has_value() != to.anchor.has_value() || from.hopper.has_value() != to.hopper.has_value()) {
     return ApplyKind::Restart;
   }
+  // Each field's metadata says how its edit applies (FieldMeta::apply, inherited from its section).
+  Scene probe;
   bool live = true;
   for (const std::string& k : keys) {
-    for (const char* r : kRestartKeys) {
-      if (startsWith(k, r)) return ApplyKind::Restart;
-    }
-    bool is_live = false;
-    for (const char* l : kLiveKeys) is_live = is_live || startsWith(k, l);
-    live = live && is_live;
+    FieldMeta meta;
+    const Apply apply = findField(probe, k, meta) ? meta.apply : Apply::KeepState;
+    if (apply == Apply::Restart) return ApplyKind::Restart;
+    live = live && apply == Apply::Live;
   }
   return live ? ApplyKind::Live : ApplyKind::KeepState;
 }

@@ -30,18 +30,20 @@ struct ChainParams {
 
   template <class V>
   void reflect(V& v) {
-    v("links", links, {.min = 1, .max = 4096, .help = "Number of links", .log = true});
-    v("length", length, {.unit = "m", .min = 1e-4, .max = 10, .help = "Length of each link", .log = true});
+    // Slider to 128: the dense solver is O(n^3), beyond ~100 links a step takes long (typed: 4096).
+    v("links", links,
+      {.min = 1, .max = 4096, .help = "Number of links", .log = true, .apply = Apply::Restart, .soft_min = 1, .soft_max = 128});
+    v("length", length, {.unit = "m", .min = 1e-4, .max = 10, .help = "Length of each link", .log = true, .apply = Apply::Restart});
     v("mass", mass, {.unit = "kg", .min = 1e-6, .max = 1e4, .help = "Mass of the first link", .log = true});
     v("radius", radius, {.unit = "m", .min = 1e-5, .max = 1, .help = "Radius of the first link", .log = true});
     v("taper", taper, {.min = 0.05, .max = 1.0, .help = "Tip radius over root radius"});
     v("damping", damping,
-      {.unit = "N m s/rad", .min = 0, .max = 10, .help = "Joint damping on relative angular velocity"});
+      {.unit = "N m s/rad", .min = 0, .max = 10, .help = "Joint damping on relative angular velocity", .log = true});
     v("stiffness", stiffness,
-      {.unit = "N m/rad", .min = 0, .max = 100, .help = "Bending stiffness toward the rest pose"});
-    v("drag", drag, {.unit = "N s/m^2", .min = 0, .max = 100, .help = "Air drag per metre of link"});
-    v("direction", direction, {.min = -1, .max = 1, .help = "Initial direction from the anchor"});
-    v("attach", attach, {.help = "What the first link hangs from"});
+      {.unit = "N m/rad", .min = 0, .max = 100, .help = "Bending stiffness toward the rest pose", .log = true});
+    v("drag", drag, {.unit = "N s/m^2", .min = 0, .max = 100, .help = "Air drag per metre of link", .log = true});
+    v("direction", direction, {.min = -1, .max = 1, .help = "Initial direction from the anchor", .apply = Apply::Restart});
+    v("attach", attach, {.help = "What the first link hangs from", .apply = Apply::Restart});
   }
 };
 

@@ -157,10 +157,10 @@ struct HopperParams {
     v("unload_margin", unload_margin, {.unit = "m", .min = 0, .max = 1, .help = "THRUST ends this short of the setpoint"});
     v("friction", friction, {.min = 0, .max = 10, .help = "Coulomb friction coefficient of the foot"});
     v("twist_radius", twist_radius, {.unit = "m", .min = 0, .max = 1, .help = "Torsional friction radius of the foot"});
-    v("position", position, {.unit = "m", .min = -1e4, .max = 1e4, .help = "Body centre of mass at t = 0"});
-    v("velocity", velocity, {.unit = "m/s", .min = -100, .max = 100, .help = "Body velocity at t = 0"});
+    v("position", position, {.unit = "m", .min = -1e4, .max = 1e4, .help = "Body centre of mass at t = 0", .apply = Apply::Restart});
+    v("velocity", velocity, {.unit = "m/s", .min = -100, .max = 100, .help = "Body velocity at t = 0", .apply = Apply::Restart});
     v("command", command, {.help = "Command when no script key applies"});
-    v("script", script, {.help = "Scripted course: commands from time t on"});
+    v("script", script, {.help = "Scripted course: commands from time t on", .apply = Apply::Restart});
   }
 };
 

@@ -54,7 +54,7 @@ struct PhysicsParams {
   template <class V>
   void reflect(V& v) {
     v("dt", dt, {.unit = "s", .min = 1e-6, .max = 0.1, .help = "Physics time step", .log = true});
-    v("substeps", substeps, {.min = 1, .max = 1000, .help = "Steps taken per dt", .log = true});
+    v("substeps", substeps, {.min = 1, .max = 1000, .help = "Steps taken per dt", .log = true, .soft_min = 1, .soft_max = 64});
     v("integrator", integrator, {.help = "Time integration method"});
     v("solver", solver, {.help = "How constraint forces are solved"});
     v("stabilization", stabilization, {.help = "Correction of joint drift"});

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <limits>
 #include <optional>
 #include <string_view>
@@ -23,13 +24,31 @@
 
 namespace ponyhop {
 
+// How an edit of a field reaches a running simulation (the tuning panel, app/ui_sim.h). A
+// section's setting holds for every field inside it unless the field says otherwise.
+enum class Apply {
+  Inherit,    // as the enclosing section (at the top level: KeepState)
+  Live,       // nothing in the world depends on it: the next frame shows it
+  KeepState,  // the world is rebuilt and the running state carried over
+  Restart,    // it changes the bodies or the starting conditions: rebuilt at t = 0
+};
+
 struct FieldMeta {
   const char* unit = "";  // SI unit shown in the panel and the docs; "" when dimensionless
   double min = -std::numeric_limits<double>::infinity();  // allowed range (inclusive)
   double max = std::numeric_limits<double>::infinity();
   const char* help = "";  // one sentence: the panel's tooltip and the docs' description
   bool log = false;       // the value spans decades: logarithmic slider in the panel
+  Apply apply = Apply::Inherit;
+  // The panel slider's range where the allowed range is far wider than anything useful to drag
+  // through (a typed value reaches the whole allowed range). NaN: the allowed range.
+  double soft_min = std::numeric_limits<double>::quiet_NaN();
+  double soft_max = std::numeric_limits<double>::quiet_NaN();
 };
+
+// The one range test of every number a file, `--set`, the panel or a program gives a field:
+// finite and within [min, max].
+inline bool inRange(double x, const FieldMeta& meta) { return std::isfinite(x) && x >= meta.min && x <= meta.max; }
 
 // Names of an enum's values in the scene file, in the enum's order. Specialize per enum:
 //   template <> struct EnumNames<Integrator> {
@@ -73,5 +92,53 @@ struct ReflectProbe {
 };
 template <class T>
 concept Reflectable = requires(T& t, ReflectProbe& v) { t.reflect(v); };
+
+// The metadata of the field at a dotted key ("chain.links", "head.animation.clip") below a
+// reflectable struct, with `apply` resolved through the enclosing sections. Lists are leaves
+// ("hopper.script"). False when there is no such field.
+class FieldFinder {
+ public:
+  FieldFinder(std::string_view key, Apply inherited) : key_(key), inherited_(inherited) {}
+
+  template <class T>
+  void operator()(const char* name, T& field, const FieldMeta& meta) {
+    if (found) return;
+    const size_t dot = key_.find('.');
+    if (key_.substr(0, dot) != name) return;
+    const Apply apply = meta.apply == Apply::Inherit ? inherited_ : meta.apply;
+    if (dot == std::string_view::npos) {
+      found = true;
+      result = meta;
+      result.apply = apply;
+      return;
+    }
+    FieldFinder inner(key_.substr(dot + 1), apply);
+    if constexpr (IsOptional<T>::value) {
+      if constexpr (Reflectable<typename T::value_type>) {
+        typename T::value_type probe{};
+        probe.reflect(inner);
+      }
+    } else if constexpr (Reflectable<T>) {
+      field.reflect(inner);
+    }
+    found = inner.found;
+    result = inner.result;
+  }
+
+  bool found = false;
+  FieldMeta result;
+
+ private:
+  std::string_view key_;
+  Apply inherited_;
+};
+
+template <class Root>
+bool findField(Root& root, std::string_view key, FieldMeta& out) {
+  FieldFinder f(key, Apply::KeepState);
+  root.reflect(f);
+  if (f.found) out = f.result;
+  return f.found;
+}
 
 }  // namespace ponyhop

@@ -35,7 +35,7 @@ struct RangeCheck {
 
  private:
   void check(const std::string& key, double value, const FieldMeta& m, bool integer) {
-    if (!error.empty() || (std::isfinite(value) && value >= m.min && value <= m.max)) return;
+    if (!error.empty() || inRange(value, m)) return;
     error = key + " = " + number(value) + ": must be " + (integer ? "an integer" : "a finite number") + " in [" +
             number(m.min) + ", " + number(m.max) + "]" + (*m.unit ? std::string(" ") + m.unit : "") + " (" +
             m.help + ")";

@@ -103,10 +103,10 @@ struct RenderParams {
 
   template <class V>
   void reflect(V& v) {
-    v("width", width, {.unit = "px", .min = 16, .max = 8192, .help = "Image width"});
-    v("height", height, {.unit = "px", .min = 16, .max = 8192, .help = "Image height"});
-    v("fps", fps, {.unit = "1/s", .min = 1, .max = 1000, .help = "Frames per second of output"});
-    v("frames", frames, {.min = 1, .max = 1000000, .help = "Frames rendered by default"});
+    v("width", width, {.unit = "px", .min = 16, .max = 8192, .help = "Image width", .soft_min = 16, .soft_max = 3840});
+    v("height", height, {.unit = "px", .min = 16, .max = 8192, .help = "Image height", .soft_min = 16, .soft_max = 2160});
+    v("fps", fps, {.unit = "1/s", .min = 1, .max = 1000, .help = "Frames per second of output", .soft_min = 1, .soft_max = 240});
+    v("frames", frames, {.min = 1, .max = 1000000, .help = "Frames rendered by default", .soft_min = 1, .soft_max = 3000});
     v("samples", samples, {.min = 1, .max = 16, .help = "Anti-aliasing: 1 = off, more = on (MSAA: samples per pixel)"});
     v("antialias", antialias, {.help = "post: an edge filter on the finished frame (cheap); msaa: multisampling"});
     v("quality", quality, {.help = "final: as configured; draft: no AA, smaller plainer shadows (previews)"});
@@ -171,20 +171,20 @@ struct HeadParams {
 
   template <class V>
   void reflect(V& v) {
-    v("mesh", mesh, {.help = "Mesh file (OBJ, glTF/GLB, FBX, PLY, STL, ...)"});
-    v("up_axis", up_axis, {.help = "The mesh's up axis (auto: glTF/Collada/X y, Quake/3DS/Blender z, else the longer of y and z)"});
-    v("height", height, {.unit = "m", .min = 0, .max = 100, .help = "Rescale so the head (above the neck of a whole body) is this tall (0: use scale)"});
-    v("scale", scale, {.min = 1e-6, .max = 1e6, .help = "Mesh units to metres", .log = true});
-    v("offset", offset, {.unit = "m", .min = -1e3, .max = 1e3, .help = "Offset in the body frame"});
-    v("rotation", rotation, {.unit = "deg", .min = -360, .max = 360, .help = "Mesh rotation, Euler x, y, z"});
-    v("pivot", pivot, {.help = "Head body origin: auto (the mesh origin if near the head's centre), mesh, bounds (centre)"});
-    v("anchor_space", anchor_space, {.help = "Ponytail anchor from anchor_in_bounds (bounds) or anchor (mesh)"});
+    v("mesh", mesh, {.help = "Mesh file (OBJ, glTF/GLB, FBX, PLY, STL, ...)", .apply = Apply::Restart});
+    v("up_axis", up_axis, {.help = "The mesh's up axis (auto: glTF/Collada/X y, Quake/3DS/Blender z, else the longer of y and z)", .apply = Apply::Restart});
+    v("height", height, {.unit = "m", .min = 0, .max = 100, .help = "Rescale so the head (above the neck of a whole body) is this tall (0: use scale)", .apply = Apply::Restart});
+    v("scale", scale, {.min = 1e-6, .max = 1e6, .help = "Mesh units to metres", .log = true, .apply = Apply::Restart});
+    v("offset", offset, {.unit = "m", .min = -1e3, .max = 1e3, .help = "Offset in the body frame", .apply = Apply::Restart});
+    v("rotation", rotation, {.unit = "deg", .min = -360, .max = 360, .help = "Mesh rotation, Euler x, y, z", .apply = Apply::Restart});
+    v("pivot", pivot, {.help = "Head body origin: auto (the mesh origin if near the head's centre), mesh, bounds (centre)", .apply = Apply::Restart});
+    v("anchor_space", anchor_space, {.help = "Ponytail anchor from anchor_in_bounds (bounds) or anchor (mesh)", .apply = Apply::Restart});
     v("anchor_in_bounds", anchor_in_bounds,
-      {.min = 0, .max = 1, .help = "Anchor as fractions of the head's bounds: x right..left, y face..back, z bottom..top"});
-    v("anchor", anchor, {.min = -1e6, .max = 1e6, .help = "Ponytail anchor in the mesh's coordinates (anchor_space mesh)"});
+      {.min = 0, .max = 1, .help = "Anchor as fractions of the head's bounds: x right..left, y face..back, z bottom..top", .apply = Apply::Restart});
+    v("anchor", anchor, {.min = -1e6, .max = 1e6, .help = "Ponytail anchor in the mesh's coordinates (anchor_space mesh)", .apply = Apply::Restart});
     v("materials", materials, {.help = "auto: the file's textures, vertex colours, colours when it has more than one plain colour; color: head.color"});
     v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Skin colour"});
-    v("animation", animation, {.help = "Keyframed motion of the head"});
+    v("animation", animation, {.help = "Keyframed motion of the head", .apply = Apply::Restart});
   }
 };
 
@@ -232,17 +232,18 @@ struct Scene {
 
   template <class V>
   void reflect(V& v) {
-    v("name", name, {.help = "Title of the scene"});
-    v("duration", duration, {.unit = "s", .min = 0, .max = 1e6, .help = "Simulated time for `ponyhop sim`"});
-    v("render", render, {.help = "Output image settings"});
-    v("camera", camera, {.help = "Camera"});
-    v("light", light, {.help = "Lighting"});
+    v("name", name, {.help = "Title of the scene", .apply = Apply::Live});
+    v("duration", duration,
+      {.unit = "s", .min = 0, .max = 1e6, .help = "Simulated time for `ponyhop sim`", .apply = Apply::Live, .soft_min = 0, .soft_max = 120});
+    v("render", render, {.help = "Output image settings", .apply = Apply::Live});
+    v("camera", camera, {.help = "Camera", .apply = Apply::Live});
+    v("light", light, {.help = "Lighting", .apply = Apply::Live});
     v("physics", physics, {.help = "Simulation settings"});
     v("head", head, {.help = "Keyframed kinematic head"});
-    v("anchor", anchor, {.help = "Prescribed anchor point of a chain scene"});
+    v("anchor", anchor, {.help = "Prescribed anchor point of a chain scene", .apply = Apply::Restart});
     v("chain", chain, {.help = "Chain of links (the ponytail)"});
     v("hopper", hopper, {.help = "Raibert hopper (body, leg, ground contact, controller)"});
-    v("hoppers", hoppers, {.help = "More hoppers in the same world, each a hopper section"});
+    v("hoppers", hoppers, {.help = "More hoppers in the same world, each a hopper section", .apply = Apply::Restart});
   }
 };
 

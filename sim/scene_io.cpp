@@ -159,12 +159,12 @@ class JsonReader {
     } else if constexpr (std::is_same_v<T, int>) {
       if (!j.is_number_integer()) return bad(key, "a whole number " + rangeText(meta), j);
       const auto x = j.get<long long>();
-      if (x < meta.min || x > meta.max) return bad(key, "a whole number " + rangeText(meta), j);
+      if (!inRange(static_cast<double>(x), meta)) return bad(key, "a whole number " + rangeText(meta), j);
       field = static_cast<int>(x);
     } else if constexpr (std::is_same_v<T, double>) {
       if (!j.is_number()) return bad(key, "a number " + rangeText(meta), j);
       const double x = j.get<double>();
-      if (!std::isfinite(x) || x < meta.min || x > meta.max) return bad(key, "a number " + rangeText(meta), j);
+      if (!inRange(x, meta)) return bad(key, "a number " + rangeText(meta), j);
       field = x;
     } else if constexpr (std::is_same_v<T, std::string>) {
       if (!j.is_string()) return bad(key, "a string", j);
@@ -176,7 +176,7 @@ class JsonReader {
       for (int i = 0; i < 3; ++i) {
         if (!j[i].is_number()) return bad(key, what, j);
         v[i] = j[i].get<double>();
-        if (!std::isfinite(v[i]) || v[i] < meta.min || v[i] > meta.max) return bad(key, what, j);
+        if (!inRange(v[i], meta)) return bad(key, what, j);
       }
       field = v;
     } else if constexpr (std::is_enum_v<T>) {
@@ -261,12 +261,12 @@ class RangeChecker {
   void check(T& field, const FieldMeta& meta, const std::string& key) {
     if constexpr (std::is_same_v<T, int> || std::is_same_v<T, double>) {
       const double x = static_cast<double>(field);
-      if (!std::isfinite(x) || x < meta.min || x > meta.max) {
+      if (!inRange(x, meta)) {
         errors_.push_back(key + ": must be " + rangeText(meta) + ", got " + formatNumber(x));
       }
     } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
       for (int i = 0; i < 3; ++i) {
-        if (!std::isfinite(field[i]) || field[i] < meta.min || field[i] > meta.max) {
+        if (!inRange(field[i], meta)) {
           errors_.push_back(key + ": each component must be " + rangeText(meta));
           break;
         }
