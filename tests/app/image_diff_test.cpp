@@ -16,6 +16,7 @@
 
 #include "engine/image.h"
 #include "engine/image_diff.h"
+#include "common/run_util.h"
 
 namespace ponyhop {
 namespace {
@@ -366,21 +367,7 @@ TEST(ImageDiff, PngRoundTripIsAtomicAndLossless) {
 
 // ---- the executable ----
 
-struct ExeRun {
-  int code;
-  std::string output;  // stdout + stderr
-};
-
-ExeRun runExe(const std::string& args) {
-  const std::filesystem::path dir = std::filesystem::path(PONYHOP_TEST_OUT) / "image_diff";
-  const std::string log = (dir / "cli.log").string();
-  const std::string cmd = std::string("\"") + PONYHOP_EXE + "\" " + args + " >\"" + log + "\" 2>&1";
-  const int status = std::system(cmd.c_str());
-  std::ifstream in(log);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ss.str()};
-}
+testing::RunResult runExe(const std::string& args) { return testing::runPonyhop(args, "image_diff_cli"); }
 
 // A PNG whose header declares WxH, with a tiny (wrong) image body: enough for the header check.
 std::string pngDeclaring(uint32_t w, uint32_t h) {
@@ -439,46 +426,46 @@ TEST(ImageDiffCli, ExitCodesAndDiffImage) {
   std::filesystem::remove(file("d.png"));
   std::filesystem::remove(file("missing.png"));
 
-  ExeRun same = runExe("diff " + q(file("a.png")) + " " + q(file("a.png")));
-  EXPECT_EQ(same.code, 0) << same.output;
-  EXPECT_NE(same.output.find("PASS"), std::string::npos) << same.output;
+  testing::RunResult same = runExe("diff " + q(file("a.png")) + " " + q(file("a.png")));
+  EXPECT_EQ(same.code, 0) << same.out;
+  EXPECT_NE(same.out.find("PASS"), std::string::npos) << same.out;
 
-  ExeRun aa = runExe("diff " + q(file("a.png")) + " " + q(file("a_aa.png")));
-  EXPECT_EQ(aa.code, 0) << aa.output;
-  ExeRun aa_off = runExe("diff --no-aa " + q(file("a.png")) + " " + q(file("a_aa.png")));
-  EXPECT_EQ(aa_off.code, 1) << aa_off.output;
+  testing::RunResult aa = runExe("diff " + q(file("a.png")) + " " + q(file("a_aa.png")));
+  EXPECT_EQ(aa.code, 0) << aa.out;
+  testing::RunResult aa_off = runExe("diff --no-aa " + q(file("a.png")) + " " + q(file("a_aa.png")));
+  EXPECT_EQ(aa_off.code, 1) << aa_off.out;
 
-  ExeRun differ = runExe("diff " + q(file("a.png")) + " " + q(file("nobar.png")) + " --out " + q(file("d.png")));
-  EXPECT_EQ(differ.code, 1) << differ.output;
-  EXPECT_NE(differ.output.find("FAIL"), std::string::npos) << differ.output;
-  EXPECT_NE(differ.output.find("differing pixels"), std::string::npos) << differ.output;
-  EXPECT_NE(differ.output.find("largest difference"), std::string::npos) << differ.output;
-  EXPECT_NE(differ.output.find("anti-aliased pixels ignored"), std::string::npos) << differ.output;
+  testing::RunResult differ = runExe("diff " + q(file("a.png")) + " " + q(file("nobar.png")) + " --out " + q(file("d.png")));
+  EXPECT_EQ(differ.code, 1) << differ.out;
+  EXPECT_NE(differ.out.find("FAIL"), std::string::npos) << differ.out;
+  EXPECT_NE(differ.out.find("differing pixels"), std::string::npos) << differ.out;
+  EXPECT_NE(differ.out.find("largest difference"), std::string::npos) << differ.out;
+  EXPECT_NE(differ.out.find("anti-aliased pixels ignored"), std::string::npos) << differ.out;
   const Image d = loadPng(file("d.png"));
   EXPECT_EQ(d.width, 160);
   EXPECT_EQ(d.height, 120);
 
   // A generous tolerance turns the same pair into a pass.
-  ExeRun lenient = runExe("diff " + q(file("a.png")) + " " + q(file("nobar.png")) + " --max-share 0.2");
-  EXPECT_EQ(lenient.code, 0) << lenient.output;
+  testing::RunResult lenient = runExe("diff " + q(file("a.png")) + " " + q(file("nobar.png")) + " --max-share 0.2");
+  EXPECT_EQ(lenient.code, 0) << lenient.out;
 
-  ExeRun sizes = runExe("diff " + q(file("a.png")) + " " + q(file("wide.png")));
-  EXPECT_EQ(sizes.code, 1) << sizes.output;
-  EXPECT_NE(sizes.output.find("161x120"), std::string::npos) << sizes.output;
+  testing::RunResult sizes = runExe("diff " + q(file("a.png")) + " " + q(file("wide.png")));
+  EXPECT_EQ(sizes.code, 1) << sizes.out;
+  EXPECT_NE(sizes.out.find("161x120"), std::string::npos) << sizes.out;
 
-  ExeRun missing = runExe("diff " + q(file("a.png")) + " " + q(file("missing.png")));
-  EXPECT_EQ(missing.code, 2) << missing.output;
-  EXPECT_NE(missing.output.find("missing.png"), std::string::npos) << missing.output;
+  testing::RunResult missing = runExe("diff " + q(file("a.png")) + " " + q(file("missing.png")));
+  EXPECT_EQ(missing.code, 2) << missing.out;
+  EXPECT_NE(missing.out.find("missing.png"), std::string::npos) << missing.out;
 
   std::ofstream(file("junk.png")) << "not a png";
-  ExeRun junk = runExe("diff " + q(file("junk.png")) + " " + q(file("a.png")));
-  EXPECT_EQ(junk.code, 2) << junk.output;
-  EXPECT_NE(junk.output.find("junk.png"), std::string::npos) << junk.output;
+  testing::RunResult junk = runExe("diff " + q(file("junk.png")) + " " + q(file("a.png")));
+  EXPECT_EQ(junk.code, 2) << junk.out;
+  EXPECT_NE(junk.out.find("junk.png"), std::string::npos) << junk.out;
 
-  ExeRun bad = runExe("diff " + q(file("a.png")) + " " + q(file("a.png")) + " --threshold 1.5");
-  EXPECT_EQ(bad.code, 2) << bad.output;
-  EXPECT_NE(bad.output.find("--threshold"), std::string::npos) << bad.output;
-  EXPECT_NE(bad.output.find("[0, 1]"), std::string::npos) << bad.output;
+  testing::RunResult bad = runExe("diff " + q(file("a.png")) + " " + q(file("a.png")) + " --threshold 1.5");
+  EXPECT_EQ(bad.code, 2) << bad.out;
+  EXPECT_NE(bad.out.find("--threshold"), std::string::npos) << bad.out;
+  EXPECT_NE(bad.out.find("[0, 1]"), std::string::npos) << bad.out;
 }
 
 }  // namespace
