@@ -30,6 +30,7 @@
 #include "app/bench_run.h"
 #include "physics/validate.h"
 #include "app/commands.h"
+#include "engine/asset_loader.h"
 #include "sim/data_dir.h"
 #include "sim/sim.h"
 #include "physics/physics_params.h"
@@ -55,6 +56,8 @@ struct BenchArgs {
   bool scaling = true;
   bool scaling_only = false;
   std::vector<int> scaling_links;  // empty: the mode's set
+  bool collision = true;
+  std::string ponytail_scene = "assets/scenes/ponytail.json";
   std::string command_line;
 };
 
@@ -344,12 +347,91 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
   }
 }
 
+// The cost of the ponytail's collisions: the demo scene (ponytail.json: the head collider, a swing
+// cone at the root) stepped with its collision section and without it, per clip, the same steps.
+struct CollisionCostRow {
+  std::string clip;
+  bool on = false;
+  double build_s = 0.0;       // s, building the Sim (with collisions: the head's distance grid too)
+  double us_per_step = 0.0;   // wall time of Sim::step, median of the repeats
+  double contact_us = 0.0;    // of which the contact stage (impulses, push-out, the impact check's splits elsewhere)
+  int steps = 0;
+  int max_contacts = 0;       // contacts and active limits after a step, at most
+  double deepest = 0.0;       // m, deepest overlap a contact stage found (before pushing out)
+  std::string status = "ok";
+};
+
+std::vector<CollisionCostRow> benchCollisionCost(const std::string& scene_path, double seconds, int repeats) {
+  std::vector<CollisionCostRow> rows;
+  for (const char* clip : {"showcase", "whip", "toss"}) {
+    for (bool on : {false, true}) {
+      CollisionCostRow r;
+      r.clip = clip;
+      r.on = on;
+      std::vector<double> per_step;
+      for (int rep = 0; rep < std::max(1, repeats); ++rep) {
+        Scene scene = loadScene(scene_path, {{"head.animation.clip", clip}});
+        if (!on) scene.collision.reset();
+        if (on && !scene.collision) scene.collision.emplace();
+        const auto t0 = Clock::now();
+        Sim rt(scene, &assimpAssets());
+        r.build_s = std::chrono::duration<double>(Clock::now() - t0).count();
+        rt.world().resetStageTimes();
+        r.steps = 0;
+        const auto t1 = Clock::now();
+        while (rt.time() < seconds && rt.step()) {
+          ++r.steps;
+          if (const Collisions* c = rt.collisions()) {
+            r.max_contacts = std::max(r.max_contacts, c->stats().active);
+            r.deepest = std::max(r.deepest, c->stats().deepest);
+          }
+        }
+        const double wall = std::chrono::duration<double>(Clock::now() - t1).count();
+        if (!rt.ok()) r.status = rt.status();
+        per_step.push_back(1e6 * wall / std::max(1, r.steps));
+        r.contact_us = 1e6 * rt.world().stageTimes()[Stage::Contact] / std::max(1, r.steps);
+      }
+      std::sort(per_step.begin(), per_step.end());
+      r.us_per_step = per_step[per_step.size() / 2];
+      std::fprintf(stderr, "bench: collision %-9s %-3s %9.1f us/step (contact stage %.1f), build %.2f s, %s\n", clip,
+                   on ? "on" : "off", r.us_per_step, r.contact_us, r.build_s, r.status.c_str());
+      rows.push_back(std::move(r));
+    }
+  }
+  return rows;
+}
+
+void appendCollisionCost(const std::string& path, const std::string& scene, double seconds,
+                         const std::vector<CollisionCostRow>& rows) {
+  std::ofstream f(path, std::ios::app);
+  f << "\n## Collision cost: the ponytail against its head\n\n"
+    << "`" << scene << "` stepped for " << fmt(seconds, "%g") << " s of each clip with its `collision` section (on) and "
+    << "without it (off), the scene's own method; the median wall time of `Sim::step` over the repeats, the part of it "
+    << "in the contact stage, and building the scene (on: the head's distance grid as well). The cost of collision per "
+    << "step is on - off; impact splits (a substep redone as two halves) are in on's step time, not in the contact "
+    << "stage.\n\n"
+    << "| clip | collision | us/step | contact stage us/step | build s | steps | max contacts | deepest overlap (mm) | status |\n"
+    << "|---|---|---|---|---|---|---|---|---|\n";
+  for (const CollisionCostRow& r : rows) {
+    f << "| " << r.clip << " | " << (r.on ? "on" : "off") << " | " << fmt(r.us_per_step, "%.1f") << " | "
+      << fmt(r.contact_us, "%.1f") << " | " << fmt(r.build_s, "%.2f") << " | " << r.steps << " | " << r.max_contacts
+      << " | " << fmt(1e3 * r.deepest, "%.2f") << " | " << r.status << " |\n";
+  }
+  std::ofstream csv(std::filesystem::path(path).parent_path() / "collision.csv");
+  csv << "clip,collision,us_per_step,contact_us_per_step,build_s,steps,max_contacts,deepest_m,status\n";
+  for (const CollisionCostRow& r : rows) {
+    csv << r.clip << ',' << (r.on ? "on" : "off") << ',' << r.us_per_step << ',' << r.contact_us << ',' << r.build_s
+        << ',' << r.steps << ',' << r.max_contacts << ',' << r.deepest << ',' << r.status << '\n';
+  }
+}
+
 int runBench(BenchArgs& args) {
   const auto start = Clock::now();
   const std::string load_before = loadAverage();
   // From any folder: the scenes as given, else ponyhop's own (sim/data_dir.h).
   args.chain_scene = resolveSceneFile(args.chain_scene);
   args.hopper_scene = resolveSceneFile(args.hopper_scene);
+  args.ponytail_scene = resolveSceneFile(args.ponytail_scene);
   Config cfg = makeConfig(args.quick);
   if (args.long_fixed >= 0.0) cfg.long_fixed = args.long_fixed;
   if (args.long_shake >= 0.0) cfg.long_shake = args.long_shake;
@@ -426,6 +508,12 @@ int runBench(BenchArgs& args) {
     }
   }
 
+  const double collision_seconds = args.quick ? 0.5 : 10.0;
+  std::vector<CollisionCostRow> collision_rows;
+  if (args.collision && !args.scaling_only) {
+    collision_rows = benchCollisionCost(args.ponytail_scene, collision_seconds, args.quick ? 1 : 3);
+  }
+
   std::vector<BenchRow> rows;
   std::vector<Reference> refs;
   std::vector<ReferenceCheck> checks;
@@ -449,6 +537,9 @@ int runBench(BenchArgs& args) {
     const double wall = std::chrono::duration<double>(Clock::now() - start).count();
     writeMarkdown(args.out + "/README.md", args, cfg, cases, rows, refs, checks, scaling, out_notes, load_before,
                   loadAverage(), wall);
+    if (!collision_rows.empty()) {
+      appendCollisionCost(args.out + "/README.md", args.ponytail_scene, collision_seconds, collision_rows);
+    }
     std::fprintf(stderr, "bench: %zu runs, %.0f s -> %s/README.md\n", rows.size(), wall, args.out.c_str());
   };
   for (const auto& cp : cases) {
@@ -528,6 +619,8 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 100000));
   cmd->add_flag("!--no-scaling", args->scaling, "Leave out the cost-against-N sweep");
   cmd->add_flag("--scaling-only", args->scaling_only, "Only the cost-against-N sweep (no chains, no hopper)");
+  cmd->add_flag("!--no-collision", args->collision, "Leave out the collision cost (the ponytail with its head collider on and off)");
+  cmd->add_option("--ponytail-scene", args->ponytail_scene, "The scene of the collision cost");
   cmd->add_option("--scaling-links", args->scaling_links, "Chain lengths of the sweep (default 2,4,...,1024; quick 2..32)")
       ->delimiter(',')
       ->check(CLI::Range(1, 65536));
@@ -555,6 +648,7 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
     if (!args->dts.empty()) args->command_line += " --dts " + list(args->dts);
     if (!args->scaling) args->command_line += " --no-scaling";
     if (args->scaling_only) args->command_line += " --scaling-only";
+    if (!args->collision) args->command_line += " --no-collision";
     if (!args->scaling_links.empty()) args->command_line += " --scaling-links " + list(args->scaling_links);
     try {
       exit_code = runBench(*args);

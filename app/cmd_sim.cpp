@@ -42,7 +42,7 @@ struct SimRow {
   size_t split = 0;
 };
 
-std::string header(const Sim& rt) {
+std::string baseHeader(const Sim& rt) {
   // Hopper: body centre of mass (m, m/s), attitude (rad), leg length (m), phase, foot contact
   // point (m), contact 0/1, the largest violation of the knee's five constraints.
   if (rt.hopper()) {
@@ -52,7 +52,21 @@ std::string header(const Sim& rt) {
   return "t,max_joint_error";
 }
 
+// A scene with collisions adds the active contacts and limits after the last contact stage and
+// the deepest overlap (m) that stage found before it pushed the bodies apart.
+std::string header(const Sim& rt) { return baseHeader(rt) + (rt.collisions() ? ",contacts,deepest" : ""); }
+
+SimRow baseSample(const Sim& rt);
 SimRow sample(const Sim& rt) {
+  SimRow r = baseSample(rt);
+  if (const Collisions* c = rt.collisions()) {
+    r.values.push_back(c->stats().active);
+    r.values.push_back(c->stats().deepest);
+  }
+  return r;
+}
+
+SimRow baseSample(const Sim& rt) {
   SimRow r;
   if (const Hopper* h = rt.hopper()) {
     const World& w = rt.world();

@@ -681,6 +681,7 @@ void Panel::drawSections() {
     s.reflect(v);
   }
   section("hopper", "Hopper", false, {"command"});
+  section("collision", "Collisions", false);
   section("physics", "Physics", true);
   if (sectionHeader("Camera", false)) {
     drawCameraTools();

@@ -14,7 +14,14 @@ std::shared_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain,
   // Padding: the thickest link plus a few cells, so every query near the head is inside the grid.
   double thickest = 0.0;
   for (double r : chain.radii) thickest = std::max(thickest, r);
-  if (!grid->build(vertices, indices, params.cell, thickest + params.margin + 3.0 * params.cell, error)) return nullptr;
+  const double pad = thickest + params.margin + 3.0 * params.cell;
+  // Only the part of the head the hair can reach: the links hang from the anchor (fixed in the
+  // head's frame), so they stay within the chain's length of it (a whole-body mesh's legs are left out).
+  const RigidBody& hb = world.body(head_body);
+  const Eigen::Vector3d anchor = hb.q.conjugate() * (chain.anchor(world) - hb.x);
+  const double reach = chain.length * static_cast<double>(chain.links.size()) + pad;
+  const Eigen::AlignedBox3d region(anchor.array() - reach, anchor.array() + reach);
+  if (!grid->build(vertices, indices, params.cell, pad, error, 8'000'000, &region)) return nullptr;
   CollisionParams cp;
   cp.friction = params.friction;
   cp.restitution = params.restitution;
@@ -22,9 +29,21 @@ std::shared_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain,
   auto col = std::make_shared<Collisions>(cp, world.params().solver);
   const int head = col->addShape(head_body, Shape::grid(grid));
   const int n = static_cast<int>(chain.links.size());
-  for (int i = 1; i < n; ++i) {
+  std::vector<int> capsules(static_cast<size_t>(n), -1);
+  for (int i = 0; i < n; ++i) {
     const double r_next = i + 1 < n ? chain.radii[i + 1] : chain.radii[i];
-    col->addPair(col->addShape(chain.links[i], Shape::capsule(0.5 * chain.length, chain.radii[i], r_next)), head);
+    if (i > 0 || params.self) capsules[i] = col->addShape(chain.links[i], Shape::capsule(0.5 * chain.length, chain.radii[i], r_next));
+    if (i > 0) col->addPair(capsules[i], head);
+  }
+  if (params.self) {
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 2; j < n; ++j) col->addPair(capsules[i], capsules[j]);
+  }
+  const double deg = std::numbers::pi / 180.0;
+  for (int i = 1; i < n; ++i) {
+    const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();  // a link's axis in its body frame
+    if (params.joint_cone > 0.0) col->addConeLimit(chain.links[i - 1], z, chain.links[i], z, params.joint_cone * deg);
+    if (params.joint_twist > 0.0) col->addTwistLimit(chain.links[i - 1], chain.links[i], z, params.joint_twist * deg, world.bodies());
   }
   if (n > 0 && params.root_cone > 0.0) {
     // The rest direction of link 0's axis in the head's frame.

@@ -30,7 +30,8 @@ bool crossAlong(int a, const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, con
 }  // namespace
 
 bool SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices,
-                               double cell, double padding, std::string* error, long max_nodes) {
+                               double cell, double padding, std::string* error, long max_nodes,
+                               const Eigen::AlignedBox3d* region) {
   const auto start = std::chrono::steady_clock::now();
   const auto fail = [&](const std::string& m) {
     if (error) *error = m;
@@ -49,6 +50,11 @@ bool SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, con
   }
   lo.array() -= padding;
   hi.array() += padding;
+  if (region) {
+    lo = lo.cwiseMax(region->min());
+    hi = hi.cwiseMin(region->max());
+    if ((hi.array() < lo.array()).any()) return fail("collider region does not meet the mesh");
+  }
   cell_ = cell;
   origin_ = lo;
   for (int a = 0; a < 3; ++a) dims_(a) = static_cast<int>(std::ceil((hi(a) - lo(a)) / cell)) + 1;
@@ -66,6 +72,9 @@ bool SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, con
   for (size_t t = 0; t < tris; ++t) {
     Eigen::Vector3d tlo = vert(t, 0).cwiseMin(vert(t, 1)).cwiseMin(vert(t, 2));
     Eigen::Vector3d thi = vert(t, 0).cwiseMax(vert(t, 1)).cwiseMax(vert(t, 2));
+    // A triangle more than a cell outside the grid seeds no node (the propagation brings the
+    // distances in from the triangles near the grid).
+    if (((tlo - hi).array() > cell_).any() || ((lo - thi).array() > cell_).any()) continue;
     Eigen::Vector3i ilo, ihi;
     for (int a = 0; a < 3; ++a) {
       ilo(a) = std::clamp(static_cast<int>(std::floor((tlo(a) - origin_(a)) / cell_)) - 1, 0, dims_(a) - 1);

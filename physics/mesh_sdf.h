@@ -23,6 +23,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -32,10 +33,13 @@ namespace ponyhop {
 class SignedDistanceGrid {
  public:
   // Builds the field of the triangles (3 indices each into `vertices`) on a grid of cubic cells
-  // of edge `cell` covering the mesh's bounding box plus `padding` on every side. Returns false
-  // with a message (no triangles, a non-positive cell, more than max_nodes nodes).
+  // of edge `cell` covering the mesh's bounding box plus `padding` on every side, cut to `region`
+  // when one is given (the part of a large mesh that anything can reach: the sign still counts
+  // every triangle). Returns false with a message (no triangles, a non-positive cell, a region
+  // that misses the mesh, more than max_nodes nodes).
   bool build(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices, double cell,
-             double padding, std::string* error, long max_nodes = 8'000'000);
+             double padding, std::string* error, long max_nodes = 8'000'000,
+             const Eigen::AlignedBox3d* region = nullptr);
 
   // Signed distance (m, negative inside) and its gradient (of the interpolant, normalized).
   double distance(const Eigen::Vector3d& p) const;

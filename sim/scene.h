@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "physics/chain_params.h"
+#include "physics/head_collisions.h"
 #include "physics/hopper_params.h"
 #include "physics/keyframe_params.h"
 #include "physics/physics_params.h"
@@ -215,6 +216,19 @@ struct HopperSection : HopperParams {
   }
 };
 
+// Collisions the scene names (docs/PHYSICS.md, "Collisions"): the ponytail's links against the
+// head's mesh (a signed distance grid built from its triangles at load) and a swing cone at the
+// root. Absent from the file: no collisions are built or stepped.
+struct CollisionSection : HeadCollisionParams {
+  bool head = true;    // the chain's links collide with the head (a chain attached to a head)
+
+  template <class V>
+  void reflect(V& v) {
+    v("head", head, {.help = "The ponytail's links collide with the head's mesh"});
+    HeadCollisionParams::reflect(v);
+  }
+};
+
 struct Scene {
   std::string path;     // the file it was read from ("" when built in code)
   std::string name;     // a short title
@@ -228,6 +242,7 @@ struct Scene {
   std::optional<ChainSection> chain;
   std::optional<HopperSection> hopper;
   std::vector<HopperSection> hoppers;  // more hoppers in the same world (each with its own position)
+  std::optional<CollisionSection> collision;
   std::vector<std::string> notes;  // what the reader chose for the user (not a field), shown on stderr
 
   template <class V>
@@ -244,6 +259,7 @@ struct Scene {
     v("chain", chain, {.help = "Chain of links (the ponytail)"});
     v("hopper", hopper, {.help = "Raibert hopper (body, leg, ground contact, controller)"});
     v("hoppers", hoppers, {.help = "More hoppers in the same world, each a hopper section", .apply = Apply::Restart});
+    v("collision", collision, {.help = "Collisions: the ponytail against the head"});
   }
 };
 

@@ -507,6 +507,16 @@ void validateScene(const Scene& scene_in, const std::string& source) {
       errors.push_back("chain.attach: \"hopper\" needs a hopper section in the scene");
     }
   }
+  if (scene.collision && scene.collision->head) {
+    if (!scene.chain || scene.chain->attach != ChainAttach::Head || !scene.head) {
+      errors.push_back("collision.head: the ponytail collides with the head only when chain.attach is \"head\" and "
+                       "the scene has a head (set collision.head false, or leave the collision section out)");
+    }
+    if (scene.physics.solver == SolverKind::Featherstone) {
+      errors.push_back("collision: physics.solver \"featherstone\" takes no contact or limit rows (reduced "
+                       "coordinates); use \"tree\" or \"dense\", or leave the collision section out");
+    }
+  }
   {
     // camera.follow names a body the scene has ("" = the scene's main body).
     const std::string& f = scene.camera.follow;

@@ -14,7 +14,23 @@ Sim::Sim(const Scene& scene, const AssetLoader* assets) : scene_(scene), world_(
   if (scene_.head) buildHead(assets);
   buildHoppers();
   if (scene_.chain) buildChain();
+  if (scene_.collision) buildCollisions();
   if (!world_.ok()) throw SceneError(scene_.path + ": " + world_.status());
+}
+
+// The ponytail against the head: the head's triangles in its body frame make the distance grid
+// (physics/head_collisions.h), each link's capsule as drawn collides with it, the root link is held
+// by a swing cone.
+void Sim::buildCollisions() {
+  const CollisionSection& c = *scene_.collision;
+  if (!c.head || !chain_ || !head_) return;
+  std::vector<Eigen::Vector3d> vertices;
+  vertices.reserve(head_->mesh.positions.size());
+  for (const auto& p : head_->mesh.positions) vertices.push_back(head_->mesh_to_body * p.cast<double>());
+  std::string err;
+  collisions_ = makeHeadCollisions(world_, *chain_, head_body_, vertices, head_->mesh.indices, c, &err);
+  if (!collisions_) throw SceneError(scene_.path + ": collision: the head's mesh makes no collider: " + err);
+  collisions_->attach(world_);
 }
 
 void Sim::buildHead(const AssetLoader* assets) {

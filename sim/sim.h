@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "physics/chain.h"
+#include "physics/collisions.h"
 #include "physics/hopper.h"
 #include "physics/world.h"
 #include "sim/assets.h"
@@ -55,6 +56,8 @@ class Sim {
   const std::vector<std::shared_ptr<Hopper>>& hoppers() const { return hoppers_; }
   const Hopper* hopper(size_t i = 0) const { return i < hoppers_.size() ? hoppers_[i].get() : nullptr; }
   Hopper* hopper(size_t i = 0) { return i < hoppers_.size() ? hoppers_[i].get() : nullptr; }
+  // The scene's collisions (collision section), null when it names none.
+  const Collisions* collisions() const { return collisions_.get(); }
 
   // Energy of the chain (kinetic + gravity, against the chain's hanging-at-rest reference) and
   // the largest joint separation (m).
@@ -85,6 +88,7 @@ class Sim {
   void buildHead(const AssetLoader* assets);
   void buildChain();
   void buildHoppers();
+  void buildCollisions();
   Eigen::Vector3d standOffAnchor(const ChainParams& c) const;
 
   Scene scene_;
@@ -94,6 +98,7 @@ class Sim {
   std::optional<HeadAsset> head_;
   std::optional<Chain> chain_;
   std::vector<std::shared_ptr<Hopper>> hoppers_;
+  std::shared_ptr<Collisions> collisions_;
 };
 
 }  // namespace ponyhop

@@ -272,5 +272,42 @@ TEST(SceneIo, ReferenceListsEveryField) {
   EXPECT_NE(md.find("`head.animation.keys.N.t`"), std::string::npos);
 }
 
+// A collision section names collisions the scene can build: the ponytail against a head, on a
+// solver that takes contact rows.
+TEST(SceneIo, CollisionSectionNeedsAChainOnAHeadAndASolverThatTakesRows) {
+  const std::string no_head = errorOf(json::parse(R"({"anchor": {}, "chain": {"attach": "anchor"}, "collision": {}})"));
+  EXPECT_NE(no_head.find("collision.head: the ponytail collides with the head only when chain.attach is \"head\""),
+            std::string::npos)
+      << no_head;
+  const std::string reduced = errorOf(json::parse(
+      R"({"head": {}, "chain": {"attach": "head"}, "physics": {"solver": "featherstone"}, "collision": {}})"));
+  EXPECT_NE(reduced.find("collision: physics.solver \"featherstone\" takes no contact or limit rows"), std::string::npos)
+      << reduced;
+  EXPECT_NE(errorOf(json::parse(R"({"collision": {"margin": -1}})")).find("collision.margin: must be"), std::string::npos);
+  // Without a head to collide with, collision.head false is a valid (empty) section.
+  EXPECT_EQ(errorOf(json::parse(R"({"collision": {"head": false}})")), "");
+}
+
+// How an edit applies is the field's own metadata, inherited from its section.
+TEST(SceneIo, FieldMetadataSaysHowAnEditApplies) {
+  Scene s;
+  FieldMeta m;
+  ASSERT_TRUE(findField(s, "chain.links", m));
+  EXPECT_EQ(m.apply, Apply::Restart);
+  EXPECT_EQ(m.soft_max, 128.0);
+  ASSERT_TRUE(findField(s, "chain.damping", m));
+  EXPECT_EQ(m.apply, Apply::KeepState);
+  EXPECT_TRUE(m.log);
+  ASSERT_TRUE(findField(s, "camera.fov", m));  // inherited from the camera section
+  EXPECT_EQ(m.apply, Apply::Live);
+  ASSERT_TRUE(findField(s, "head.animation.clip", m));  // inside a Restart section
+  EXPECT_EQ(m.apply, Apply::Restart);
+  ASSERT_TRUE(findField(s, "render.ground", m));
+  EXPECT_EQ(m.apply, Apply::Live);
+  ASSERT_TRUE(findField(s, "collision.friction", m));
+  EXPECT_EQ(m.apply, Apply::KeepState);
+  EXPECT_FALSE(findField(s, "chain.no_such_field", m));
+}
+
 }  // namespace
 }  // namespace ponyhop
