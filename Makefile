@@ -1,8 +1,8 @@
 # ponyhop: the two commands of the README's quick start, and a few for developers.
 #   make demo   installs what is missing, builds, renders the demo scenes into out/demo/
 #   make test   installs what is missing, builds, runs every test
-# CI (.ci/run) runs `make test`, `make test-asan` (the same tests built with ASan+UBSan),
-# `make test-tsan`, `make release` and a bounded `make fuzz`.
+# CI (.ci/run) runs `make format-check`, `make test`, `make test-asan` (the same tests built with
+# ASan+UBSan), `make test-tsan`, `make release` and a bounded `make fuzz`.
 BUILD      ?= build
 ASAN_BUILD ?= build-asan
 TSAN_BUILD ?= build-tsan

@@ -7,11 +7,11 @@
 // with exactly dt per step (stepSimulation(dt, 0)). Its integrator is semi-implicit Euler. No
 // damping (Bullet's default 0.04 linear/angular multibody damping is set to 0), no sleeping,
 // the joint speed cap raised out of the way, no collision shapes.
-#include <btBulletDynamicsCommon.h>
 #include <BulletDynamics/Featherstone/btMultiBody.h>
 #include <BulletDynamics/Featherstone/btMultiBodyConstraintSolver.h>
 #include <BulletDynamics/Featherstone/btMultiBodyDynamicsWorld.h>
 #include <BulletDynamics/Featherstone/btMultiBodyLink.h>
+#include <btBulletDynamicsCommon.h>
 
 #include "app/bench_peers.h"
 
@@ -24,10 +24,7 @@ Eigen::Vector3d eigen(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
 class BulletSim final : public PeerSim {
  public:
   BulletSim(const PeerChain& chain, double dt)
-      : PeerSim(chain),
-        dispatcher_(&config_),
-        world_(&dispatcher_, &broadphase_, &solver_, &config_),
-        dt_(dt) {
+      : PeerSim(chain), dispatcher_(&config_), world_(&dispatcher_, &broadphase_, &solver_, &config_), dt_(dt) {
     const int n = static_cast<int>(chain.mass.size());
     // Link frames are ponyhop's (centre of mass, axis z). Built with every joint at zero (all
     // links in the base's orientation, identity), then the joints set to the t = 0 pose.
@@ -41,8 +38,8 @@ class BulletSim final : public PeerSim {
       // Pivot: the link's top end, +L/2 z from its centre; from the parent's centre it is -L/2 z
       // (the anchor is the base's origin).
       const btVector3 parent_to_pivot = i == 0 ? btVector3(0, 0, 0) : -half;
-      body_->setupSpherical(i, chain.mass[i], bt(chain.inertia[i]), i - 1, btQuaternion::getIdentity(),
-                            parent_to_pivot, -half, true);
+      body_->setupSpherical(i, chain.mass[i], bt(chain.inertia[i]), i - 1, btQuaternion::getIdentity(), parent_to_pivot,
+                            -half, true);
     }
     body_->finalizeMultiDof();
     for (int i = 0; i < n; ++i) {

@@ -1,7 +1,6 @@
 // Compiled only when CMake found MuJoCo (app/CMakeLists.txt defines PONYHOP_HAVE_MUJOCO).
-#include "app/bench_peers.h"
-
 #include <mujoco/mujoco.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +10,7 @@
 #include <memory>
 #include <sstream>
 
-#include <unistd.h>
+#include "app/bench_peers.h"
 
 namespace ponyhop {
 namespace {
@@ -77,8 +76,7 @@ std::string mujocoChainXml(const PeerChain& c, const std::string& integrator, do
   x.precision(17);
   x << "<mujoco model=\"ponyhop chain\">\n"
     << "  <compiler angle=\"radian\" inertiafromgeom=\"false\"/>\n"
-    << "  <option timestep=\"" << dt << "\" gravity=\"" << vec(c.gravity) << "\" integrator=\"" << integrator
-    << "\">\n"
+    << "  <option timestep=\"" << dt << "\" gravity=\"" << vec(c.gravity) << "\" integrator=\"" << integrator << "\">\n"
     << "    <flag contact=\"disable\" energy=\"enable\"/>\n"
     << "  </option>\n"
     << "  <worldbody>\n";
@@ -91,8 +89,7 @@ std::string mujocoChainXml(const PeerChain& c, const std::string& integrator, do
       x << indent << "<body name=\"link0\" pos=\"" << vec(c.anchor) << "\" quat=\"" << quat(c.q[0]) << "\">\n";
     } else {
       const Eigen::Quaterniond rel = c.q[i - 1].conjugate() * c.q[i];
-      x << indent << "<body name=\"link" << i << "\" pos=\"0 0 " << -c.length << "\" quat=\"" << quat(rel)
-        << "\">\n";
+      x << indent << "<body name=\"link" << i << "\" pos=\"0 0 " << -c.length << "\" quat=\"" << quat(rel) << "\">\n";
     }
     x << indent << "  <joint type=\"ball\" pos=\"0 0 0\" damping=\"0\" armature=\"0\"/>\n"
       << indent << "  <inertial pos=\"0 0 " << -0.5 * c.length << "\" mass=\"" << c.mass[i] << "\" diaginertia=\""

@@ -32,8 +32,8 @@ class OdeSim final : public PeerSim {
       const Eigen::Vector3d x = pivot - q * Eigen::Vector3d(0.0, 0.0, 0.5 * chain.length);
       dBodyID b = dBodyCreate(world_);
       dMass m;
-      dMassSetParameters(&m, chain.mass[i], 0, 0, 0, chain.inertia[i].x(), chain.inertia[i].y(),
-                         chain.inertia[i].z(), 0, 0, 0);
+      dMassSetParameters(&m, chain.mass[i], 0, 0, 0, chain.inertia[i].x(), chain.inertia[i].y(), chain.inertia[i].z(),
+                         0, 0, 0);
       dBodySetMass(b, &m);
       dBodySetPosition(b, x.x(), x.y(), x.z());
       const dQuaternion oq = {q.w(), q.x(), q.y(), q.z()};
@@ -50,8 +50,10 @@ class OdeSim final : public PeerSim {
   ~OdeSim() override { dWorldDestroy(world_); }
 
   void step() override {
-    if (quick_) dWorldQuickStep(world_, dt_);
-    else dWorldStep(world_, dt_);
+    if (quick_)
+      dWorldQuickStep(world_, dt_);
+    else
+      dWorldStep(world_, dt_);
     time_ += dt_;
   }
   double time() const override { return time_; }
@@ -80,8 +82,9 @@ class OdeSim final : public PeerSim {
 Peer odePeer(bool quick) {
   Peer p;
   p.name = quick ? "ode/quickstep" : "ode/worldstep";
-  p.version = "ODE (libode-dev, double precision): maximal coordinates, ball joints, dWorldStep (direct) and "
-              "dWorldQuickStep (20 Gauss-Seidel iterations), its defaults ERP 0.2, CFM 1e-10, gyroscopic term on";
+  p.version =
+      "ODE (libode-dev, double precision): maximal coordinates, ball joints, dWorldStep (direct) and "
+      "dWorldQuickStep (20 Gauss-Seidel iterations), its defaults ERP 0.2, CFM 1e-10, gyroscopic term on";
   p.make = [quick](const PeerChain& chain, double dt, std::string&) -> std::unique_ptr<PeerSim> {
     return std::make_unique<OdeSim>(chain, dt, quick);
   };

@@ -62,7 +62,8 @@ PeerChain peerChainOf(const Sim& rt) {
 
 std::vector<Peer> availablePeers() {
   std::vector<Peer> all;
-  for (auto&& list : {mujocoPeers(), bulletPeers(), odePeers(), dartPeers()}) all.insert(all.end(), list.begin(), list.end());
+  for (auto&& list : {mujocoPeers(), bulletPeers(), odePeers(), dartPeers()})
+    all.insert(all.end(), list.begin(), list.end());
   return all;
 }
 
@@ -157,11 +158,11 @@ ScalingResult benchPeerScaling(const Peer& peer, const PeerChain& chain, double 
     return s;
   }
   s.us_per_step = 1e6 * timeSteps(
-                             [&] {
-                               sim->step();
-                               return true;
-                             },
-                             budget, s.steps);
+                            [&] {
+                              sim->step();
+                              return true;
+                            },
+                            budget, s.steps);
   if (!sim->finite()) {
     s.status = "failed";
     s.reason = peer.name + "'s state became non-finite";

@@ -28,11 +28,11 @@ namespace ponyhop {
 // along z, the top end at +length/2 z.
 struct PeerChain {
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();
-  double length = 0.0;                    // m, each link
-  std::vector<double> mass;               // kg
-  std::vector<double> radius;             // m (drawing only: the inertia is given explicitly)
-  std::vector<Eigen::Vector3d> inertia;   // kg m^2, principal, link frame
-  std::vector<Eigen::Quaterniond> q;      // link to world at t = 0 (the chain starts at rest)
+  double length = 0.0;                   // m, each link
+  std::vector<double> mass;              // kg
+  std::vector<double> radius;            // m (drawing only: the inertia is given explicitly)
+  std::vector<Eigen::Vector3d> inertia;  // kg m^2, principal, link frame
+  std::vector<Eigen::Quaterniond> q;     // link to world at t = 0 (the chain starts at rest)
   Eigen::Vector3d gravity{0.0, 0.0, -9.81};
 };
 

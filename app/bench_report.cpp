@@ -32,7 +32,8 @@ std::string gnuplotQuote(std::string s) {
 }
 
 std::string runGnuplot(const std::string& script_path) {
-  if (!haveGnuplot()) return "gnuplot is not installed (apt-get install gnuplot-nox): no PNG plots, CSV and Markdown only";
+  if (!haveGnuplot())
+    return "gnuplot is not installed (apt-get install gnuplot-nox): no PNG plots, CSV and Markdown only";
   const std::string cmd = "gnuplot '" + script_path + "' 2>'" + script_path + ".log'";
   if (int rc = std::system(cmd.c_str()); rc != 0) return "gnuplot failed (" + script_path + ".log)";
   return "";
@@ -70,17 +71,17 @@ void writeBenchCsv(const std::string& path, const std::vector<BenchRow>& rows) {
     const RunResult& r = row.r;
     const bool ran = r.status != "cannot_run";
     const bool ok = r.status == "ok";
-    f << c.id << ',' << c.links << ',' << c.anchor << ',' << row.method << ',' << row.solver << ','
-      << row.integrator << ',' << row.stabilization << ',' << row.step << ',' << fmt(row.dt, "%.9g") << ',' << r.status << ','
+    f << c.id << ',' << c.links << ',' << c.anchor << ',' << row.method << ',' << row.solver << ',' << row.integrator
+      << ',' << row.stabilization << ',' << row.step << ',' << fmt(row.dt, "%.9g") << ',' << r.status << ','
       << csvField(r.reason) << ',' << (ran ? std::to_string(r.steps) : "") << ',' << (ran ? num(r.us_per_step) : "")
       << ',' << (ran ? num(r.us_per_sim_second) : "") << ',' << fmt(row.horizon, "%.6g") << ','
       << (ok ? num(r.err_rms) : "") << ',' << (ok ? num(r.err_max) : "") << ',' << (ran ? num(r.substeps) : "");
     for (int s = 0; s < StageTimes::kCount; ++s) f << ',' << (ran ? num(r.stage_us[s]) : "");
     f << ',' << (ran ? num(r.other_us) : "") << ',' << (ok ? r.long_status : "skipped") << ','
-      << csvField(ok ? r.long_reason : "the horizon run did not complete") << ',' << fmt(c.long_duration, "%.6g")
-      << ',' << (ok ? num(r.long_reached) : "") << ',' << (ok ? num(r.energy_drift) : "") << ','
-      << (ok ? num(r.energy_rel) : "") << ',' << (ok ? num(r.joint_drift) : "") << ','
-      << (ok ? num(r.max_speed) : "") << ',' << (ok ? std::to_string(r.tolerance_misses) : "") << '\n';
+      << csvField(ok ? r.long_reason : "the horizon run did not complete") << ',' << fmt(c.long_duration, "%.6g") << ','
+      << (ok ? num(r.long_reached) : "") << ',' << (ok ? num(r.energy_drift) : "") << ','
+      << (ok ? num(r.energy_rel) : "") << ',' << (ok ? num(r.joint_drift) : "") << ',' << (ok ? num(r.max_speed) : "")
+      << ',' << (ok ? std::to_string(r.tolerance_misses) : "") << '\n';
   }
 }
 
@@ -144,15 +145,15 @@ std::string plotErrorVsCost(const std::string& dir, const std::vector<BenchRow>&
   }
   d << "# pareto\n";
   for (size_t i : paretoFront(rows, c.id)) {
-    d << rows[i].r.us_per_sim_second * 1e-6 << ' ' << std::max(rows[i].r.err_rms, 1e-16) << ' ' << rows[i].dt
-      << '\n';
+    d << rows[i].r.us_per_sim_second * 1e-6 << ' ' << std::max(rows[i].r.err_rms, 1e-16) << ' ' << rows[i].dt << '\n';
   }
   d.close();
   const std::string script = dir + "/error_vs_cost_" + c.id + ".gp";
   std::ofstream g = open(script);
   g << "set terminal pngcairo size 1400,900 font ',10'\n"
     << "set output '" << dir << "/error_vs_cost_" << c.id << ".png'\n"
-    << "set title \"" << gnuplotQuote(c.title) << ": RMS error over the converged horizon against cost (one point per dt)\"\n"
+    << "set title \"" << gnuplotQuote(c.title)
+    << ": RMS error over the converged horizon against cost (one point per dt)\"\n"
     << "set logscale xy\nset format x '10^{%L}'\nset format y '10^{%L}'\n"
     << "set xlabel 'cost: wall seconds per simulated second'\nset ylabel 'RMS error of the tracked point (m)'\n"
     << "set key outside right top font ',8'\nset grid\n"
@@ -163,8 +164,8 @@ std::string plotErrorVsCost(const std::string& dir, const std::vector<BenchRow>&
       << (mj ? 7 : static_cast<int>(i % 13) + 1) << " title \"" << gnuplotQuote(order[i]) << "\", ";
   }
   g << "'" << data << "' index " << order.size()
-    << " using 1:2 with steps lw 3 lc rgb 'black' dt 2 title 'Pareto front', '" << data << "' index "
-    << order.size() << " using 1:2 with points pt 6 ps 2.2 lw 2 lc rgb 'black' notitle\n";
+    << " using 1:2 with steps lw 3 lc rgb 'black' dt 2 title 'Pareto front', '" << data << "' index " << order.size()
+    << " using 1:2 with points pt 6 ps 2.2 lw 2 lc rgb 'black' notitle\n";
   g.close();
   return runGnuplot(script);
 }
@@ -196,7 +197,8 @@ std::string plotScaling(const std::string& dir, const std::vector<ScalingRow>& r
   std::ofstream g = open(script);
   g << "set terminal pngcairo size 1000,700 font ',10'\n"
     << "set output '" << dir << "/scaling.png'\n"
-    << "set title 'Cost per step against chain length (hanging chain, dt = 1/1920 s; ours: symplectic Euler, no stabilization; peers: their own step)'\n"
+    << "set title 'Cost per step against chain length (hanging chain, dt = 1/1920 s; ours: symplectic Euler, no "
+       "stabilization; peers: their own step)'\n"
     << "set logscale xy\nset xlabel 'links N'\nset ylabel 'microseconds per step'\nset key left top\nset grid\n"
     << "plot ";
   for (size_t i = 0; i < solvers.size(); ++i) {

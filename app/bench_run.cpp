@@ -184,9 +184,12 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   // chain's tip peaks at 13-17 m/s), energy within its own size (conservative), the hopper's
   // body between 0.2 m and 5 m high.
   char why[160] = "";
-  if (r.joint_drift > 1e-2) std::snprintf(why, sizeof why, "joint error %.3g m > 1 cm", r.joint_drift);
-  else if (r.max_speed > 100.0) std::snprintf(why, sizeof why, "speed %.3g m/s > 100 m/s", r.max_speed);
-  else if (c.conservative && r.energy_rel > 1.0) std::snprintf(why, sizeof why, "energy drift %.3g x E0", r.energy_rel);
+  if (r.joint_drift > 1e-2)
+    std::snprintf(why, sizeof why, "joint error %.3g m > 1 cm", r.joint_drift);
+  else if (r.max_speed > 100.0)
+    std::snprintf(why, sizeof why, "speed %.3g m/s > 100 m/s", r.max_speed);
+  else if (c.conservative && r.energy_rel > 1.0)
+    std::snprintf(why, sizeof why, "energy drift %.3g x E0", r.energy_rel);
   else if (rt.hopper() && !(rt.trackedPoint().z() > 0.2 && rt.trackedPoint().z() < 5.0)) {
     std::snprintf(why, sizeof why, "hopper body at z = %.3g m (fell or flew off)", rt.trackedPoint().z());
   }
@@ -197,7 +200,8 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   return r;
 }
 
-double timeSteps(const std::function<bool()>& step, double budget, int& steps, const std::function<void()>& after_warmup) {
+double timeSteps(const std::function<bool()>& step, double budget, int& steps,
+                 const std::function<void()>& after_warmup) {
   // One untimed-for-the-result step: warms caches and estimates the cost.
   auto t0 = Clock::now();
   bool ok = step();
@@ -234,7 +238,8 @@ ScalingResult benchScaling(const std::string& scene, const std::string& solver, 
     s.reason = rt->status();
     return s;
   }
-  const double per_step = timeSteps([&] { return rt->step(); }, budget, s.steps, [&] { rt->world().resetStageTimes(); });
+  const double per_step =
+      timeSteps([&] { return rt->step(); }, budget, s.steps, [&] { rt->world().resetStageTimes(); });
   if (!rt->ok()) {
     s.status = "failed";
     s.reason = rt->status();

@@ -10,9 +10,9 @@
 #include <string_view>
 #include <vector>
 
-#include "sim/scene_io.h"
 #include "physics/reflect.h"
 #include "physics/stage_times.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 
@@ -82,16 +82,16 @@ struct RunResult {
   std::array<double, StageTimes::kCount> stage_us{};  // per step, the median repeat
   double other_us = 0.0;                              // per step: step() minus the stages
   double substeps = 1.0;                              // mean World::lastSubsteps()
-  int tolerance_misses = 0;  // +tol: substeps still above the tolerance at the deepest split (timed run)
-  double err_rms = 0.0, err_max = 0.0;                // m, against the reference over the horizon
+  int tolerance_misses = 0;             // +tol: substeps still above the tolerance at the deepest split (timed run)
+  double err_rms = 0.0, err_max = 0.0;  // m, against the reference over the horizon
   // Long run (continues the first repeat to BenchCase::long_duration).
   std::string long_status = "ok";  // ok | stopped | unbounded | skipped
   std::string long_reason;
-  double long_reached = 0.0;    // s, simulated before it stopped
-  double energy_drift = -1.0;   // J, max |E - E0| (conservative cases), -1: not applicable
-  double energy_rel = -1.0;     // energy_drift / |E0| (E0 against the hanging reference)
-  double joint_drift = 0.0;     // m, max joint error sampled every 1/240 s
-  double max_speed = 0.0;       // m/s, the tracked point's largest speed (sampled every 1/240 s)
+  double long_reached = 0.0;   // s, simulated before it stopped
+  double energy_drift = -1.0;  // J, max |E - E0| (conservative cases), -1: not applicable
+  double energy_rel = -1.0;    // energy_drift / |E0| (E0 against the hanging reference)
+  double joint_drift = 0.0;    // m, max joint error sampled every 1/240 s
+  double max_speed = 0.0;      // m/s, the tracked point's largest speed (sampled every 1/240 s)
 };
 
 // The timed run: `repeats` runs of [0, horizon] (cost = median), the error against the
@@ -100,7 +100,8 @@ RunResult benchRun(const BenchCase& c, const Method& method, double dt, double h
                    const Trajectory& reference);
 
 // Cost per step of a chain of `links` links with `solver` (symplectic Euler, no stabilization,
-// fixed anchor, chain hanging at rest, dt 1/1920 s: one solve per step), median of blocks of steps within ~budget seconds.
+// fixed anchor, chain hanging at rest, dt 1/1920 s: one solve per step), median of blocks of steps within ~budget
+// seconds.
 struct ScalingResult {
   std::string status = "ok";
   std::string reason;

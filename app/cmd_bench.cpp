@@ -28,12 +28,12 @@
 #include "app/bench_peers.h"
 #include "app/bench_report.h"
 #include "app/bench_run.h"
-#include "physics/validate.h"
 #include "app/commands.h"
 #include "engine/asset_loader.h"
+#include "physics/physics_params.h"
+#include "physics/validate.h"
 #include "sim/data_dir.h"
 #include "sim/sim.h"
-#include "physics/physics_params.h"
 
 namespace ponyhop {
 namespace {
@@ -157,8 +157,7 @@ Reference computeReference(const BenchCase& c, const Config& cfg, double target,
   }
   double h = cfg.reference_h0;
   while (true) {
-    std::fprintf(stderr, "bench: %s reference %s at h = 1/%.0f s\n", c.id.c_str(), ref.method.name().c_str(),
-                 2.0 / h);
+    std::fprintf(stderr, "bench: %s reference %s at h = 1/%.0f s\n", c.id.c_str(), ref.method.name().c_str(), 2.0 / h);
     Trajectory b = simulateTrajectory(c, ref.method, 0.5 * h, cfg.reference_span);
     const size_t n = std::min(a.p.size(), b.p.size());
     double horizon = 0.0, max_diff = 0.0;
@@ -167,8 +166,10 @@ Reference computeReference(const BenchCase& c, const Config& cfg, double target,
     for (size_t k = 0; k < n; ++k) {
       const double d = (a.p[k] - b.p[k]).norm();
       if (k * kBenchGrid <= check_time + 1e-9) max_diff = std::max(max_diff, d);
-      if (within && d <= kConverged) horizon = k * kBenchGrid;
-      else within = false;
+      if (within && d <= kConverged)
+        horizon = k * kBenchGrid;
+      else
+        within = false;
     }
     std::string status = a.status.empty() ? b.status : a.status;
     checks.push_back({c.id, ref.method.name(), h, max_diff, check_time, horizon, status});
@@ -215,8 +216,11 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
        "reference's convergence check), `scaling.csv`, `error_vs_cost_*.png`, `scaling.png`.\n\n"
     << "Every run uses fixed steps (`physics.substeps = 1`, `max_step_rotation = 0`, `tolerance = 0`): dt "
        "means dt; except the rows marked `+auto` (`max_step_rotation = 2` deg: ponyhop's default step control) and "
-       "`+tol` (`tolerance = " << fmt(kBenchTolerance, "%g") << "` m, step doubling), whose cost per step includes "
-       "their substeps (the substeps column: mean per dt). Error: RMS and max distance of the tracked point (chain: the free end; hopper: the body "
+       "`+tol` (`tolerance = "
+    << fmt(kBenchTolerance, "%g")
+    << "` m, step doubling), whose cost per step includes "
+       "their substeps (the substeps column: mean per dt). Error: RMS and max distance of the tracked point (chain: "
+       "the free end; hopper: the body "
        "centre) from the reference at the run's own steps over the converged horizon. Long runs continue the "
        "first run untimed: energy drift max|E - E0| (fixed anchor, conservative), joint drift (max |C| sampled "
        "every 1/240 s) and bounded (joints within 1 cm, speed below 100 m/s, energy drift below E0, the hopper "
@@ -248,8 +252,10 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
     f << "\n## " << c.title << "\n\n![error against cost](error_vs_cost_" << c.id << ".png)\n\n";
     const double pick = args.quick ? 1.0 / 480.0 : 1.0 / 240.0;
     f << "### All methods at dt = " << dtName(pick) << " s\n\n"
-      << "| method | status | substeps | us/step | ms per sim. s | RMS err (m) | max err (m) | energy drift (J) | joint drift (m) "
-         "| long run (" << fmt(c.long_duration) << " s) |\n|---|---|---|---|---|---|---|---|---|---|\n";
+      << "| method | status | substeps | us/step | ms per sim. s | RMS err (m) | max err (m) | energy drift (J) | "
+         "joint drift (m) "
+         "| long run ("
+      << fmt(c.long_duration) << " s) |\n|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& row : rows) {
       if (row.bench_case != &c || std::abs(row.dt - pick) > 1e-12) continue;
       const RunResult& r = row.r;
@@ -266,8 +272,7 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
         << (r.status == "cannot_run" ? "" : fmt(r.us_per_sim_second * 1e-3)) << " | " << (ok ? fmt(r.err_rms) : "")
         << " | " << (ok ? fmt(r.err_max) : "") << " | " << (ok && r.energy_drift >= 0 ? fmt(r.energy_drift) : "")
         << " | " << (ok ? fmt(r.joint_drift) : "") << " | "
-        << (ok ? r.long_status + (r.long_status == "ok" ? "" : " at t = " + fmt(r.long_reached) + " s") : "")
-        << " |\n";
+        << (ok ? r.long_status + (r.long_status == "ok" ? "" : " at t = " + fmt(r.long_reached) + " s") : "") << " |\n";
     }
     f << "\n### Pareto front (no other run is both cheaper and more accurate)\n\n"
       << "| method | dt (s) | ms per sim. s | RMS err (m) | max err (m) |\n|---|---|---|---|---|\n";
@@ -352,12 +357,12 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
 struct CollisionCostRow {
   std::string clip;
   bool on = false;
-  double build_s = 0.0;       // s, building the Sim (with collisions: the head's distance grid too)
-  double us_per_step = 0.0;   // wall time of Sim::step, median of the repeats
-  double contact_us = 0.0;    // of which the contact stage (impulses, push-out, the impact check's splits elsewhere)
+  double build_s = 0.0;      // s, building the Sim (with collisions: the head's distance grid too)
+  double us_per_step = 0.0;  // wall time of Sim::step, median of the repeats
+  double contact_us = 0.0;   // of which the contact stage (impulses, push-out, the impact check's splits elsewhere)
   int steps = 0;
-  int max_contacts = 0;       // contacts and active limits after a step, at most
-  double deepest = 0.0;       // m, deepest overlap a contact stage found (before pushing out)
+  int max_contacts = 0;  // contacts and active limits after a step, at most
+  double deepest = 0.0;  // m, deepest overlap a contact stage found (before pushing out)
   std::string status = "ok";
 };
 
@@ -405,12 +410,14 @@ void appendCollisionCost(const std::string& path, const std::string& scene, doub
                          const std::vector<CollisionCostRow>& rows) {
   std::ofstream f(path, std::ios::app);
   f << "\n## Collision cost: the ponytail against its head\n\n"
-    << "`" << scene << "` stepped for " << fmt(seconds, "%g") << " s of each clip with its `collision` section (on) and "
+    << "`" << scene << "` stepped for " << fmt(seconds, "%g")
+    << " s of each clip with its `collision` section (on) and "
     << "without it (off), the scene's own method; the median wall time of `Sim::step` over the repeats, the part of it "
     << "in the contact stage, and building the scene (on: the head's distance grid as well). The cost of collision per "
     << "step is on - off; impact splits (a substep redone as two halves) are in on's step time, not in the contact "
     << "stage.\n\n"
-    << "| clip | collision | us/step | contact stage us/step | build s | steps | max contacts | deepest overlap (mm) | status |\n"
+    << "| clip | collision | us/step | contact stage us/step | build s | steps | max contacts | deepest overlap (mm) | "
+       "status |\n"
     << "|---|---|---|---|---|---|---|---|---|\n";
   for (const CollisionCostRow& r : rows) {
     f << "| " << r.clip << " | " << (r.on ? "on" : "off") << " | " << fmt(r.us_per_step, "%.1f") << " | "
@@ -520,13 +527,16 @@ int runBench(BenchArgs& args) {
   const std::vector<Method> methods = allMethods();
   const auto writeAll = [&](size_t done) {
     std::vector<std::string> out_notes = notes;
-    if (done < cases.size()) out_notes.push_back("Partial: " + std::to_string(done) + " of " + std::to_string(cases.size()) + " cases so far.");
+    if (done < cases.size())
+      out_notes.push_back("Partial: " + std::to_string(done) + " of " + std::to_string(cases.size()) +
+                          " cases so far.");
     writeBenchCsv(args.out + "/bench.csv", rows);
     writeReferenceCsv(args.out + "/reference.csv", checks);
     writeScalingCsv(args.out + "/scaling.csv", scaling);
     for (size_t ci = 0; ci < done; ++ci) {
       const auto& c = cases[ci];
-      if (std::string e = plotErrorVsCost(args.out, rows, *c); !e.empty()) out_notes.push_back("plot " + c->id + ": " + e);
+      if (std::string e = plotErrorVsCost(args.out, rows, *c); !e.empty())
+        out_notes.push_back("plot " + c->id + ": " + e);
     }
     if (std::string e = scaling.empty() ? "" : plotScaling(args.out, scaling); !e.empty()) {
       out_notes.push_back("scaling plot: " + e);
@@ -572,10 +582,10 @@ int runBench(BenchArgs& args) {
         Sim rt(loadScene(c.scene, c.overrides));
         for (const Peer& peer : peers) {
           const auto slash = peer.name.find('/');
-          BenchRow row{&c, peer.name, peer.name.substr(0, slash), peer.name.substr(slash + 1), "-", "fixed", dt,
+          BenchRow row{&c,      peer.name, peer.name.substr(0, slash), peer.name.substr(slash + 1), "-", "fixed", dt,
                        horizon, {}};
-          row.r = benchPeerRun(peer, chain, dt, horizon, cfg.repeats, c.long_duration, ref.trajectory,
-                               rt.chainEnergy());
+          row.r =
+              benchPeerRun(peer, chain, dt, horizon, cfg.repeats, c.long_duration, ref.trajectory, rt.chainEnergy());
           std::fprintf(stderr, "bench: %-14s %-40s dt 1/%-4d %-10s %9.1f us/step  err %.3g m\n", c.id.c_str(),
                        row.method.c_str(), d, row.r.status.c_str(), row.r.us_per_step, row.r.err_rms);
           rows.push_back(std::move(row));
@@ -619,9 +629,11 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 100000));
   cmd->add_flag("!--no-scaling", args->scaling, "Leave out the cost-against-N sweep");
   cmd->add_flag("--scaling-only", args->scaling_only, "Only the cost-against-N sweep (no chains, no hopper)");
-  cmd->add_flag("!--no-collision", args->collision, "Leave out the collision cost (the ponytail with its head collider on and off)");
+  cmd->add_flag("!--no-collision", args->collision,
+                "Leave out the collision cost (the ponytail with its head collider on and off)");
   cmd->add_option("--ponytail-scene", args->ponytail_scene, "The scene of the collision cost");
-  cmd->add_option("--scaling-links", args->scaling_links, "Chain lengths of the sweep (default 2,4,...,1024; quick 2..32)")
+  cmd->add_option("--scaling-links", args->scaling_links,
+                  "Chain lengths of the sweep (default 2,4,...,1024; quick 2..32)")
       ->delimiter(',')
       ->check(CLI::Range(1, 65536));
   cmd->callback([args, &exit_code] {
@@ -629,8 +641,10 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
       std::string s;
       for (const auto& x : v) {
         if (!s.empty()) s += ",";
-        if constexpr (std::is_same_v<std::decay_t<decltype(x)>, std::string>) s += x;
-        else s += std::to_string(x);
+        if constexpr (std::is_same_v<std::decay_t<decltype(x)>, std::string>)
+          s += x;
+        else
+          s += std::to_string(x);
       }
       return s;
     };

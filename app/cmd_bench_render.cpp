@@ -161,11 +161,13 @@ int runBenchRender(const BenchRenderArgs& args) {
 
 void addBenchRenderCommand(CLI::App& app, int& exit_code) {
   auto args = std::make_shared<BenchRenderArgs>();
-  auto* cmd = app.add_subcommand("bench-render", "Render time per pass of the demo scenes in each quality configuration");
+  auto* cmd =
+      app.add_subcommand("bench-render", "Render time per pass of the demo scenes in each quality configuration");
   cmd->add_option("--scenes", args->scenes, "Scenes to render (default ponytail, ponytail_hopper)")->delimiter(',');
   cmd->add_option("--sizes", args->sizes, "Frame sizes, e.g. 1280x720,1920x1080")->delimiter(',');
   cmd->add_option("--frames", args->frames, "Timed frames per configuration (default 20)")->check(CLI::Range(1, 10000));
-  cmd->add_option("--out", args->out, "Markdown table to write (default docs/bench/render_table.md; empty: print only)");
+  cmd->add_option("--out", args->out,
+                  "Markdown table to write (default docs/bench/render_table.md; empty: print only)");
   cmd->callback([args, &exit_code] {
     try {
       exit_code = runBenchRender(*args);

@@ -8,8 +8,8 @@
 #include "app/commands.h"
 #include "app/output_safety.h"
 #include "app/scene_args.h"
-#include "sim/scene_io.h"
 #include "engine/image_diff.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 namespace {
@@ -98,10 +98,9 @@ int runDiff(const DiffArgs& args) {
 
 void addDiffCommand(CLI::App& app, int& exit_code) {
   auto args = std::make_shared<DiffArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "diff",
-      "Compare two PNGs perceptually (YIQ distance, anti-aliasing ignored). "
-      "Exit 0 pass, 1 differ or sizes differ, 2 unreadable file.");
+  CLI::App* cmd = app.add_subcommand("diff",
+                                     "Compare two PNGs perceptually (YIQ distance, anti-aliasing ignored). "
+                                     "Exit 0 pass, 1 differ or sizes differ, 2 unreadable file.");
   cmd->add_option("expected", args->expected, "Expected (golden) PNG")->required();
   cmd->add_option("actual", args->actual, "Actual PNG")->required();
   cmd->add_option("--out", args->out, "Write the diff image here (red: differs, yellow: anti-aliasing)")

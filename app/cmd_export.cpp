@@ -51,8 +51,8 @@ std::vector<BakeMesh> bodyMeshes(const Sim& rt, std::vector<int>& mesh_of_body) 
     for (size_t i = 0; i < c->links.size(); ++i) {
       const RigidBody& b = w.body(c->links[i]);
       add(c->links[i], BakeMesh{"hair " + std::to_string(i),
-                                makeCapsuleMesh(toBody(b, segs[i].top), float(segs[i].radius_top), toBody(b, segs[i].bottom),
-                                                float(segs[i].radius_bottom)),
+                                makeCapsuleMesh(toBody(b, segs[i].top), float(segs[i].radius_top),
+                                                toBody(b, segs[i].bottom), float(segs[i].radius_bottom)),
                                 scene.chain->color.cast<float>()});
     }
     for (int i = 0; i < w.bodyCount(); ++i) {
@@ -134,7 +134,8 @@ void addExportCommand(CLI::App& app, int& exit_code) {
   args->scene.add(cmd);
   cmd->add_option("--out", args->out, "Output file (.glb)")->required();
   cmd->add_option("--fps", args->fps, "Samples per second (default: render.fps)")->check(CLI::Range(1.0, 1000.0));
-  cmd->add_option("--frames", args->frames, "Number of samples (default: render.frames)")->check(CLI::Range(1, 1000000));
+  cmd->add_option("--frames", args->frames, "Number of samples (default: render.frames)")
+      ->check(CLI::Range(1, 1000000));
   cmd->callback([args, &exit_code] {
     try {
       exit_code = runExport(*args);

@@ -13,14 +13,14 @@
 #include <filesystem>
 
 #include "app/commands.h"
-#include "app/render_range.h"
 #include "app/output_safety.h"
-#include "app/ui_headless.h"
-#include "engine/render_session.h"
+#include "app/render_range.h"
 #include "app/scene_args.h"
+#include "app/ui_headless.h"
 #include "engine/frame_writer.h"
-#include "sim/scene_io.h"
+#include "engine/render_session.h"
 #include "engine/video.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 namespace {
@@ -28,9 +28,7 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 struct RenderArgs {
   SceneArgs scene;
@@ -40,7 +38,7 @@ struct RenderArgs {
   std::string out;
   std::string video;
   bool ui = false;
-  std::string range;   // --range A:B (app/render_range.h)
+  std::string range;  // --range A:B (app/render_range.h)
   bool resume = false;
   bool transparent = false;
 };
@@ -51,8 +49,8 @@ class Progress {
   explicit Progress(int total) : total_(total), tty_(isatty(STDERR_FILENO)) {}
   void update(int done, double ms_per_frame) {
     if (tty_) {
-      std::fprintf(stderr, "\rrender: frame %d/%d (%3.0f%%) %.1f ms/frame   ", done, total_,
-                   100.0 * done / total_, ms_per_frame);
+      std::fprintf(stderr, "\rrender: frame %d/%d (%3.0f%%) %.1f ms/frame   ", done, total_, 100.0 * done / total_,
+                   ms_per_frame);
       if (done == total_) std::fputc('\n', stderr);
     } else {
       const int step = std::max(1, total_ / 10);
@@ -119,12 +117,14 @@ int runRender(const RenderArgs& args) {
       throw SceneError("--video " + args.video + ": is inside the frames folder " + out +
                        ", which each render replaces whole; put the video beside it");
     }
-    if (!ffmpegAvailable()) throw SceneError("--video " + args.video + ": ffmpeg is not installed (apt-get install ffmpeg)");
+    if (!ffmpegAvailable())
+      throw SceneError("--video " + args.video + ": ffmpeg is not installed (apt-get install ffmpeg)");
   }
   std::string video_err;
   if (!args.video.empty() && videoContainer(args.video, &video_err).empty()) throw SceneError("--video " + video_err);
   const bool chunk = !args.range.empty() || args.resume;
-  if (chunk && args.ui) throw SceneError("--range/--resume: not with --ui (the panel's plots depend on every frame before)");
+  if (chunk && args.ui)
+    throw SceneError("--range/--resume: not with --ui (the panel's plots depend on every frame before)");
   if (!args.range.empty() && !args.video.empty()) {
     throw SceneError("--range with --video: a chunk is part of a video; encode the merged folder with `ponyhop video`");
   }
@@ -165,8 +165,9 @@ int runRender(const RenderArgs& args) {
     sim_ms += msSince(t0);
     if (!sim_ok) {
       writer.finish();
-      std::fprintf(stderr, "\nponyhop render: the simulation stopped before frame %d: %s\n"
-                           "  no frame was written; %s is untouched\n",
+      std::fprintf(stderr,
+                   "\nponyhop render: the simulation stopped before frame %d: %s\n"
+                   "  no frame was written; %s is untouched\n",
                    i, status().c_str(), out.c_str());
       return 1;
     }
@@ -240,8 +241,8 @@ int runRender(const RenderArgs& args) {
   std::fprintf(stderr,
                "render: %d frames %dx%d (%d samples) in %.2f s = %.1f ms/frame: simulate %.2f, render %.1f, "
                "encode %.1f on 2 worker threads (overlapped; the render loop waited %.1f ms/frame for it)\n",
-               frames, out_w, out_h, scene.render.samples, total_s, 1000.0 * total_s / frames,
-               sim_ms / frames, render_ms / frames, writer.meanEncodeMs(), wait_ms / frames);
+               frames, out_w, out_h, scene.render.samples, total_s, 1000.0 * total_s / frames, sim_ms / frames,
+               render_ms / frames, writer.meanEncodeMs(), wait_ms / frames);
   std::fprintf(stderr, "render: per pass (ms/frame, %s): shadow %.1f, main %.1f, resolve %.1f, read-back %.1f\n",
                passes.timed_on_gpu ? "GPU timer queries" : "glFinish-bracketed", passes.shadow_ms / frames,
                passes.main_ms / frames, passes.resolve_ms / frames, passes.readback_ms / frames);
@@ -262,7 +263,8 @@ void addRenderCommand(CLI::App& app, int& exit_code) {
       ->check(nonEmpty());
   cmd->add_option("--out", args->out, "Output folder (default: out/SCENE_NAME); replaced whole by a run that succeeds")
       ->check(nonEmpty());
-  cmd->add_option("--video", args->video, "Also encode a video: .mp4, .mov (H.264), .webm (VP9) or .gif (ffmpeg)")->check(nonEmpty());
+  cmd->add_option("--video", args->video, "Also encode a video: .mp4, .mov (H.264), .webm (VP9) or .gif (ffmpeg)")
+      ->check(nonEmpty());
   cmd->add_flag("--ui", args->ui, "Draw the tuning panel beside the scene");
   cmd->add_option("--range", args->range,
                   "Render only frames A to B (A:B, inclusive), byte-identical to a full run's (docs/RENDER_FARM.md)");

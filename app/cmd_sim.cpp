@@ -9,8 +9,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <csignal>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -18,8 +18,8 @@
 #include "app/output_safety.h"
 #include "app/pose_sampling.h"
 #include "app/scene_args.h"
-#include "sim/scene_io.h"
 #include "engine/asset_loader.h"
+#include "sim/scene_io.h"
 #include "sim/sim.h"
 
 namespace ponyhop {
@@ -73,8 +73,9 @@ SimRow baseSample(const Sim& rt) {
     const RigidBody& b = w.body(h->model().body);
     const Eigen::Vector3d att = h->attitude(w);
     const Eigen::Vector3d foot = h->footPoint(w);
-    r.values = {b.x.x(), b.x.y(), b.x.z(), b.v.x(), b.v.y(), b.v.z(), att[0], att[1], att[2], h->leg(w).length,
-                foot.x(), foot.y(), foot.z(), h->inContact() ? 1.0 : 0.0, h->kneeError(w)};
+    r.values = {b.x.x(),        b.x.y(), b.x.z(),          b.v.x(),  b.v.y(),  b.v.z(),  att[0],
+                att[1],         att[2],  h->leg(w).length, foot.x(), foot.y(), foot.z(), h->inContact() ? 1.0 : 0.0,
+                h->kneeError(w)};
     r.text = h->phaseName();
     r.split = 10;
   } else if (const Chain* c = rt.chain()) {
@@ -172,9 +173,9 @@ int runSummary(const Scene& scene, double duration, const SimArgs& args) {
 void writePoseRows(std::FILE* f, const PoseFrame& fr, const std::vector<std::string>& ids) {
   for (size_t i = 0; i < fr.bodies.size(); ++i) {
     const BodyPose& p = fr.bodies[i];
-    std::fprintf(f, "%.9g,%zu,%s,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n",
-                 fr.t, i, ids[i].c_str(), p.x.x(), p.x.y(), p.x.z(), p.q.w(), p.q.x(), p.q.y(), p.q.z(), p.v.x(),
-                 p.v.y(), p.v.z(), p.w.x(), p.w.y(), p.w.z());
+    std::fprintf(f, "%.9g,%zu,%s,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n", fr.t,
+                 i, ids[i].c_str(), p.x.x(), p.x.y(), p.x.z(), p.q.w(), p.q.x(), p.q.y(), p.q.z(), p.v.x(), p.v.y(),
+                 p.v.z(), p.w.x(), p.w.y(), p.w.z());
   }
 }
 

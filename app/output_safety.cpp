@@ -63,7 +63,8 @@ const std::regex& frameName() {
 }
 
 volatile sig_atomic_t g_signal = 0;
-struct sigaction g_old_int {}, g_old_term {};
+struct sigaction g_old_int {
+}, g_old_term{};
 
 void onSignal(int sig) { g_signal = sig; }
 
@@ -113,7 +114,8 @@ FrameFolder::FrameFolder(const std::string& option, const std::string& dir_in) :
   if (::lstat(dir_.c_str(), &st) == 0) {
     exists = true;
     if (S_ISLNK(st.st_mode)) throw SceneError(option + " " + dir_ + ": is a symbolic link; give the folder itself");
-    if (!S_ISDIR(st.st_mode)) throw SceneError(option + " " + dir_ + ": exists and is " + kindOf(st) + ", not a folder");
+    if (!S_ISDIR(st.st_mode))
+      throw SceneError(option + " " + dir_ + ": exists and is " + kindOf(st) + ", not a folder");
   }
   const fs::path parent = folderOf(dir_);
   std::error_code ec;
@@ -145,7 +147,8 @@ FrameFolder::FrameFolder(const std::string& option, const std::string& dir_in) :
   lock_path_ = dir_ + ".lock";
   for (int attempt = 0;; ++attempt) {
     lock_fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (lock_fd_ < 0) throw SceneError(option + " " + dir_ + ": cannot create the lock " + lock_path_ + ": " + errnoText());
+    if (lock_fd_ < 0)
+      throw SceneError(option + " " + dir_ + ": cannot create the lock " + lock_path_ + ": " + errnoText());
     if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
       char buf[256] = {};
       const ssize_t n = ::pread(lock_fd_, buf, sizeof(buf) - 1, 0);
@@ -158,8 +161,10 @@ FrameFolder::FrameFolder(const std::string& option, const std::string& dir_in) :
     }
     // The holder before us may have removed the file after we opened it: lock the file that is
     // at the path now.
-    struct stat a {}, b {};
-    if (::fstat(lock_fd_, &a) == 0 && ::stat(lock_path_.c_str(), &b) == 0 && a.st_ino == b.st_ino && a.st_dev == b.st_dev) {
+    struct stat a {
+    }, b{};
+    if (::fstat(lock_fd_, &a) == 0 && ::stat(lock_path_.c_str(), &b) == 0 && a.st_ino == b.st_ino &&
+        a.st_dev == b.st_dev) {
       break;
     }
     ::close(lock_fd_);
@@ -169,7 +174,7 @@ FrameFolder::FrameFolder(const std::string& option, const std::string& dir_in) :
   {
     char buf[160];
     const std::time_t now = std::time(nullptr);
-    std::tm tm {};
+    std::tm tm{};
     gmtime_r(&now, &tm);
     char when[32];
     std::strftime(when, sizeof(when), "%Y-%m-%d %H:%M:%S UTC", &tm);
@@ -189,7 +194,8 @@ FrameFolder::FrameFolder(const std::string& option, const std::string& dir_in) :
   staging_ = (stage_parent / (prefix + std::to_string(getpid()))).string();
   fs::remove_all(staging_, ec);
   fs::create_directories(staging_, ec);
-  if (ec) throw SceneError(option + " " + dir_ + ": cannot create the staging folder " + staging_ + ": " + ec.message());
+  if (ec)
+    throw SceneError(option + " " + dir_ + ": cannot create the staging folder " + staging_ + ": " + ec.message());
 }
 
 FrameFolder::~FrameFolder() {

@@ -56,7 +56,7 @@ class InterruptGuard {
   ~InterruptGuard();
   InterruptGuard(const InterruptGuard&) = delete;
   InterruptGuard& operator=(const InterruptGuard&) = delete;
-  static int signal();  // 0 while none came
+  static int signal();                                // 0 while none came
   static int exitCode(int sig) { return 128 + sig; }  // 130 for SIGINT, 143 for SIGTERM
 };
 

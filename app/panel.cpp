@@ -115,7 +115,8 @@ void tooltip(const std::string& key, const FieldMeta& meta, const std::string& d
   if (meta.unit && *meta.unit) ImGui::Text("Unit: %s", meta.unit);
   const bool has_min = std::isfinite(meta.min), has_max = std::isfinite(meta.max);
   if (has_min || has_max) {
-    ImGui::Text("Allowed: %s .. %s", has_min ? number(meta.min).c_str() : "-inf", has_max ? number(meta.max).c_str() : "inf");
+    ImGui::Text("Allowed: %s .. %s", has_min ? number(meta.min).c_str() : "-inf",
+                has_max ? number(meta.max).c_str() : "inf");
   }
   if (!default_text.empty()) ImGui::Text("Default: %s", default_text.c_str());
   ImGui::TextDisabled("%s  (scene file / --set)", key.c_str());
@@ -203,8 +204,7 @@ Eigen::Vector3d closestOnSegment(const Eigen::Vector3d& o, const Eigen::Vector3d
 
 class FieldWidgets {
  public:
-  FieldWidgets(Panel& panel, std::string prefix, std::vector<std::string> only = {},
-               std::vector<std::string> skip = {})
+  FieldWidgets(Panel& panel, std::string prefix, std::vector<std::string> only = {}, std::vector<std::string> skip = {})
       : panel_(panel), prefix_(std::move(prefix)), only_(std::move(only)), skip_(std::move(skip)) {}
 
   template <class T>
@@ -306,7 +306,9 @@ class FieldWidgets {
       } else {
         choices = {"", "head", "chain", "hopper"};
       }
-      const auto shown = [&](const std::string& c) { return c.empty() ? std::string(is_clip ? "(inline keys)" : "(auto)") : c; };
+      const auto shown = [&](const std::string& c) {
+        return c.empty() ? std::string(is_clip ? "(inline keys)" : "(auto)") : c;
+      };
       if (ImGui::BeginCombo("##v", shown(v).c_str())) {
         for (const std::string& c : choices) {
           if (ImGui::Selectable(shown(c).c_str(), c == v)) v = c;
@@ -336,7 +338,7 @@ class FieldWidgets {
   }
 
   template <class E>
-    requires std::is_enum_v<E>
+  requires std::is_enum_v<E>
   void widget(const std::string&, E& v, const FieldMeta&) {
     const auto& names = EnumNames<E>::names;
     const std::string current(enumName(v));
@@ -359,7 +361,12 @@ class SectionVisitor {
  public:
   SectionVisitor(Panel& panel, const char* field, const char* title, bool open, std::vector<std::string> only = {},
                  std::vector<std::string> skip = {}, std::string prefix = "")
-      : panel_(panel), field_(field), title_(title), open_(open), only_(std::move(only)), skip_(std::move(skip)),
+      : panel_(panel),
+        field_(field),
+        title_(title),
+        open_(open),
+        only_(std::move(only)),
+        skip_(std::move(skip)),
         prefix_(std::move(prefix)) {}
 
   template <class T>
@@ -660,7 +667,8 @@ void Panel::drawPresets() {
   }
   remember("load");
   if (!preset_message_.empty()) {
-    ImGui::PushStyleColor(ImGuiCol_Text, preset_error_ ? ImVec4(1.0f, 0.5f, 0.4f, 1.0f) : ImVec4(0.6f, 0.85f, 0.6f, 1.0f));
+    ImGui::PushStyleColor(ImGuiCol_Text,
+                          preset_error_ ? ImVec4(1.0f, 0.5f, 0.4f, 1.0f) : ImVec4(0.6f, 0.85f, 0.6f, 1.0f));
     ImGui::TextWrapped("%s", preset_message_.c_str());
     ImGui::PopStyleColor();
   }
@@ -882,14 +890,14 @@ void Panel::drawViewOverlay(const PanelLayout& layout) {
   char buf[160];
   const char* state = !sim_.ok() ? "stopped" : (sim_.running() ? "running" : "paused");
   std::snprintf(buf, sizeof buf, "t = %.2f s   %s   %s", sim_.simTime(), state,
-                sim_.speedIndex() == kRealTimeSpeedIndex ? "1x" :
-                (std::string(number(sim_.speed())) + "x").c_str());
+                sim_.speedIndex() == kRealTimeSpeedIndex ? "1x" : (std::string(number(sim_.speed())) + "x").c_str());
   text(12.0f, 10.0f, IM_COL32(255, 255, 255, 235), buf);
   if (sim_.fallingBehind()) {
     std::snprintf(buf, sizeof buf, "behind: %.2fx real time", sim_.achievedRealTimeFactor() * sim_.speed());
     text(12.0f, 30.0f, IM_COL32(255, 200, 90, 255), buf);
   }
-  if (!sim_.ok()) text(12.0f, 30.0f, IM_COL32(255, 110, 100, 255), "Simulation stopped: see the panel. Backspace resets.");
+  if (!sim_.ok())
+    text(12.0f, 30.0f, IM_COL32(255, 110, 100, 255), "Simulation stopped: see the panel. Backspace resets.");
   text(12.0f, float(layout.height) - 26.0f, IM_COL32(255, 255, 255, 170),
        "drag: orbit   right-drag: pan   wheel: zoom   drag hair/body: pull   Space: run/pause");
 }

@@ -40,13 +40,13 @@ class PanelContext {
 
 // Synthetic input for one frame (headless use). Coordinates: pixels, origin top-left.
 struct UiInput {
-  float width = 1280, height = 720;  // display size, scene view + panel
-  double dt = 1.0 / 60.0;            // s since the previous frame
-  float mouse_x = -1e6f, mouse_y = -1e6f;  // off-screen by default
+  float width = 1280, height = 720;            // display size, scene view + panel
+  double dt = 1.0 / 60.0;                      // s since the previous frame
+  float mouse_x = -1e6f, mouse_y = -1e6f;      // off-screen by default
   bool mouse_down[3] = {false, false, false};  // left, right, middle
-  float wheel = 0.0f;                // notches, + zooms in
+  float wheel = 0.0f;                          // notches, + zooms in
   bool ctrl = false, shift = false;
-  std::vector<int> keys_down;        // ImGuiKey_ values held during this frame (Space, Backspace...)
+  std::vector<int> keys_down;  // ImGuiKey_ values held during this frame (Space, Backspace...)
 };
 // Writes the input into ImGui's io (call before ImGui::NewFrame()).
 void feedInput(const UiInput& in);
@@ -129,7 +129,8 @@ class Panel {
   double last_cam_time_ = 0.0;
   bool free_view_ = false;
   double azimuth_ = 0.0, elevation_ = 0.0, distance_ = 1.0;  // rad, rad, m
-  Eigen::Vector3d view_target_ = Eigen::Vector3d::Zero();   // free view: looked-at point (or offset from the followed body)
+  Eigen::Vector3d view_target_ =
+      Eigen::Vector3d::Zero();  // free view: looked-at point (or offset from the followed body)
   enum class Drag { None, Orbit, Pan, Pull } drag_ = Drag::None;
   double grab_depth_ = 0.0;  // m along the view direction, of the grabbed point
 };

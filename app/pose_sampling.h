@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "sim/sim.h"
 #include "physics/body_pose.h"
+#include "sim/sim.h"
 
 namespace ponyhop {
 

@@ -38,7 +38,8 @@ int renderChunk(RenderSession& session, double fps, const std::string& out, Fram
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   if (ec) {
-    std::fprintf(stderr, "ponyhop render: %s: cannot create the output folder: %s\n", out.c_str(), ec.message().c_str());
+    std::fprintf(stderr, "ponyhop render: %s: cannot create the output folder: %s\n", out.c_str(),
+                 ec.message().c_str());
     return 1;
   }
   const auto t0 = Clock::now();

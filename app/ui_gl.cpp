@@ -47,8 +47,6 @@ OffscreenTarget::~OffscreenTarget() {
   glDeleteRenderbuffers(1, &color_);
 }
 
-void OffscreenTarget::readPixels(std::vector<uint8_t>& rgba) const {
-  readFramebufferRGBA(fbo_, width_, height_, rgba);
-}
+void OffscreenTarget::readPixels(std::vector<uint8_t>& rgba) const { readFramebufferRGBA(fbo_, width_, height_, rgba); }
 
 }  // namespace ponyhop

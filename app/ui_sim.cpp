@@ -17,7 +17,8 @@ double msSince(Clock::time_point t0) { return std::chrono::duration<double, std:
 
 void flatten(const nlohmann::json& j, const std::string& prefix, std::map<std::string, nlohmann::json>& out) {
   if (j.is_object()) {
-    for (auto it = j.begin(); it != j.end(); ++it) flatten(it.value(), prefix.empty() ? it.key() : prefix + "." + it.key(), out);
+    for (auto it = j.begin(); it != j.end(); ++it)
+      flatten(it.value(), prefix.empty() ? it.key() : prefix + "." + it.key(), out);
   } else {
     out[prefix] = j;  // numbers, strings, vectors and key lists are compared whole
   }
@@ -74,10 +75,14 @@ void Readouts::clear() {
 
 const char* applyKindName(ApplyKind k) {
   switch (k) {
-    case ApplyKind::None: return "none";
-    case ApplyKind::Live: return "live";
-    case ApplyKind::KeepState: return "rebuilt, state kept";
-    case ApplyKind::Restart: return "rebuilt, restarted at t = 0";
+    case ApplyKind::None:
+      return "none";
+    case ApplyKind::Live:
+      return "live";
+    case ApplyKind::KeepState:
+      return "rebuilt, state kept";
+    case ApplyKind::Restart:
+      return "rebuilt, restarted at t = 0";
   }
   return "";
 }
@@ -99,9 +104,7 @@ std::set<std::string> changedKeys(const Scene& a, const Scene& b) {
 
 // ---------------------------------------------------------------------------------------------
 
-LiveSim::LiveSim(const Scene& scene) : edited_(scene), applied_(scene) {
-  replaceRuntime(makeSim(scene), 0.0);
-}
+LiveSim::LiveSim(const Scene& scene) : edited_(scene), applied_(scene) { replaceRuntime(makeSim(scene), 0.0); }
 
 LiveSim::~LiveSim() = default;  // the renderer frees its meshes itself when it goes
 

@@ -26,9 +26,9 @@
 
 #include "engine/renderer.h"
 #include "engine/scene_draw.h"
+#include "physics/perturbation.h"
 #include "sim/scene.h"
 #include "sim/sim.h"
-#include "physics/perturbation.h"
 
 namespace ponyhop {
 

@@ -140,7 +140,8 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
           const ImGuiIO& io = ImGui::GetIO();
           std::fprintf(quality_log, "frame %d %s running=%d item_active=%d mouse_down=%d\n", frame,
                        quality == RenderQuality::Draft ? "draft" : "final", sim.running() ? 1 : 0,
-                       ImGui::IsAnyItemActive() ? 1 : 0, (io.MouseDown[0] || io.MouseDown[1] || io.MouseDown[2]) ? 1 : 0);
+                       ImGui::IsAnyItemActive() ? 1 : 0,
+                       (io.MouseDown[0] || io.MouseDown[1] || io.MouseDown[2]) ? 1 : 0);
           std::fflush(quality_log);
         }
         ImGui::Render();
@@ -186,8 +187,9 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
                      1000.0 / mean, stats.physics / stats.n, stats.panel / stats.n, stats.render / stats.n,
                      stats.compose / stats.n);
       }
-      for (const auto& [name, v] : {std::pair<const char*, const std::vector<double>&>{"draft (moving)", stats.draft_ms},
-                                    {"final (still)", stats.final_ms}}) {
+      for (const auto& [name, v] :
+           {std::pair<const char*, const std::vector<double>&>{"draft (moving)", stats.draft_ms},
+            {"final (still)", stats.final_ms}}) {
         if (v.empty()) continue;
         double sum = 0;
         for (double x : v) sum += x;

@@ -1,8 +1,9 @@
 #include "engine/animation_import.h"
 
+#include <assimp/scene.h>
+
 #include <algorithm>
 #include <assimp/Importer.hpp>
-#include <assimp/scene.h>
 #include <cmath>
 #include <cstring>
 #include <numbers>
@@ -51,7 +52,7 @@ Eigen::Quaterniond rotationAt(const aiNodeAnim& ch, double t) {
 }
 
 std::optional<ImportedAnimation> importHere(const std::string& path, const AnimationImportOptions& opt,
-                                           std::string* error);
+                                            std::string* error);
 
 // ImportedAnimation through the pipe from the import process.
 void putBytes(std::string& s, const void* p, size_t n) { s.append(static_cast<const char*>(p), n); }
@@ -95,8 +96,9 @@ std::string serialize(const ImportedAnimation& a) {
   const uint64_t n = a.samples.size();
   putBytes(s, &n, sizeof(n));
   for (const PoseSample& p : a.samples) {
-    const double v[8] = {p.t, p.position.x(), p.position.y(), p.position.z(),
-                         p.rotation.w(), p.rotation.x(), p.rotation.y(), p.rotation.z()};
+    const double v[8] = {
+        p.t,           p.position.x(), p.position.y(), p.position.z(), p.rotation.w(), p.rotation.x(), p.rotation.y(),
+        p.rotation.z()};
     putBytes(s, v, sizeof(v));
   }
   return s;
@@ -147,7 +149,7 @@ std::optional<ImportedAnimation> importAnimation(const std::string& path, const 
 namespace {
 
 std::optional<ImportedAnimation> importHere(const std::string& path, const AnimationImportOptions& opt,
-                                           std::string* error) {
+                                            std::string* error) {
   Assimp::Importer importer;
   const aiScene* scene = importer.ReadFile(path, 0);
   if (!scene) return fail(error, path + ": cannot read the animation: " + importer.GetErrorString());
@@ -179,8 +181,9 @@ std::optional<ImportedAnimation> importHere(const std::string& path, const Anima
       if (name == opt.node) ch = anim->mChannels[i];
       names += (i ? ", \"" : "\"") + name + "\"";
     }
-    if (!ch) return fail(error, path + ": animation \"" + std::string(anim->mName.C_Str()) +
-                                    "\" does not animate node \"" + opt.node + "\" (it animates " + names + ")");
+    if (!ch)
+      return fail(error, path + ": animation \"" + std::string(anim->mName.C_Str()) + "\" does not animate node \"" +
+                             opt.node + "\" (it animates " + names + ")");
   }
   if (ch->mNumPositionKeys == 0 && ch->mNumRotationKeys == 0)
     return fail(error, path + ": node \"" + std::string(ch->mNodeName.C_Str()) + "\" has no position or rotation keys");

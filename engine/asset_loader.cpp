@@ -1,8 +1,8 @@
 #include "engine/asset_loader.h"
 
-#include "engine/animation_import.h"
 #include <cstdio>
 
+#include "engine/animation_import.h"
 #include "engine/mesh.h"
 #include "sim/head_fit.h"
 #include "sim/scene_io.h"
@@ -30,7 +30,8 @@ std::optional<KeyframeTrack> AssimpAssets::loadMeshAnimation(const HeadParams& h
   // The file's own animation, its keys taken as samples of the node's pose (metres, after the
   // same up-axis fix as the mesh).
   AnimationImportOptions import;
-  import.y_up_to_z_up = (head.up_axis == UpAxis::Auto ? detectUpAxis(mesh_path, MeshData{}, nullptr) : head.up_axis) == UpAxis::Y;
+  import.y_up_to_z_up =
+      (head.up_axis == UpAxis::Auto ? detectUpAxis(mesh_path, MeshData{}, nullptr) : head.up_axis) == UpAxis::Y;
   return importAnimationTrack(mesh_path, import, options, error);
 }
 

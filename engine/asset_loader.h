@@ -8,7 +8,8 @@ namespace ponyhop {
 
 class AssimpAssets final : public AssetLoader {
  public:
-  HeadAsset loadHead(const HeadParams& head, const std::string& mesh_path, const std::string& scene_path) const override;
+  HeadAsset loadHead(const HeadParams& head, const std::string& mesh_path,
+                     const std::string& scene_path) const override;
   std::optional<KeyframeTrack> loadMeshAnimation(const HeadParams& head, const std::string& mesh_path,
                                                  const TrackOptions& options, std::string* error) const override;
 };

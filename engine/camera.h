@@ -12,9 +12,9 @@ struct Camera {
   Eigen::Vector3d eye{0.9, -1.4, 0.55};
   Eigen::Vector3d target{0.0, 0.0, 0.0};
   Eigen::Vector3d up{0.0, 0.0, 1.0};
-  double fov = 35.0;     // deg, vertical
-  double znear = 0.0;    // m; 0: chosen by the renderer from the scene bounds
-  double zfar = 0.0;     // m; 0: chosen by the renderer (covers the faded ground)
+  double fov = 35.0;   // deg, vertical
+  double znear = 0.0;  // m; 0: chosen by the renderer from the scene bounds
+  double zfar = 0.0;   // m; 0: chosen by the renderer (covers the faded ground)
 
   // Right-handed look-at (camera looks down its -z), as in gluLookAt.
   Eigen::Matrix4d view() const;

@@ -46,7 +46,7 @@ class FrameWriter {
   bool finish(std::string* err = nullptr);
 
   int framesWritten() const;
-  double meanEncodeMs() const;   // per frame: PNG encode + write + rename, on a worker
+  double meanEncodeMs() const;  // per frame: PNG encode + write + rename, on a worker
   double lastEncodeMs() const;
   std::string error() const;
 

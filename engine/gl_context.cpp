@@ -4,8 +4,10 @@
 
 // glad first: it defines __gl_h_, so the <GL/gl.h> that osmesa.h includes is skipped and every
 // GL symbol stays glad's pointer.
+// clang-format off
 #include <glad/gl.h>
 #include <GL/osmesa.h>
+// clang-format on
 
 namespace ponyhop {
 
@@ -21,8 +23,8 @@ bool loadGL(GLProcLoader get_proc_address, std::string* err) {
   }
   if (GLAD_VERSION_MAJOR(version) * 10 + GLAD_VERSION_MINOR(version) < 33) {
     if (err)
-      *err = "loadGL: OpenGL 3.3 core is required, the context offers " +
-             std::to_string(GLAD_VERSION_MAJOR(version)) + "." + std::to_string(GLAD_VERSION_MINOR(version));
+      *err = "loadGL: OpenGL 3.3 core is required, the context offers " + std::to_string(GLAD_VERSION_MAJOR(version)) +
+             "." + std::to_string(GLAD_VERSION_MINOR(version));
     return false;
   }
   return true;
@@ -58,8 +60,8 @@ void readFramebufferRGBA(unsigned fbo, int width, int height, std::vector<uint8_
 
 std::unique_ptr<HeadlessContext> HeadlessContext::create(int width, int height, std::string* err) {
   if (width < 1 || height < 1 || width > 16384 || height > 16384) {
-    if (err) *err = "HeadlessContext: size " + std::to_string(width) + "x" + std::to_string(height) +
-                    " out of range 1..16384";
+    if (err)
+      *err = "HeadlessContext: size " + std::to_string(width) + "x" + std::to_string(height) + " out of range 1..16384";
     return nullptr;
   }
   // Depth/stencil of the default framebuffer are unused (we draw into our own FBOs).

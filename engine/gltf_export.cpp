@@ -150,7 +150,7 @@ bool writeGlb(const Bake& bake, const std::string& path, std::string* err) {
     a->mChannels = new aiNodeAnim*[channels.size()];
     for (size_t i = 0; i < channels.size(); ++i) a->mChannels[i] = channels[i];
     scene->mNumAnimations = 1;
-    scene->mAnimations = new aiAnimation*[1]{a};
+    scene->mAnimations = new aiAnimation* [1] { a };
   }
 
   const std::string tmp = path + ".tmp";

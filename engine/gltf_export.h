@@ -20,8 +20,8 @@ struct BakeMesh {
 
 struct BakeNode {
   std::string name;
-  int parent = -1;  // index of an earlier node, -1: a child of the root
-  int mesh = -1;    // index into Bake::meshes, -1: none
+  int parent = -1;                                      // index of an earlier node, -1: a child of the root
+  int mesh = -1;                                        // index into Bake::meshes, -1: none
   Eigen::Affine3d local = Eigen::Affine3d::Identity();  // rigid, used when not animated
   // Animated: one translation and rotation per Bake::times entry (both empty: static).
   std::vector<Eigen::Vector3d> translation;

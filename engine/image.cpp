@@ -36,12 +36,11 @@ Image decodePng(const std::string& bytes, const std::string& source, std::string
     if (err) *err = source + ": cannot read as an image (" + stbi_failure_reason() + ")";
     return {};
   }
-  if (w <= 0 || h <= 0 || w > kMaxImageSide || h > kMaxImageSide ||
-      int64_t(w) * int64_t(h) > kMaxImagePixels) {
+  if (w <= 0 || h <= 0 || w > kMaxImageSide || h > kMaxImageSide || int64_t(w) * int64_t(h) > kMaxImagePixels) {
     if (err) {
-      *err = source + ": the image declares " + std::to_string(w) + "x" + std::to_string(h) +
-             " pixels; the limit is " + std::to_string(kMaxImageSide) + " per side and " +
-             std::to_string(kMaxImagePixels / 1000000) + " megapixels";
+      *err = source + ": the image declares " + std::to_string(w) + "x" + std::to_string(h) + " pixels; the limit is " +
+             std::to_string(kMaxImageSide) + " per side and " + std::to_string(kMaxImagePixels / 1000000) +
+             " megapixels";
     }
     return {};
   }

@@ -28,8 +28,7 @@ struct Yiq {
 inline Yiq toYiq(const uint8_t* p) {
   const double a = p[3] / 255.0;
   const double r = overWhite(p[0], a), g = overWhite(p[1], a), b = overWhite(p[2], a);
-  return {0.29889531 * r + 0.58662247 * g + 0.11448223 * b,
-          0.59597799 * r - 0.27417610 * g - 0.32180189 * b,
+  return {0.29889531 * r + 0.58662247 * g + 0.11448223 * b, 0.59597799 * r - 0.27417610 * g - 0.32180189 * b,
           0.21147017 * r - 0.52261711 * g + 0.31114694 * b};
 }
 
@@ -135,9 +134,9 @@ DiffResult compareImages(const Image& expected, const Image& actual, const DiffO
   const int w = expected.width, h = expected.height;
   const size_t bytes = static_cast<size_t>(std::max(w, 0)) * static_cast<size_t>(std::max(h, 0)) * 4;
   if (expected.rgba.size() != bytes || actual.rgba.size() != bytes) {
-    r.message = "inconsistent image: " + sizeText(expected) + " needs " + std::to_string(bytes) +
-                " bytes, got " + std::to_string(expected.rgba.size()) + " (expected) and " +
-                std::to_string(actual.rgba.size()) + " (actual)";
+    r.message = "inconsistent image: " + sizeText(expected) + " needs " + std::to_string(bytes) + " bytes, got " +
+                std::to_string(expected.rgba.size()) + " (expected) and " + std::to_string(actual.rgba.size()) +
+                " (actual)";
     if (diff_out) *diff_out = Image{};
     return r;  // same_size stays false: nothing was compared
   }

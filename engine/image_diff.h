@@ -46,14 +46,14 @@ std::string validateDiffOptions(const DiffOptions& options);
 
 struct DiffResult {
   bool same_size = false;
-  long pixels = 0;        // width * height (0 when the sizes differ)
-  long differing = 0;     // pixels over the threshold and not anti-aliasing
-  double share = 0;       // differing / pixels
-  double max_delta = 0;   // normalized YIQ distance sqrt(d / 35215) in [0, 1] of the worst
-                          // pixel that is not anti-aliasing; compare with DiffOptions::threshold
-  long antialiased = 0;   // pixels over the threshold but ignored as anti-aliasing
-  bool pass = false;      // same_size && share <= max_diff_share
-  std::string message;    // one line: why it failed (sizes, share) or a summary on pass
+  long pixels = 0;       // width * height (0 when the sizes differ)
+  long differing = 0;    // pixels over the threshold and not anti-aliasing
+  double share = 0;      // differing / pixels
+  double max_delta = 0;  // normalized YIQ distance sqrt(d / 35215) in [0, 1] of the worst
+                         // pixel that is not anti-aliasing; compare with DiffOptions::threshold
+  long antialiased = 0;  // pixels over the threshold but ignored as anti-aliasing
+  bool pass = false;     // same_size && share <= max_diff_share
+  std::string message;   // one line: why it failed (sizes, share) or a summary on pass
 };
 
 // Compares `actual` against `expected`. Different sizes fail (same_size = false, message naming

@@ -72,8 +72,8 @@ bool writeAll(int fd, const void* data, size_t n) {
   const std::string& payload = ok ? result : error;
   const uint8_t status = ok ? 1 : 0;
   const uint64_t size = payload.size();
-  const bool sent = writeAll(fd, &status, 1) && writeAll(fd, &size, sizeof(size)) &&
-                    writeAll(fd, payload.data(), payload.size());
+  const bool sent =
+      writeAll(fd, &status, 1) && writeAll(fd, &size, sizeof(size)) && writeAll(fd, payload.data(), payload.size());
   ::close(fd);
   _exit(sent ? 0 : 3);  // no atexit handlers, no destructors of the parent's objects
 }

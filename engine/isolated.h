@@ -10,8 +10,8 @@
 namespace ponyhop {
 
 struct IsolationLimits {
-  double seconds = 30.0;                      // wall-clock time, then the child is killed
-  size_t memory_bytes = size_t(1) << 30;      // address space the child may add to what it inherits
+  double seconds = 30.0;                  // wall-clock time, then the child is killed
+  size_t memory_bytes = size_t(1) << 30;  // address space the child may add to what it inherits
 };
 
 // Forks; the child runs `work`, which fills `result` (any bytes) or `error` and returns success;

@@ -75,8 +75,7 @@ MeshTexture readTexture(const aiScene* scene, const aiString& ref, const std::st
 bool importMesh(const std::string& path, MeshData& out, std::string* err) {
   Assimp::Importer importer;
   unsigned flags = aiProcess_Triangulate | aiProcess_GenSmoothNormals | aiProcess_JoinIdenticalVertices |
-                   aiProcess_PreTransformVertices | aiProcess_SortByPType |
-                   aiProcess_ValidateDataStructure;
+                   aiProcess_PreTransformVertices | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
   // No aiProcess_FindDegenerates: marching-cubes meshes hold many zero-area triangles whose
   // removal leaves T-junctions, i.e. pinholes in the rendered surface. Zero-area triangles cost
   // nothing; bad normals are caught below.
@@ -219,7 +218,8 @@ bool getMaterials(const std::string& s, size_t& at, MeshData& m) {
       !getArray(s, at, texels) || !getArray(s, at, text) || dims.size() % 2 != 0) {
     return false;
   }
-  if ((!m.colors.empty() && m.colors.size() != m.positions.size()) || (!m.uvs.empty() && m.uvs.size() != m.positions.size())) {
+  if ((!m.colors.empty() && m.colors.size() != m.positions.size()) ||
+      (!m.uvs.empty() && m.uvs.size() != m.positions.size())) {
     return false;
   }
   size_t used = 0;
@@ -227,7 +227,8 @@ bool getMaterials(const std::string& s, size_t& at, MeshData& m) {
     if (dims[i] <= 0 || dims[i + 1] <= 0 || dims[i] > 16384 || dims[i + 1] > 16384) return false;
     const size_t n = size_t(dims[i]) * size_t(dims[i + 1]) * 4;
     if (texels.size() - used < n) return false;
-    m.textures.push_back(MeshTexture{dims[i], dims[i + 1], std::vector<uint8_t>(texels.begin() + long(used), texels.begin() + long(used + n))});
+    m.textures.push_back(MeshTexture{
+        dims[i], dims[i + 1], std::vector<uint8_t>(texels.begin() + long(used), texels.begin() + long(used + n))});
     used += n;
   }
   if (used != texels.size()) return false;
@@ -284,8 +285,9 @@ bool loadMesh(const std::string& path, MeshData& out, std::string* err) {
   }
   for (const uint32_t i : m.indices) {
     if (i >= m.positions.size()) {
-      if (err) *err = path + ": a triangle refers to vertex " + std::to_string(i) + " of " +
-                      std::to_string(m.positions.size());
+      if (err)
+        *err =
+            path + ": a triangle refers to vertex " + std::to_string(i) + " of " + std::to_string(m.positions.size());
       return false;
     }
   }
@@ -349,8 +351,8 @@ MeshData makeCapsuleMesh(const Eigen::Vector3f& p0, float r0, const Eigen::Vecto
   MeshData m = makeUvSphere(1.0f, slices, stacks | 1);  // odd: no ring on the equator
   const Eigen::Vector3f axis = p1 - p0;
   const float len = axis.norm();
-  const Eigen::Quaternionf R =
-      len > 1e-9f ? Eigen::Quaternionf::FromTwoVectors(Eigen::Vector3f::UnitZ(), axis / len) : Eigen::Quaternionf::Identity();
+  const Eigen::Quaternionf R = len > 1e-9f ? Eigen::Quaternionf::FromTwoVectors(Eigen::Vector3f::UnitZ(), axis / len)
+                                           : Eigen::Quaternionf::Identity();
   for (size_t i = 0; i < m.positions.size(); ++i) {
     const Eigen::Vector3f n = m.positions[i];  // unit sphere: position = normal
     const bool top = n.z() > 0.0f;

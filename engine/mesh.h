@@ -14,8 +14,9 @@
 namespace ponyhop {
 
 // Loads `path` with its materials (base colours, vertex colours, base-colour textures: files
-// beside the mesh or embedded; MeshData::warnings names one that cannot be read). Missing normals are generated smooth; STL (whose normals are per facet by format)
-// gets smooth normals too. Returns false with "FILE: assimp's message" (or "FILE: no triangles").
+// beside the mesh or embedded; MeshData::warnings names one that cannot be read). Missing normals are generated smooth;
+// STL (whose normals are per facet by format) gets smooth normals too. Returns false with "FILE: assimp's message" (or
+// "FILE: no triangles").
 bool loadMesh(const std::string& path, MeshData& out, std::string* err);
 
 // Body-from-mesh transform of HeadParams with the whole mesh as the head and the mesh origin as

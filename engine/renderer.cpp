@@ -16,9 +16,7 @@ namespace ponyhop {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // The ground's shadow texture has shadow_size / this texels a side (renderer.cpp, endFrame).
 constexpr int kGroundShadowDivisor = 8;
@@ -120,8 +118,8 @@ LightFrustum fitLightFrustum(const Eigen::Vector3d& dir, const Eigen::AlignedBox
   center = (center / texel).array().round().matrix() * texel;
   const double depth_margin = 0.05 * std::max(ls.sizes().z(), extent) + 1e-3;
   const double n = -ls.max().z() - depth_margin, f = -ls.min().z() + depth_margin;
-  const Eigen::Matrix4d P = ortho(center.x() - extent / 2, center.x() + extent / 2, center.y() - extent / 2,
-                                  center.y() + extent / 2, n, f);
+  const Eigen::Matrix4d P =
+      ortho(center.x() - extent / 2, center.x() + extent / 2, center.y() - extent / 2, center.y() + extent / 2, n, f);
   lf.view_proj = P * V;
   lf.texel_world = texel;
   lf.depth_range = f - n;
@@ -159,7 +157,7 @@ struct Renderer::Impl {
   GLuint output_fbo = 0;  // where the finished frame is: resolve_fbo, or msaa_fbo without AA
   bool target_post = false;
   GLuint shadow_fbo = 0, shadow_tex = 0;
-  GLuint raw_depth_sampler = 0;  // reads shadow_tex without comparison (blocker search)
+  GLuint raw_depth_sampler = 0;                         // reads shadow_tex without comparison (blocker search)
   GLuint ground_shadow_fbo = 0, ground_shadow_tex = 0;  // R8, shadowFactor on the ground plane
   int ground_shadow_size = 0;
   LightFrustum frustum;
@@ -397,7 +395,8 @@ static void uploadWithMaterials(const MeshData& m, GpuMesh& g) {
     glGenTextures(1, &tex);
     glBindTexture(GL_TEXTURE_2D, tex);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8_ALPHA8, img.width, img.height, 0, GL_RGBA, GL_UNSIGNED_BYTE, img.rgba.data());
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8_ALPHA8, img.width, img.height, 0, GL_RGBA, GL_UNSIGNED_BYTE,
+                 img.rgba.data());
     glGenerateMipmap(GL_TEXTURE_2D);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -647,7 +646,8 @@ void Renderer::Impl::setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_
   glUniform1f(loc(prog, "u_texelWorld"), float(std::max(frustum.texel_world, 1e-9)));
   // The sun is 0.27 deg in radius; a softer 1.5 deg reads better at the scale of a head.
   glUniform1f(loc(prog, "u_penumbraSlope"), float(std::tan(kKeyLightAngularRadius)));
-  glUniform1f(loc(prog, "u_maxPenumbraTexels"), float(std::clamp(0.03 / std::max(frustum.texel_world, 1e-9), 2.0, 48.0)));
+  glUniform1f(loc(prog, "u_maxPenumbraTexels"),
+              float(std::clamp(0.03 / std::max(frustum.texel_world, 1e-9), 2.0, 48.0)));
   const Eigen::Vector3f top = params.background.cast<float>().cwiseMax(0.0f).cwiseMin(1.0f);
   // Brighter, slightly warm towards the horizon: reads as sky haze; the ground fades into it.
   const Eigen::Vector3f bottom = top + (Eigen::Vector3f(0.97f, 0.96f, 0.94f) - top) * 0.55f;

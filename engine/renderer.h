@@ -51,17 +51,17 @@ struct DebugLine {
 // and the fences cost nothing llvmpipe would not do anyway. With a hardware GPU the passes are
 // measured with GL_TIME_ELAPSED queries read one frame late (no stall); timed_on_gpu says which.
 struct RenderStats {
-  double submit_ms = 0.0;    // wall time of endFrame (all passes, CPU side included)
-  double shadow_ms = 0.0;    // shadow map (depth from the key light) + the ground's shadow texture
-  double main_ms = 0.0;      // background + ground + objects + lines
-  double resolve_ms = 0.0;   // MSAA resolve / post-process anti-aliasing into the output target
-  double readback_ms = 0.0;  // readPixels, which waits for the GPU (llvmpipe) to finish
-  bool timed_on_gpu = false; // pass times from GL timer queries (the previous frame's)
-  size_t triangles = 0;      // main pass, excluding ground and background
-  int draw_calls = 0;        // main pass
-  int samples = 0;           // MSAA samples actually used (1: none)
-  bool post_aa = false;      // the post-process anti-aliasing filter ran
-  bool draft = false;        // RenderQuality::Draft
+  double submit_ms = 0.0;     // wall time of endFrame (all passes, CPU side included)
+  double shadow_ms = 0.0;     // shadow map (depth from the key light) + the ground's shadow texture
+  double main_ms = 0.0;       // background + ground + objects + lines
+  double resolve_ms = 0.0;    // MSAA resolve / post-process anti-aliasing into the output target
+  double readback_ms = 0.0;   // readPixels, which waits for the GPU (llvmpipe) to finish
+  bool timed_on_gpu = false;  // pass times from GL timer queries (the previous frame's)
+  size_t triangles = 0;       // main pass, excluding ground and background
+  int draw_calls = 0;         // main pass
+  int samples = 0;            // MSAA samples actually used (1: none)
+  bool post_aa = false;       // the post-process anti-aliasing filter ran
+  bool draft = false;         // RenderQuality::Draft
 };
 
 class Renderer {

@@ -24,17 +24,20 @@ void drawHopper(const Hopper& hopper, const HopperSection& p, const World& world
   const Material rubber = material(p.foot_color, 0.08f, 12.0f);
 
   const Eigen::Vector3d half = 0.5 * p.body_size;
-  const auto at = [&](double x, double y, double z) { return Eigen::Vector3d(s.body_x + s.body_q * Eigen::Vector3d(x, y, z)); };
+  const auto at = [&](double x, double y, double z) {
+    return Eigen::Vector3d(s.body_x + s.body_q * Eigen::Vector3d(x, y, z));
+  };
   const double rz = half.z();
   const double ry = 0.75 * half.y();
   // Main hull: a capsule along the body's x axis, squashed look from two overlapping capsules.
   renderer.drawCapsule(at(-(half.x() - rz), 0.0, 0.0), at(half.x() - rz, 0.0, 0.0), rz, paint);
-  renderer.drawCapsule(at(-(half.x() - rz) * 0.8, 0.0, 0.15 * rz), at((half.x() - rz) * 0.8, 0.0, 0.15 * rz), 0.9 * rz, paint);
+  renderer.drawCapsule(at(-(half.x() - rz) * 0.8, 0.0, 0.15 * rz), at((half.x() - rz) * 0.8, 0.0, 0.15 * rz), 0.9 * rz,
+                       paint);
   // Side pods (the body's mass is spread out: its inertia is large) and a sensor dome on top.
-  renderer.drawTaperedCapsule(at(-0.55 * half.x(), ry + 0.3 * rz, -0.1 * rz), at(0.35 * half.x(), ry + 0.3 * rz, -0.1 * rz),
-                              0.55 * rz, 0.45 * rz, dark);
-  renderer.drawTaperedCapsule(at(-0.55 * half.x(), -(ry + 0.3 * rz), -0.1 * rz), at(0.35 * half.x(), -(ry + 0.3 * rz), -0.1 * rz),
-                              0.55 * rz, 0.45 * rz, dark);
+  renderer.drawTaperedCapsule(at(-0.55 * half.x(), ry + 0.3 * rz, -0.1 * rz),
+                              at(0.35 * half.x(), ry + 0.3 * rz, -0.1 * rz), 0.55 * rz, 0.45 * rz, dark);
+  renderer.drawTaperedCapsule(at(-0.55 * half.x(), -(ry + 0.3 * rz), -0.1 * rz),
+                              at(0.35 * half.x(), -(ry + 0.3 * rz), -0.1 * rz), 0.55 * rz, 0.45 * rz, dark);
   renderer.drawSphere(at(0.25 * half.x(), 0.0, 0.85 * rz), 0.45 * rz, metal);
   // Hip ball, upper leg (tube), foot (rod) and toe.
   renderer.drawSphere(s.hip, 1.35 * p.upper_radius, dark);

@@ -445,8 +445,8 @@ static GLuint compile(GLenum stage, const char* const* parts, int count, const c
     std::vector<char> log(size_t(std::max(n, 1)));
     glGetShaderInfoLog(s, GLsizei(log.size()), nullptr, log.data());
     if (err)
-      *err = std::string("shader ") + name + (stage == GL_VERTEX_SHADER ? " (vertex)" : " (fragment)") +
-             ": " + log.data();
+      *err =
+          std::string("shader ") + name + (stage == GL_VERTEX_SHADER ? " (vertex)" : " (fragment)") + ": " + log.data();
     glDeleteShader(s);
     return 0;
   }

@@ -6,21 +6,21 @@
 namespace ponyhop::shaders {
 
 // Vertex shaders.
-extern const char* const kMeshVS;       // meshes and boxes: per-draw model matrix (uniforms)
-extern const char* const kMeshMatVS;    // meshes with their own colours/texture coordinates
-extern const char* const kCapsuleVS;    // spheres / capsules / tapered capsules: one instanced draw
-extern const char* const kFullscreenVS; // full-screen triangle from gl_VertexID (ground shadow pass)
-extern const char* const kBackdropVS;   // full-screen triangle carrying each pixel's eye ray
-extern const char* const kLinesVS;      // debug lines
+extern const char* const kMeshVS;        // meshes and boxes: per-draw model matrix (uniforms)
+extern const char* const kMeshMatVS;     // meshes with their own colours/texture coordinates
+extern const char* const kCapsuleVS;     // spheres / capsules / tapered capsules: one instanced draw
+extern const char* const kFullscreenVS;  // full-screen triangle from gl_VertexID (ground shadow pass)
+extern const char* const kBackdropVS;    // full-screen triangle carrying each pixel's eye ray
+extern const char* const kLinesVS;       // debug lines
 // Fragment shaders.
-extern const char* const kLitFS;        // Blinn-Phong + rim, shadowed key light, fill, hemi ambient
-extern const char* const kMeshMatFS;    // kLitFS with the albedo times vertex colour and base-colour texture
-extern const char* const kBackdropFS;   // background + ground plane in one pass (ray-plane hit)
-extern const char* const kBackgroundFS; // the gradient alone (no ground)
-extern const char* const kGroundShadowFS; // the ground's soft shadow into a small texture
-extern const char* const kPostAaFS;    // post-process anti-aliasing of the finished frame
+extern const char* const kLitFS;           // Blinn-Phong + rim, shadowed key light, fill, hemi ambient
+extern const char* const kMeshMatFS;       // kLitFS with the albedo times vertex colour and base-colour texture
+extern const char* const kBackdropFS;      // background + ground plane in one pass (ray-plane hit)
+extern const char* const kBackgroundFS;    // the gradient alone (no ground)
+extern const char* const kGroundShadowFS;  // the ground's soft shadow into a small texture
+extern const char* const kPostAaFS;        // post-process anti-aliasing of the finished frame
 extern const char* const kLinesFS;
-extern const char* const kDepthFS;      // shadow pass (depth only)
+extern const char* const kDepthFS;  // shadow pass (depth only)
 
 // Compiles and links "#version 330 core" + the given sources. Returns 0 and fills `err` (with the
 // driver's log and the stage's name) on failure. Needs a current context with GL loaded.

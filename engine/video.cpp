@@ -117,9 +117,17 @@ bool encodeVideo(const std::string& frame_dir, const std::string& out_mp4, const
   const std::string tmp = out_mp4 + ".tmp";
   char fps[32];
   std::snprintf(fps, sizeof(fps), "%.6g", opt.fps);
-  std::vector<std::string> args = {
-      opt.ffmpeg, "-hide_banner", "-loglevel", "error", "-y", "-framerate", fps, "-start_number",
-      std::to_string(opt.start_number), "-i", (fs::path(frame_dir) / opt.pattern).string()};
+  std::vector<std::string> args = {opt.ffmpeg,
+                                   "-hide_banner",
+                                   "-loglevel",
+                                   "error",
+                                   "-y",
+                                   "-framerate",
+                                   fps,
+                                   "-start_number",
+                                   std::to_string(opt.start_number),
+                                   "-i",
+                                   (fs::path(frame_dir) / opt.pattern).string()};
   // yuv420p needs even sizes: pad odd ones by a pixel (of the edge colour would need a filter
   // graph; black padding of one pixel is invisible in players).
   const std::string pad = "pad=ceil(iw/2)*2:ceil(ih/2)*2";
@@ -131,7 +139,8 @@ bool encodeVideo(const std::string& frame_dir, const std::string& out_mp4, const
     args.insert(args.end(), {"-vf", pad, "-c:v", "libvpx-vp9", "-pix_fmt", "yuva420p", "-crf", "32", "-b:v", "0",
                              "-deadline", "good", "-cpu-used", "4", "-row-mt", "1"});
   } else {  // gif: one palette made for the whole video
-    args.insert(args.end(), {"-vf", "split[a][b];[a]palettegen=reserve_transparent=1[p];[b][p]paletteuse", "-loop", "0"});
+    args.insert(args.end(),
+                {"-vf", "split[a][b];[a]palettegen=reserve_transparent=1[p];[b][p]paletteuse", "-loop", "0"});
   }
   args.insert(args.end(), {"-f", container, tmp});
   const RunResult r = run(args);
@@ -141,8 +150,7 @@ bool encodeVideo(const std::string& frame_dir, const std::string& out_mp4, const
   }
   if (r.exit_code != 0) {
     fs::remove(tmp, ec);
-    if (err)
-      *err = out_mp4 + ": ffmpeg failed (exit " + std::to_string(r.exit_code) + "):\n" + tail(r.output, 12);
+    if (err) *err = out_mp4 + ": ffmpeg failed (exit " + std::to_string(r.exit_code) + "):\n" + tail(r.output, 12);
     return false;
   }
   fs::rename(tmp, out_mp4, ec);

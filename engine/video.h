@@ -8,11 +8,11 @@ namespace ponyhop {
 
 struct VideoOptions {
   double fps = 30.0;
-  int crf = 18;                              // x264 quality (lower = better, 18 ~ visually lossless)
-  std::string pattern = "frame_%05d.png";    // as written by FrameWriter
+  int crf = 18;                            // x264 quality (lower = better, 18 ~ visually lossless)
+  std::string pattern = "frame_%05d.png";  // as written by FrameWriter
   int start_number = 0;
-  std::string ffmpeg = "ffmpeg";             // program name or path
-  std::string container;                     // "" = from the output's extension (videoContainer)
+  std::string ffmpeg = "ffmpeg";  // program name or path
+  std::string container;          // "" = from the output's extension (videoContainer)
 };
 
 // True when the ffmpeg program can be started.

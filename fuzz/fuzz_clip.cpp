@@ -4,8 +4,8 @@
 #include <cstdint>
 #include <string>
 
-#include "sim/scene_io.h"
 #include "physics/keyframes.h"
+#include "sim/scene_io.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

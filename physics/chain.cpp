@@ -38,7 +38,8 @@ Chain addChain(World& world, const ChainParams& params, int parent, const Eigen:
   // Body z points from the bottom end to the top end: -d along the initial chain.
   const Eigen::Quaterniond q0 = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), -d);
   const Eigen::Vector3d g = world.params().gravity;
-  const Eigen::Vector3d down = g.norm() > 0.0 ? Eigen::Vector3d(g.normalized()) : Eigen::Vector3d(-Eigen::Vector3d::UnitZ());
+  const Eigen::Vector3d down =
+      g.norm() > 0.0 ? Eigen::Vector3d(g.normalized()) : Eigen::Vector3d(-Eigen::Vector3d::UnitZ());
   const Eigen::Vector3d half(0.0, 0.0, 0.5 * len);
 
   int previous = parent;
@@ -102,9 +103,7 @@ Eigen::Vector3d Chain::bottom(const World& world, int i) const {
   return world.body(links[i]).pointToWorld(Eigen::Vector3d(0.0, 0.0, -0.5 * length));
 }
 
-Eigen::Vector3d Chain::tip(const World& world) const {
-  return bottom(world, static_cast<int>(links.size()) - 1);
-}
+Eigen::Vector3d Chain::tip(const World& world) const { return bottom(world, static_cast<int>(links.size()) - 1); }
 
 std::vector<CapsuleSegment> Chain::segments(const World& world) const {
   std::vector<CapsuleSegment> out;

@@ -35,10 +35,10 @@ struct CapsuleSegment {
 struct Chain {
   int parent = kWorldBody;
   Eigen::Vector3d anchor_local = Eigen::Vector3d::Zero();  // in the parent's body frame
-  double length = 0.0;                                      // m, each link
-  std::vector<int> links;     // body indices, root first
-  std::vector<int> joints;    // joint indices (joint i: link i to its parent / previous link)
-  std::vector<double> radii;  // m, per link
+  double length = 0.0;                                     // m, each link
+  std::vector<int> links;                                  // body indices, root first
+  std::vector<int> joints;           // joint indices (joint i: link i to its parent / previous link)
+  std::vector<double> radii;         // m, per link
   double potential_reference = 0.0;  // J, gravity potential of the hanging-at-rest pose
 
   bool empty() const { return links.empty(); }

@@ -17,14 +17,14 @@ struct EnumNames<ChainAttach> {
 
 // Defaults are the canonical chain: identical solid cylinders, no damping, no stiffness, no drag.
 struct ChainParams {
-  int links = 8;                 // count
-  double length = 0.05;          // m, each link
-  double mass = 0.02;            // kg, the first link; tapered links scale with their volume
-  double radius = 0.01;          // m, the first link's radius
-  double taper = 1.0;            // tip radius / root radius (1: cylinders)
-  double damping = 0.0;          // N m s/rad, per joint, on the relative angular velocity
-  double stiffness = 0.0;        // N m/rad, per joint, bending toward the rest pose
-  double drag = 0.0;             // N s/m per metre of link, linear air drag on each link
+  int links = 8;                             // count
+  double length = 0.05;                      // m, each link
+  double mass = 0.02;                        // kg, the first link; tapered links scale with their volume
+  double radius = 0.01;                      // m, the first link's radius
+  double taper = 1.0;                        // tip radius / root radius (1: cylinders)
+  double damping = 0.0;                      // N m s/rad, per joint, on the relative angular velocity
+  double stiffness = 0.0;                    // N m/rad, per joint, bending toward the rest pose
+  double drag = 0.0;                         // N s/m per metre of link, linear air drag on each link
   Eigen::Vector3d direction{1.0, 0.0, 0.0};  // initial direction from the anchor (unit)
   ChainAttach attach = ChainAttach::Anchor;
 
@@ -32,8 +32,15 @@ struct ChainParams {
   void reflect(V& v) {
     // Slider to 128: the dense solver is O(n^3), beyond ~100 links a step takes long (typed: 4096).
     v("links", links,
-      {.min = 1, .max = 4096, .help = "Number of links", .log = true, .apply = Apply::Restart, .soft_min = 1, .soft_max = 128});
-    v("length", length, {.unit = "m", .min = 1e-4, .max = 10, .help = "Length of each link", .log = true, .apply = Apply::Restart});
+      {.min = 1,
+       .max = 4096,
+       .help = "Number of links",
+       .log = true,
+       .apply = Apply::Restart,
+       .soft_min = 1,
+       .soft_max = 128});
+    v("length", length,
+      {.unit = "m", .min = 1e-4, .max = 10, .help = "Length of each link", .log = true, .apply = Apply::Restart});
     v("mass", mass, {.unit = "kg", .min = 1e-6, .max = 1e4, .help = "Mass of the first link", .log = true});
     v("radius", radius, {.unit = "m", .min = 1e-5, .max = 1, .help = "Radius of the first link", .log = true});
     v("taper", taper, {.min = 0.05, .max = 1.0, .help = "Tip radius over root radius"});
@@ -42,7 +49,8 @@ struct ChainParams {
     v("stiffness", stiffness,
       {.unit = "N m/rad", .min = 0, .max = 100, .help = "Bending stiffness toward the rest pose", .log = true});
     v("drag", drag, {.unit = "N s/m^2", .min = 0, .max = 100, .help = "Air drag per metre of link", .log = true});
-    v("direction", direction, {.min = -1, .max = 1, .help = "Initial direction from the anchor", .apply = Apply::Restart});
+    v("direction", direction,
+      {.min = -1, .max = 1, .help = "Initial direction from the anchor", .apply = Apply::Restart});
     v("attach", attach, {.help = "What the first link hangs from", .apply = Apply::Restart});
   }
 };

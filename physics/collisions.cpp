@@ -69,7 +69,9 @@ int projectedGaussSeidel(const Eigen::MatrixXd& d, const Eigen::VectorXd& u0, co
       if (blocks[c].second != 3) continue;
       const int n = blocks[c].first;
       const bool inside = std::hypot(p(n + 1), p(n + 2)) < mu[c] * p(n) * (1.0 - 1e-12);
-      if (inside) tangent_residual = std::max(tangent_residual, std::hypot(u(n + 1), u(n + 2)) / std::max(d(n + 1, n + 1), 1e-300));
+      if (inside)
+        tangent_residual =
+            std::max(tangent_residual, std::hypot(u(n + 1), u(n + 2)) / std::max(d(n + 1, n + 1), 1e-300));
     }
     if (change <= 1e-13 * scale && tangent_residual <= 1e-12 * scale) break;
   }
@@ -100,14 +102,15 @@ void Collisions::addConeLimit(int parent, const Eigen::Vector3d& parent_axis, in
 void Collisions::addTwistLimit(int parent, int child, const Eigen::Vector3d& child_axis, double max_angle,
                                const std::vector<RigidBody>& bodies) {
   const Eigen::Quaterniond rest = bodyOf(bodies, parent).q.conjugate() * bodyOf(bodies, child).q;
-  limits_.push_back({true, parent, child, Eigen::Vector3d::Zero(), child_axis.normalized(), rest.normalized(),
-                     max_angle});
+  limits_.push_back(
+      {true, parent, child, Eigen::Vector3d::Zero(), child_axis.normalized(), rest.normalized(), max_angle});
 }
 
 void Collisions::attach(World& world) {
   if (world.reduced()) {
-    world.fail("collisions: physics.solver = featherstone does not take contact or limit rows (reduced coordinates); "
-               "use solver = tree or dense");
+    world.fail(
+        "collisions: physics.solver = featherstone does not take contact or limit rows (reduced coordinates); "
+        "use solver = tree or dense");
     return;
   }
   world.addContactSet(shared_from_this());
@@ -188,8 +191,7 @@ bool Collisions::impactIn(const std::vector<RigidBody>& bodies) const {
   return false;
 }
 
-void Collisions::buildJacobians(const std::vector<RigidBody>& bodies, const std::vector<Row>& rows,
-                                bool normals_only) {
+void Collisions::buildJacobians(const std::vector<RigidBody>& bodies, const std::vector<Row>& rows, bool normals_only) {
   jrows_.clear();
   for (size_t c = 0; c < rows.size(); ++c) {
     const Row& r = rows[c];
@@ -284,7 +286,8 @@ std::string Collisions::resolve(std::vector<RigidBody>& bodies, const Constraint
   }
   const double energy_before = [&] {
     double e = 0.0;
-    for (const RigidBody& b : bodies) if (b.isDynamic()) e += b.kineticEnergy();
+    for (const RigidBody& b : bodies)
+      if (b.isDynamic()) e += b.kineticEnergy();
     return e;
   }();
   Eigen::VectorXd p;
@@ -298,7 +301,8 @@ std::string Collisions::resolve(std::vector<RigidBody>& bodies, const Constraint
     }
   }
   double energy_after = 0.0;
-  for (const RigidBody& b : bodies) if (b.isDynamic()) energy_after += b.kineticEnergy();
+  for (const RigidBody& b : bodies)
+    if (b.isDynamic()) energy_after += b.kineticEnergy();
   stats_.max_energy_gain = std::max(stats_.max_energy_gain, energy_after - energy_before);
 
   // 2. Positions: push out what overlaps, keep the joints.

@@ -49,18 +49,18 @@ namespace ponyhop {
 class World;
 
 struct CollisionParams {
-  double friction = 0.5;          // Coulomb's mu (both static and kinetic)
-  double restitution = 0.0;       // e: normal velocity after / before an impact
-  double margin = 0.0;            // m, every shape is inflated by this skin
-  double impact_tolerance = 1e-4; // m, a new contact this deep at the end of a substep splits it
+  double friction = 0.5;           // Coulomb's mu (both static and kinetic)
+  double restitution = 0.0;        // e: normal velocity after / before an impact
+  double margin = 0.0;             // m, every shape is inflated by this skin
+  double impact_tolerance = 1e-4;  // m, a new contact this deep at the end of a substep splits it
 };
 
 struct CollisionStats {
-  int active = 0;                 // contact and limit rows' constraints active after the last stage
-  double deepest = 0.0;           // m, deepest overlap found by the last stage (before pushing out)
+  int active = 0;                   // contact and limit rows' constraints active after the last stage
+  double deepest = 0.0;             // m, deepest overlap found by the last stage (before pushing out)
   double max_energy_gain = -1e300;  // J, kinetic energy after - before the impulses, any stage
-  int impacts = 0;                // stages with at least one newly touching contact
-  int iterations = 0;             // projected Gauss-Seidel sweeps of the last stage
+  int impacts = 0;                  // stages with at least one newly touching contact
+  int iterations = 0;               // projected Gauss-Seidel sweeps of the last stage
 };
 
 class Collisions final : public ContactSet, public std::enable_shared_from_this<Collisions> {
@@ -103,7 +103,7 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
 
   // A found contact or active limit: one unilateral constraint (1 or 3 rows).
   struct Row {
-    int a = kWorldBody, b = kWorldBody;  // the impulse acts + on a, - on b
+    int a = kWorldBody, b = kWorldBody;               // the impulse acts + on a, - on b
     Eigen::Vector3d point = Eigen::Vector3d::Zero();  // contacts: world point
     Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
     bool angular = false;  // limits: rows act on rotations only (normal = the axis)

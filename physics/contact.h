@@ -50,13 +50,13 @@ enum class ContactMode { Off, Stick, Slide };
 // Shared between the constraint, the friction element and the manager.
 struct ContactState {
   ContactMode mode = ContactMode::Off;
-  bool twist = false;                                   // Stick: the torsion row is active
-  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();     // Stick: where c is held (world)
-  Eigen::Vector3d twist_ref = Eigen::Vector3d::UnitY(); // Stick: g (world, horizontal)
-  Eigen::Vector3d slip_dir = Eigen::Vector3d::UnitX();  // Slide: unit direction of slip
-  double normal_force = 0.0;                            // N, last solve (0 when Off)
+  bool twist = false;                                        // Stick: the torsion row is active
+  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();          // Stick: where c is held (world)
+  Eigen::Vector3d twist_ref = Eigen::Vector3d::UnitY();      // Stick: g (world, horizontal)
+  Eigen::Vector3d slip_dir = Eigen::Vector3d::UnitX();       // Slide: unit direction of slip
+  double normal_force = 0.0;                                 // N, last solve (0 when Off)
   Eigen::Vector3d friction_force = Eigen::Vector3d::Zero();  // N, tangential, last solve
-  double twist_torque = 0.0;                            // N m, last solve
+  double twist_torque = 0.0;                                 // N m, last solve
 };
 
 class FootContact final : public Constraint {
@@ -67,9 +67,7 @@ class FootContact final : public Constraint {
   int dimension() const override;
   const char* typeName() const override { return "contact"; }
   void evaluate(const RigidBody& a, const RigidBody& b, ConstraintRows& out) const override;
-  double error(const ConstraintRows& rows) const override {
-    return rows.C.size() ? rows.C.cwiseAbs().maxCoeff() : 0.0;
-  }
+  double error(const ConstraintRows& rows) const override { return rows.C.size() ? rows.C.cwiseAbs().maxCoeff() : 0.0; }
 
  private:
   Eigen::Vector3d center_;
@@ -95,8 +93,8 @@ class KineticFriction final : public ForceElement {
 struct ContactStats {
   int touchdowns = 0;
   int sliding_touchdowns = 0;
-  int slips = 0;          // Stick -> Slide transitions in stance
-  int twist_slips = 0;    // torsion rows dropped
+  int slips = 0;                              // Stick -> Slide transitions in stance
+  int twist_slips = 0;                        // torsion rows dropped
   double max_touchdown_energy_gain = -1e300;  // J, kinetic energy after - before the impulse
 };
 

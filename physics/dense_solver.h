@@ -3,8 +3,8 @@
 // O(n^3)"); the reference that sparser solvers are checked against.
 #pragma once
 
-#include <Eigen/Core>
 #include <Eigen/Cholesky>
+#include <Eigen/Core>
 #include <vector>
 
 #include "physics/constraint_solver.h"

@@ -16,7 +16,9 @@ using Matrix6 = ArticulatedSystem::Matrix6;
 using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 6, 6>;
 using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, 6, 1>;
 
-const RigidBody& bodyOf(const std::vector<RigidBody>& bodies, int i) { return i == kWorldBody ? worldBody() : bodies[i]; }
+const RigidBody& bodyOf(const std::vector<RigidBody>& bodies, int i) {
+  return i == kWorldBody ? worldBody() : bodies[i];
+}
 bool dynamicBody(const std::vector<RigidBody>& bodies, int i) { return i != kWorldBody && bodies[i].isDynamic(); }
 
 // X = [ I  -d~ ; 0  I ]: velocity of the point x_i from the twist at x_p (d = x_i - x_p);
@@ -202,11 +204,12 @@ std::string ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const
       nodes_.push_back(nd);
       return "";
     };
-    if (std::string e = addNode(root, held >= 0 ? (joints[grounding[root]]->bodyA() == root
-                                                        ? joints[grounding[root]]->bodyB()
-                                                        : joints[grounding[root]]->bodyA())
-                                                 : kWorldBody,
-                                held >= 0 ? grounding[root] : -1);
+    if (std::string e =
+            addNode(root,
+                    held >= 0 ? (joints[grounding[root]]->bodyA() == root ? joints[grounding[root]]->bodyB()
+                                                                          : joints[grounding[root]]->bodyA())
+                              : kWorldBody,
+                    held >= 0 ? grounding[root] : -1);
         !e.empty()) {
       return fail(e);
     }
@@ -462,17 +465,21 @@ void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorX
     pass_[i].pa = biasForce(b, inertia_world);
   }
   const auto dispatch = [](int dofs, auto&& f1, auto&& f3, auto&& f6) {
-    if (dofs == 3) f3();
-    else if (dofs == 1) f1();
-    else f6();
+    if (dofs == 3)
+      f3();
+    else if (dofs == 1)
+      f1();
+    else
+      f6();
   };
   for (size_t r = n; r-- > 0;) {
-    dispatch(nodes_[r].dofs, [&] { abaInward<1>(r, tau); }, [&] { abaInward<3>(r, tau); },
-             [&] { abaInward<6>(r, tau); });
+    dispatch(
+        nodes_[r].dofs, [&] { abaInward<1>(r, tau); }, [&] { abaInward<3>(r, tau); }, [&] { abaInward<6>(r, tau); });
   }
   for (size_t i = 0; i < n; ++i) {
-    dispatch(nodes_[i].dofs, [&] { abaOutward<1>(i, udot); }, [&] { abaOutward<3>(i, udot); },
-             [&] { abaOutward<6>(i, udot); });
+    dispatch(
+        nodes_[i].dofs, [&] { abaOutward<1>(i, udot); }, [&] { abaOutward<3>(i, udot); },
+        [&] { abaOutward<6>(i, udot); });
   }
   // Accelerations and constraint forces of the bodies: F^J_i = I^A A + p^A, and a body's
   // constraint force F^J_i - sum_c X_c^T F^J_c (children come after parents: one pass back).
@@ -647,8 +654,8 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
       coords_ = c0_;
       for (size_t i = 0; i < nodes_.size(); ++i) {
         coords_.x[i] += h / 6.0 * (r[0].x[i] + 2.0 * r[1].x[i] + 2.0 * r[2].x[i] + r[3].x[i]);
-        coords_.q[i].coeffs() += h / 6.0 * (r[0].q[i].coeffs() + 2.0 * r[1].q[i].coeffs() +
-                                            2.0 * r[2].q[i].coeffs() + r[3].q[i].coeffs());
+        coords_.q[i].coeffs() +=
+            h / 6.0 * (r[0].q[i].coeffs() + 2.0 * r[1].q[i].coeffs() + 2.0 * r[2].q[i].coeffs() + r[3].q[i].coeffs());
         coords_.q[i].normalize();
         coords_.s[i] += h / 6.0 * (r[0].s[i] + 2.0 * r[1].s[i] + 2.0 * r[2].s[i] + r[3].s[i]);
       }
@@ -656,8 +663,9 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
       break;
     }
     default:
-      return std::string("solver 'featherstone' integrates in joint space with rk4 or symplectic_euler; "
-                         "physics.integrator = '") +
+      return std::string(
+                 "solver 'featherstone' integrates in joint space with rk4 or symplectic_euler; "
+                 "physics.integrator = '") +
              std::string(enumName(integrator)) + "' is not available with it";
   }
   hooks.kinematics(t + h);

@@ -96,15 +96,15 @@ class ArticulatedSystem {
   enum class Type { Free, Spherical, Prismatic };
   struct Node {
     Type type = Type::Free;
-    int body = -1;         // the child body
+    int body = -1;            // the child body
     int parent = kWorldBody;  // parent body index (world, kinematic or dynamic)
-    int parent_node = -1;  // node of the parent when it is dynamic
-    int dof = 0;           // first index in u
+    int parent_node = -1;     // node of the parent when it is dynamic
+    int dof = 0;              // first index in u
     int dofs = 0;
-    Eigen::Vector3d point_parent = Eigen::Vector3d::Zero();  // spherical: in the parent's frame
-    Eigen::Vector3d point_child = Eigen::Vector3d::Zero();   // spherical: in the child's frame
-    Eigen::Vector3d offset = Eigen::Vector3d::Zero();        // prismatic: e (parent frame)
-    Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();         // prismatic: z (parent frame)
+    Eigen::Vector3d point_parent = Eigen::Vector3d::Zero();    // spherical: in the parent's frame
+    Eigen::Vector3d point_child = Eigen::Vector3d::Zero();     // spherical: in the child's frame
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();          // prismatic: e (parent frame)
+    Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();           // prismatic: z (parent frame)
     Eigen::Quaterniond rest = Eigen::Quaterniond::Identity();  // prismatic: Q0
     std::vector<int> children;
   };
@@ -117,10 +117,10 @@ class ArticulatedSystem {
   // Per-node kinematics at the current state. S is 6 x dofs in the first columns of a fixed
   // 6 x 6 (no dynamic sizes in the passes: they are specialized on dofs = 1, 3, 6).
   struct Kinematics {
-    Eigen::Matrix3d R;  // the body's rotation (body to world)
-    Eigen::Matrix3d Rp;  // spherical: the parent's rotation (S = [r_i~; I] Rp)
+    Eigen::Matrix3d R;    // the body's rotation (body to world)
+    Eigen::Matrix3d Rp;   // spherical: the parent's rotation (S = [r_i~; I] Rp)
     Eigen::Vector3d r_i;  // spherical: the joint point from the child's centre (world)
-    Eigen::Vector3d d;  // x_i - x_p
+    Eigen::Vector3d d;    // x_i - x_p
     Matrix6 S;
     Vector6d c;
     Vector6d a_base;  // X A_p for a prescribed parent (zero otherwise)

@@ -32,7 +32,8 @@ std::shared_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain,
   std::vector<int> capsules(static_cast<size_t>(n), -1);
   for (int i = 0; i < n; ++i) {
     const double r_next = i + 1 < n ? chain.radii[i + 1] : chain.radii[i];
-    if (i > 0 || params.self) capsules[i] = col->addShape(chain.links[i], Shape::capsule(0.5 * chain.length, chain.radii[i], r_next));
+    if (i > 0 || params.self)
+      capsules[i] = col->addShape(chain.links[i], Shape::capsule(0.5 * chain.length, chain.radii[i], r_next));
     if (i > 0) col->addPair(capsules[i], head);
   }
   if (params.self) {
@@ -43,13 +44,15 @@ std::shared_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain,
   for (int i = 1; i < n; ++i) {
     const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();  // a link's axis in its body frame
     if (params.joint_cone > 0.0) col->addConeLimit(chain.links[i - 1], z, chain.links[i], z, params.joint_cone * deg);
-    if (params.joint_twist > 0.0) col->addTwistLimit(chain.links[i - 1], chain.links[i], z, params.joint_twist * deg, world.bodies());
+    if (params.joint_twist > 0.0)
+      col->addTwistLimit(chain.links[i - 1], chain.links[i], z, params.joint_twist * deg, world.bodies());
   }
   if (n > 0 && params.root_cone > 0.0) {
     // The rest direction of link 0's axis in the head's frame.
     const RigidBody& h = world.body(head_body);
     const Eigen::Vector3d axis = h.q.conjugate() * (world.body(chain.links[0]).q * Eigen::Vector3d::UnitZ());
-    col->addConeLimit(head_body, axis, chain.links[0], Eigen::Vector3d::UnitZ(), params.root_cone * std::numbers::pi / 180.0);
+    col->addConeLimit(head_body, axis, chain.links[0], Eigen::Vector3d::UnitZ(),
+                      params.root_cone * std::numbers::pi / 180.0);
   }
   return col;
 }

@@ -16,9 +16,9 @@
 namespace ponyhop {
 
 struct HeadCollisionParams {
-  double cell = 0.003;       // m, grid cell of the head's signed distance field
-  double margin = 0.001;     // m, skin kept between a link and the head
-  double friction = 0.3;     // hair on skin
+  double cell = 0.003;    // m, grid cell of the head's signed distance field
+  double margin = 0.001;  // m, skin kept between a link and the head
+  double friction = 0.3;  // hair on skin
   double restitution = 0.0;
   double root_cone = 75.0;   // deg, the first link's swing from its rest direction (0: none)
   double joint_cone = 0.0;   // deg, each joint's swing: a link's axis from its parent link's (0: none)
@@ -27,13 +27,27 @@ struct HeadCollisionParams {
 
   template <class V>
   void reflect(V& v) {
-    v("cell", cell, {.unit = "m", .min = 5e-4, .max = 0.05, .help = "Grid cell of the head's distance field (finer: closer to the mesh, slower to build)", .log = true});
+    v("cell", cell,
+      {.unit = "m",
+       .min = 5e-4,
+       .max = 0.05,
+       .help = "Grid cell of the head's distance field (finer: closer to the mesh, slower to build)",
+       .log = true});
     v("margin", margin, {.unit = "m", .min = 0, .max = 0.05, .help = "Skin kept between a link and the head"});
     v("friction", friction, {.min = 0, .max = 5, .help = "Coulomb friction of hair on the head"});
     v("restitution", restitution, {.min = 0, .max = 1, .help = "Bounce at an impact (0: none)"});
-    v("root_cone", root_cone, {.unit = "deg", .min = 0, .max = 180, .help = "The first link's swing from its rest direction (a hair tie; 0: free)"});
-    v("joint_cone", joint_cone, {.unit = "deg", .min = 0, .max = 180, .help = "Each joint's swing limit between neighbouring links (0: free)"});
-    v("joint_twist", joint_twist, {.unit = "deg", .min = 0, .max = 180, .help = "Each joint's twist limit about the link from the rest pose (0: free)"});
+    v("root_cone", root_cone,
+      {.unit = "deg",
+       .min = 0,
+       .max = 180,
+       .help = "The first link's swing from its rest direction (a hair tie; 0: free)"});
+    v("joint_cone", joint_cone,
+      {.unit = "deg", .min = 0, .max = 180, .help = "Each joint's swing limit between neighbouring links (0: free)"});
+    v("joint_twist", joint_twist,
+      {.unit = "deg",
+       .min = 0,
+       .max = 180,
+       .help = "Each joint's twist limit about the link from the rest pose (0: free)"});
     v("self", self, {.help = "Links two or more apart collide with each other"});
   }
 };

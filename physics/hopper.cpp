@@ -46,8 +46,8 @@ std::string validate(const HopperParams& p, const std::string& prefix) {
            " m: must exceed max_length - toe_radius - foot_length (the foot would leave the upper leg)";
   }
   if (p.position.z() - p.hip_offset - p.rest_length < 0.0) {
-    return prefix + ".position.z = " + number(p.position.z()) + " m: the foot would start below the ground (needs >= " +
-           number(p.hip_offset + p.rest_length) + " m)";
+    return prefix + ".position.z = " + number(p.position.z()) +
+           " m: the foot would start below the ground (needs >= " + number(p.hip_offset + p.rest_length) + " m)";
   }
   for (size_t i = 1; i < p.script.size(); ++i) {
     if (p.script[i].t < p.script[i - 1].t) {
@@ -102,8 +102,7 @@ LegState legState(const HopperModel& m, const std::vector<RigidBody>& bodies) {
 //      (the ground holds the leg):  C = z_b . x_world -> 0, C = z_b . y_world -> 0 (upright),
 //                              C = x_b . h_perp -> 0, h_perp = (-sin psi_d, cos psi_d, 0) (heading)
 //    The weights are setpoints (0 or 1, set by Think), not branches in the force law.
-void computeHopperForces(const HopperModel& m, const HopperSetpoints& s, double /*t*/,
-                         std::vector<RigidBody>& bodies) {
+void computeHopperForces(const HopperModel& m, const HopperSetpoints& s, double /*t*/, std::vector<RigidBody>& bodies) {
   const HopperParams& p = m.params;
   RigidBody& body = bodies[m.body];
   RigidBody& upper = bodies[m.upper];
@@ -112,11 +111,10 @@ void computeHopperForces(const HopperModel& m, const HopperSetpoints& s, double 
   // 1. Leg spring and stops.
   const LegState leg = legState(m, bodies);
   const double r = leg.length, rd = leg.rate, eps = p.stop_smoothing;
-  const double f = p.leg_stiffness * (s.leg_length - r) - p.leg_damping * rd +
-                   p.stop_stiffness * smoothRamp(p.min_length - r, eps) -
-                   p.stop_damping * rd * smoothStep(p.min_length - r, eps) -
-                   p.stop_stiffness * smoothRamp(r - p.max_length, eps) -
-                   p.stop_damping * rd * smoothStep(r - p.max_length, eps);
+  const double f =
+      p.leg_stiffness * (s.leg_length - r) - p.leg_damping * rd + p.stop_stiffness * smoothRamp(p.min_length - r, eps) -
+      p.stop_damping * rd * smoothStep(p.min_length - r, eps) - p.stop_stiffness * smoothRamp(r - p.max_length, eps) -
+      p.stop_damping * rd * smoothStep(r - p.max_length, eps);
   foot.force -= f * leg.axis;
   upper.force += f * leg.axis;
 
@@ -125,7 +123,8 @@ void computeHopperForces(const HopperModel& m, const HopperSetpoints& s, double 
   const Eigen::Vector3d xb = axisOf(body, 0), yb = axisOf(body, 1), zb = axisOf(body, 2);
   const Eigen::Vector3d dw = upper.w - body.w;
   Eigen::Vector3d torque_leg = Eigen::Vector3d::Zero();  // on the upper leg; the body gets -torque_leg
-  const auto relative = [&](const Eigen::Vector3d& sa, const Eigen::Vector3d& tb, double ks, double kd, double cd) -> Eigen::Vector3d {
+  const auto relative = [&](const Eigen::Vector3d& sa, const Eigen::Vector3d& tb, double ks, double kd,
+                            double cd) -> Eigen::Vector3d {
     const Eigen::Vector3d n = sa.cross(tb);
     return softConstraintForce(ks, kd, sa.dot(tb), cd, dw.dot(n)) * n;  // f (s x t)
   };
@@ -134,7 +133,8 @@ void computeHopperForces(const HopperModel& m, const HopperSetpoints& s, double 
   torque_leg -= s.place_weight * relative(xa, yb, p.twist_stiffness, p.twist_damping, 0.0);
 
   Eigen::Vector3d torque_body = Eigen::Vector3d::Zero();  // on the body; the leg gets -torque_body
-  const auto absolute = [&](const Eigen::Vector3d& sb, const Eigen::Vector3d& t_world, double ks, double kd) -> Eigen::Vector3d {
+  const auto absolute = [&](const Eigen::Vector3d& sb, const Eigen::Vector3d& t_world, double ks,
+                            double kd) -> Eigen::Vector3d {
     const Eigen::Vector3d n = sb.cross(t_world);
     return softConstraintForce(ks, kd, sb.dot(t_world), 0.0, body.w.dot(n)) * n;
   };
@@ -212,9 +212,9 @@ Hopper::Hopper(Key, World& world, const HopperParams& params) : params_(params) 
   m.hip_in_upper = 0.5 * p.upper_length * ez;
   m.toe_in_foot = -0.5 * p.foot_length * ez;
   m.hip_joint = world.addJoint(std::make_unique<SphericalJoint>(m.body, m.hip_in_body, m.upper, m.hip_in_upper));
-  m.knee_joint = world.addJoint(std::make_unique<PrismaticJoint>(m.upper, Eigen::Vector3d::Zero(),
-                                                                 Eigen::Quaterniond::Identity(), m.foot,
-                                                                 Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
+  m.knee_joint =
+      world.addJoint(std::make_unique<PrismaticJoint>(m.upper, Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity(),
+                                                      m.foot, Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
   contact_ = std::make_shared<GroundContact>(world, m.foot, m.toe_in_foot, p.toe_radius, p.friction, p.twist_radius);
 
   mem_.setpoints.leg_length = p.rest_length;
@@ -309,8 +309,8 @@ void Hopper::think(World& world) {
           mem_.last_apex = mem_.flight_max_z;
           // Per-hop trim of the thrust from the apex error (integral action on the losses the
           // energy estimate below does not know: damping, the foot's impact, a ponytail).
-          mem_.height_trim = std::clamp(mem_.height_trim + p.height_gain * (cmd.height - mem_.last_apex), -p.thrust_max,
-                                    p.thrust_max);
+          mem_.height_trim =
+              std::clamp(mem_.height_trim + p.height_gain * (cmd.height - mem_.last_apex), -p.thrust_max, p.thrust_max);
         }
         // Per-hop integral of the speed error on the foot placement (the neutral point
         // x' T_s / 2 is only approximately where the hopper neither speeds up nor slows down).
@@ -384,8 +384,8 @@ void Hopper::updateSetpoints(const World& world, const HopperCommand& cmd, doubl
       s.attitude_weight = 0.0;
       // Foot placement (Raibert): neutral point plus the speed correction, both axes.
       const Eigen::Vector3d v = centerOfMassVelocity(world);
-      Eigen::Vector2d xf = v.head<2>() * mem_.stance_time / 2.0 +
-                           p.speed_gain * (v.head<2>() - mem_.desired_velocity) + mem_.speed_trim;
+      Eigen::Vector2d xf =
+          v.head<2>() * mem_.stance_time / 2.0 + p.speed_gain * (v.head<2>() - mem_.desired_velocity) + mem_.speed_trim;
       // x_f is measured from the centre of mass; the leg pivots at the hip, which a pitched or
       // rolled body carries off to the side (hip_offset sin(tilt)).
       const Eigen::Vector3d hip = body.pointToWorld(model_.hip_in_body);

@@ -106,10 +106,10 @@ class Hopper final : public Controller {
   // ("hopper.command.height = 9: must be ..."), leaving the command unchanged.
   std::string setCommand(const HopperCommand& command);
   bool inContact() const { return contact_->inContact(); }
-  int hops() const { return mem_.hops; }                     // liftoffs so far
+  int hops() const { return mem_.hops; }  // liftoffs so far
   double measuredStanceTime() const { return mem_.stance_time; }
-  double lastApex() const { return mem_.last_apex; }         // m, body height at the last apex
-  double thrust() const { return mem_.thrust; }              // m, last thrust setpoint extension
+  double lastApex() const { return mem_.last_apex; }                         // m, body height at the last apex
+  double thrust() const { return mem_.thrust; }                              // m, last thrust setpoint extension
   Eigen::Vector2d desiredVelocity() const { return mem_.desired_velocity; }  // m/s, slewed command
 
   LegState leg(const World& world) const { return legState(model_, world.bodies()); }
@@ -144,8 +144,8 @@ class Hopper final : public Controller {
     double last_apex = 0.0;
     double thrust = 0.0;
     double height_trim = 0.0;
-    Eigen::Vector2d speed_trim = Eigen::Vector2d::Zero();  // m, integral part of the foot placement
-    double heading = 0.0;                                  // rad, slewed heading setpoint
+    Eigen::Vector2d speed_trim = Eigen::Vector2d::Zero();        // m, integral part of the foot placement
+    double heading = 0.0;                                        // rad, slewed heading setpoint
     Eigen::Vector2d desired_velocity = Eigen::Vector2d::Zero();  // m/s, slewed velocity command
     int hops = 0;
     int touchdowns = 0;

@@ -53,10 +53,10 @@ struct HopperCommandKey {
 
 struct HopperParams {
   // Body: a massive box-like body; the hip sits below its centre of mass.
-  double body_mass = 10.0;                       // kg
-  Eigen::Vector3d body_inertia{0.6, 0.6, 0.8};   // kg m^2, principal, body frame (x forward, z up)
-  Eigen::Vector3d body_size{0.56, 0.34, 0.2};    // m, drawn size (x, y, z)
-  double hip_offset = 0.12;                      // m, hip below the body's centre of mass
+  double body_mass = 10.0;                      // kg
+  Eigen::Vector3d body_inertia{0.6, 0.6, 0.8};  // kg m^2, principal, body frame (x forward, z up)
+  Eigen::Vector3d body_size{0.56, 0.34, 0.2};   // m, drawn size (x, y, z)
+  double hip_offset = 0.12;                     // m, hip below the body's centre of mass
 
   // Leg: an upper leg (tube) hanging from the hip, a foot (rod + toe sphere) sliding in it.
   double upper_mass = 0.7;      // kg
@@ -91,15 +91,15 @@ struct HopperParams {
   double max_yaw_rate = 60.0;          // deg/s, heading setpoint slew rate
 
   // Controller (Raibert's three parts; thresholds of the state machine).
-  double speed_gain = 0.08;        // s, k_xdot in x_f = xdot T_s / 2 + k_xdot (xdot - xdot_d)
-  double max_acceleration = 0.5;   // m/s^2, desired velocity slews toward the command this fast
+  double speed_gain = 0.08;           // s, k_xdot in x_f = xdot T_s / 2 + k_xdot (xdot - xdot_d)
+  double max_acceleration = 0.5;      // m/s^2, desired velocity slews toward the command this fast
   double speed_integral_gain = 0.02;  // s, per-hop integral of the speed error on x_f
-  double stance_time = 0.2;        // s, T_s before the first stance is measured
-  double max_leg_angle = 25.0;     // deg, largest foot placement angle from vertical
-  double swing_delay = 0.04;       // s, after liftoff before the leg swings (then as long to blend in)
-  double height_gain = 0.3;        // m/m, thrust correction per metre of apex error (per hop)
-  double load_depth = 0.02;        // m, LOADING -> COMPRESSION when r < rest_length - load_depth
-  double unload_margin = 0.02;     // m, THRUST -> UNLOADING when r > r_set - unload_margin
+  double stance_time = 0.2;           // s, T_s before the first stance is measured
+  double max_leg_angle = 25.0;        // deg, largest foot placement angle from vertical
+  double swing_delay = 0.04;          // s, after liftoff before the leg swings (then as long to blend in)
+  double height_gain = 0.3;           // m/m, thrust correction per metre of apex error (per hop)
+  double load_depth = 0.02;           // m, LOADING -> COMPRESSION when r < rest_length - load_depth
+  double unload_margin = 0.02;        // m, THRUST -> UNLOADING when r > r_set - unload_margin
 
   // Ground contact (plane z = 0).
   double friction = 1.0;       // Coulomb mu
@@ -108,15 +108,19 @@ struct HopperParams {
   // Initial state and commands.
   Eigen::Vector3d position{0.0, 0.0, 1.05};  // m, body centre of mass at t = 0 (leg vertical, at rest length)
   Eigen::Vector3d velocity{0.0, 0.0, 0.0};   // m/s at t = 0
-  HopperCommand command;                      // used when no script key applies
-  std::vector<HopperCommandKey> script;       // a course: each key holds from its t on
+  HopperCommand command;                     // used when no script key applies
+  std::vector<HopperCommandKey> script;      // a course: each key holds from its t on
 
   template <class V>
   void reflect(V& v) {
     v("body_mass", body_mass, {.unit = "kg", .min = 0.01, .max = 1e4, .help = "Mass of the body", .log = true});
     v("body_inertia", body_inertia,
       {.unit = "kg m^2", .min = 1e-5, .max = 1e4, .help = "Principal inertia of the body (x fwd, z up)"});
-    v("body_size", body_size, {.unit = "m", .min = 0.01, .max = 10, .help = "Size of the body (x fwd, z up): drawn, and where a ponytail hangs"});
+    v("body_size", body_size,
+      {.unit = "m",
+       .min = 0.01,
+       .max = 10,
+       .help = "Size of the body (x fwd, z up): drawn, and where a ponytail hangs"});
     v("hip_offset", hip_offset, {.unit = "m", .min = 0, .max = 5, .help = "Hip below the body's centre of mass"});
     v("upper_mass", upper_mass, {.unit = "kg", .min = 1e-3, .max = 1e3, .help = "Mass of the upper leg", .log = true});
     v("upper_length", upper_length, {.unit = "m", .min = 0.01, .max = 10, .help = "Length of the upper leg"});
@@ -132,16 +136,23 @@ struct HopperParams {
     v("leg_damping", leg_damping, {.unit = "N s/m", .min = 0, .max = 1e4, .help = "Leg spring damping"});
     v("stop_stiffness", stop_stiffness, {.unit = "N/m", .min = 1, .max = 1e7, .help = "End stops", .log = true});
     v("stop_damping", stop_damping, {.unit = "N s/m", .min = 0, .max = 1e5, .help = "End stop damping"});
-    v("stop_smoothing", stop_smoothing, {.unit = "m", .min = 1e-6, .max = 0.1, .help = "Stop engagement width", .log = true});
+    v("stop_smoothing", stop_smoothing,
+      {.unit = "m", .min = 1e-6, .max = 0.1, .help = "Stop engagement width", .log = true});
     v("thrust_max", thrust_max, {.unit = "m", .min = 0, .max = 1, .help = "Largest thrust setpoint extension"});
     v("flight_retract", flight_retract, {.unit = "m", .min = 0, .max = 1, .help = "Leg shortening while rising"});
-    v("placement_stiffness", placement_stiffness, {.unit = "N m", .min = 0, .max = 1e5, .help = "Hip servo: leg direction (flight)"});
-    v("placement_damping", placement_damping, {.unit = "N m s", .min = 0, .max = 1e4, .help = "Hip servo damping (flight)"});
-    v("twist_stiffness", twist_stiffness, {.unit = "N m", .min = 0, .max = 1e4, .help = "Hip servo: leg twist (flight)"});
+    v("placement_stiffness", placement_stiffness,
+      {.unit = "N m", .min = 0, .max = 1e5, .help = "Hip servo: leg direction (flight)"});
+    v("placement_damping", placement_damping,
+      {.unit = "N m s", .min = 0, .max = 1e4, .help = "Hip servo damping (flight)"});
+    v("twist_stiffness", twist_stiffness,
+      {.unit = "N m", .min = 0, .max = 1e4, .help = "Hip servo: leg twist (flight)"});
     v("twist_damping", twist_damping, {.unit = "N m s", .min = 0, .max = 1e3, .help = "Leg twist damping (flight)"});
-    v("attitude_stiffness", attitude_stiffness, {.unit = "N m", .min = 0, .max = 1e5, .help = "Hip servo: body roll/pitch (stance)"});
-    v("attitude_damping", attitude_damping, {.unit = "N m s", .min = 0, .max = 1e4, .help = "Body roll/pitch damping (stance)"});
-    v("yaw_stiffness", yaw_stiffness, {.unit = "N m", .min = 0, .max = 1e5, .help = "Hip servo: body heading (stance)"});
+    v("attitude_stiffness", attitude_stiffness,
+      {.unit = "N m", .min = 0, .max = 1e5, .help = "Hip servo: body roll/pitch (stance)"});
+    v("attitude_damping", attitude_damping,
+      {.unit = "N m s", .min = 0, .max = 1e4, .help = "Body roll/pitch damping (stance)"});
+    v("yaw_stiffness", yaw_stiffness,
+      {.unit = "N m", .min = 0, .max = 1e5, .help = "Hip servo: body heading (stance)"});
     v("yaw_damping", yaw_damping, {.unit = "N m s", .min = 0, .max = 1e4, .help = "Body heading damping (stance)"});
     v("max_yaw_rate", max_yaw_rate, {.unit = "deg/s", .min = 1, .max = 3600, .help = "Heading setpoint slew rate"});
     v("speed_gain", speed_gain, {.unit = "s", .min = 0, .max = 1, .help = "k_xdot of foot placement"});
@@ -150,15 +161,20 @@ struct HopperParams {
     v("speed_integral_gain", speed_integral_gain,
       {.unit = "s", .min = 0, .max = 1, .help = "Per-hop integral of the speed error on foot placement"});
     v("stance_time", stance_time, {.unit = "s", .min = 0.01, .max = 2, .help = "Stance time before one is measured"});
-    v("max_leg_angle", max_leg_angle, {.unit = "deg", .min = 0, .max = 60, .help = "Largest placement angle from vertical"});
-    v("swing_delay", swing_delay, {.unit = "s", .min = 1e-3, .max = 1, .help = "Wait after liftoff before the leg swings"});
+    v("max_leg_angle", max_leg_angle,
+      {.unit = "deg", .min = 0, .max = 60, .help = "Largest placement angle from vertical"});
+    v("swing_delay", swing_delay,
+      {.unit = "s", .min = 1e-3, .max = 1, .help = "Wait after liftoff before the leg swings"});
     v("height_gain", height_gain, {.min = 0, .max = 5, .help = "Thrust correction per metre of apex error"});
     v("load_depth", load_depth, {.unit = "m", .min = 0, .max = 1, .help = "LOADING ends at this compression"});
-    v("unload_margin", unload_margin, {.unit = "m", .min = 0, .max = 1, .help = "THRUST ends this short of the setpoint"});
+    v("unload_margin", unload_margin,
+      {.unit = "m", .min = 0, .max = 1, .help = "THRUST ends this short of the setpoint"});
     v("friction", friction, {.min = 0, .max = 10, .help = "Coulomb friction coefficient of the foot"});
     v("twist_radius", twist_radius, {.unit = "m", .min = 0, .max = 1, .help = "Torsional friction radius of the foot"});
-    v("position", position, {.unit = "m", .min = -1e4, .max = 1e4, .help = "Body centre of mass at t = 0", .apply = Apply::Restart});
-    v("velocity", velocity, {.unit = "m/s", .min = -100, .max = 100, .help = "Body velocity at t = 0", .apply = Apply::Restart});
+    v("position", position,
+      {.unit = "m", .min = -1e4, .max = 1e4, .help = "Body centre of mass at t = 0", .apply = Apply::Restart});
+    v("velocity", velocity,
+      {.unit = "m/s", .min = -100, .max = 100, .help = "Body velocity at t = 0", .apply = Apply::Restart});
     v("command", command, {.help = "Command when no script key applies"});
     v("script", script, {.help = "Scripted course: commands from time t on", .apply = Apply::Restart});
   }

@@ -47,10 +47,14 @@ ConstrainedStepResult linearlyImplicitEulerStep(double t, double h, ConstrainedS
     RigidBody& b = bodies[dyn[k]];
     const RigidBody saved = b;
     for (int j = 0; j < 12; ++j) {
-      if (j < 3) b.x(j) += eps;
-      else if (j < 6) b.q = quaternionFromRotationVector(eps * Eigen::Vector3d::Unit(j - 3)) * b.q;
-      else if (j < 9) b.v(j - 6) += eps;
-      else b.w(j - 9) += eps;
+      if (j < 3)
+        b.x(j) += eps;
+      else if (j < 6)
+        b.q = quaternionFromRotationVector(eps * Eigen::Vector3d::Unit(j - 3)) * b.q;
+      else if (j < 9)
+        b.v(j - 6) += eps;
+      else
+        b.w(j - 9) += eps;
       if (!s.forces(t)) return result;
       for (int r = 0; r < nd; ++r) f1.segment<6>(6 * r) = generalizedForce(bodies[dyn[r]]);
       const Eigen::VectorXd col = (f1 - f0) / eps;

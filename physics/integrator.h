@@ -43,8 +43,8 @@ inline Eigen::Quaterniond quaternionRate(const Eigen::Vector3d& w, const Eigen::
 struct ConstrainedStep {
   std::vector<RigidBody>& bodies;
   const Constraints& joints;
-  ConstraintSystem& system;   // scratch
-  ConstraintSolver& solver;   // factor/solve of J M^-1 J^T (dense, tree, ...)
+  ConstraintSystem& system;  // scratch
+  ConstraintSolver& solver;  // factor/solve of J M^-1 J^T (dense, tree, ...)
   // Kinematic bodies at time t, then external + controller forces into the accumulators at the
   // bodies' current state (no gyroscopic term, no constraint force). False: the world stopped.
   std::function<bool(double t)> forces;

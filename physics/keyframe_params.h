@@ -11,9 +11,9 @@
 namespace ponyhop {
 
 struct Keyframe {
-  double t = 0.0;                            // s
-  Eigen::Vector3d position{0.0, 0.0, 0.0};   // m, world frame
-  Eigen::Vector3d rotation{0.0, 0.0, 0.0};   // deg, Euler angles about x, y, z: R = Rz Ry Rx
+  double t = 0.0;                           // s
+  Eigen::Vector3d position{0.0, 0.0, 0.0};  // m, world frame
+  Eigen::Vector3d rotation{0.0, 0.0, 0.0};  // deg, Euler angles about x, y, z: R = Rz Ry Rx
 
   template <class V>
   void reflect(V& v) {

@@ -118,8 +118,7 @@ bool finite3(const Eigen::Vector3d& v) { return v.allFinite(); }
 // Clamp: M_0 = M_m = 0 (zero acceleration at the ends) and S'(s_0) = S'(s_m) = 0 (zero
 // velocity); the two extra equations are balanced by two knots whose values are unknowns.
 // Solves for M (and the free values, written into Y).
-bool solveSpline(const std::vector<double>& s, Rows6& Y, const std::vector<int>& freeKnots, bool periodic,
-                 Rows6& M) {
+bool solveSpline(const std::vector<double>& s, Rows6& Y, const std::vector<int>& freeKnots, bool periodic, Rows6& M) {
   const int m = static_cast<int>(s.size()) - 1;
   const int nM = periodic ? m : m + 1;
   const int n = nM + static_cast<int>(freeKnots.size());
@@ -383,7 +382,8 @@ KinematicState KeyframeTrack::evaluate(double t) const {
   const double h = s[j + 1] - s[j];
   const double A = (s[j + 1] - tau) / h, B = (tau - s[j]) / h;
   const auto yj = d.Y.row(j), yk = d.Y.row(j + 1), Mj = d.M.row(j), Mk = d.M.row(j + 1);
-  const Eigen::Matrix<double, 1, 6> y0 = A * yj + B * yk + ((A * A * A - A) * Mj + (B * B * B - B) * Mk) * (h * h / 6.0);
+  const Eigen::Matrix<double, 1, 6> y0 =
+      A * yj + B * yk + ((A * A * A - A) * Mj + (B * B * B - B) * Mk) * (h * h / 6.0);
   const Eigen::Matrix<double, 1, 6> y1 =
       (yk - yj) / h + (-(3.0 * A * A - 1.0) * Mj + (3.0 * B * B - 1.0) * Mk) * (h / 6.0);
   const Eigen::Matrix<double, 1, 6> y2 = A * Mj + B * Mk;
@@ -393,8 +393,8 @@ KinematicState KeyframeTrack::evaluate(double t) const {
   st.x = y0.head<3>().transpose();
   st.v = k1 * y1.head<3>().transpose();
   st.a = k2 * y2.head<3>().transpose();
-  const QuatJet e = expRotationVector(y0.tail<3>().transpose(), k1 * y1.tail<3>().transpose(),
-                                      k2 * y2.tail<3>().transpose());
+  const QuatJet e =
+      expRotationVector(y0.tail<3>().transpose(), k1 * y1.tail<3>().transpose(), k2 * y2.tail<3>().transpose());
   // q = q0 e(t): q0 is constant, so q' = q0 e', q'' = q0 e''.
   const QuatJet q{d.q0 * e.q, d.q0 * e.dq, d.q0 * e.ddq};
   st.q = q.q;

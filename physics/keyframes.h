@@ -67,8 +67,8 @@ class KeyframeTrack {
   static std::optional<KeyframeTrack> fromKeyframes(const std::vector<Keyframe>& keys, const TrackOptions& options,
                                                     std::string* error = nullptr);
   // From pose samples (quaternions; need not be normalized, must not be zero).
-  static std::optional<KeyframeTrack> fromSamples(const std::vector<PoseSample>& samples,
-                                                  const TrackOptions& options, std::string* error = nullptr);
+  static std::optional<KeyframeTrack> fromSamples(const std::vector<PoseSample>& samples, const TrackOptions& options,
+                                                  std::string* error = nullptr);
 
   // Pose, velocity, acceleration, orientation, angular velocity and angular acceleration (world
   // frame) at time t (s), all analytic. Clip time is speed * t.

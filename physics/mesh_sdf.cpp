@@ -64,7 +64,9 @@ bool SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, con
                 ": raise the cell size");
   }
   const auto vert = [&](size_t t, int k) -> const Eigen::Vector3d& { return vertices[indices[3 * t + k]]; };
-  const auto nodeAt = [&](int i, int j, int k) -> Eigen::Vector3d { return origin_ + cell_ * Eigen::Vector3d(i, j, k); };
+  const auto nodeAt = [&](int i, int j, int k) -> Eigen::Vector3d {
+    return origin_ + cell_ * Eigen::Vector3d(i, j, k);
+  };
 
   // 1. Distance: exact near each triangle, then closest-triangle propagation.
   std::vector<double> dist(nodes, std::numeric_limits<double>::infinity());

@@ -22,12 +22,12 @@ namespace ponyhop {
 
 // What the user is doing with the mouse; shared between the UI (writes) and the element (reads).
 struct PerturbationTarget {
-  int body = -1;                                            // grabbed body (-1: none)
-  Eigen::Vector3d local_point = Eigen::Vector3d::Zero();    // grabbed point, body frame (m)
-  Eigen::Vector3d target = Eigen::Vector3d::Zero();         // where it is pulled to, world (m)
-  double stiffness = 400.0;  // 1/s^2 (k per kg of the grabbed body): a ~3 Hz pull
-  double damping = 1.0;      // zeta, fraction of critical damping
-  double max_accel = 400.0;  // m/s^2, cap of |F| / m
+  int body = -1;                                          // grabbed body (-1: none)
+  Eigen::Vector3d local_point = Eigen::Vector3d::Zero();  // grabbed point, body frame (m)
+  Eigen::Vector3d target = Eigen::Vector3d::Zero();       // where it is pulled to, world (m)
+  double stiffness = 400.0;                               // 1/s^2 (k per kg of the grabbed body): a ~3 Hz pull
+  double damping = 1.0;                                   // zeta, fraction of critical damping
+  double max_accel = 400.0;                               // m/s^2, cap of |F| / m
 
   bool active() const { return body >= 0; }
   // The spring force on the body at its current state (N), before the cap is applied too.

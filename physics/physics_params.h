@@ -39,8 +39,8 @@ struct PhysicsParams {
   SolverKind solver = SolverKind::Dense;
   Stabilization stabilization = Stabilization::Projection;
   // Baumgarte: C'' + 2 alpha C' + beta^2 C = 0 (alpha in 1/s, beta in 1/s).
-  double baumgarte_alpha = 10.0;  // 1/s
-  double baumgarte_beta = 10.0;   // 1/s
+  double baumgarte_alpha = 10.0;             // 1/s
+  double baumgarte_beta = 10.0;              // 1/s
   Eigen::Vector3d gravity{0.0, 0.0, -9.81};  // m/s^2, world frame (z up)
   // Automatic substeps: a step in which a body turns more than twice this is split in two, and
   // each dt starts with enough substeps that the fastest body turns at most this much per
@@ -54,7 +54,8 @@ struct PhysicsParams {
   template <class V>
   void reflect(V& v) {
     v("dt", dt, {.unit = "s", .min = 1e-6, .max = 0.1, .help = "Physics time step", .log = true});
-    v("substeps", substeps, {.min = 1, .max = 1000, .help = "Steps taken per dt", .log = true, .soft_min = 1, .soft_max = 64});
+    v("substeps", substeps,
+      {.min = 1, .max = 1000, .help = "Steps taken per dt", .log = true, .soft_min = 1, .soft_max = 64});
     v("integrator", integrator, {.help = "Time integration method"});
     v("solver", solver, {.help = "How constraint forces are solved"});
     v("stabilization", stabilization, {.help = "Correction of joint drift"});

@@ -57,8 +57,8 @@ JointRow axisRow(const RigidBody& a, const Eigen::Vector3d& p_a, const Eigen::Ve
   r.ja.tail<3>() = u.cross(p_b - a.x).transpose();
   r.jb.head<3>() = u.transpose();
   r.jb.tail<3>() = r_b.cross(u).transpose();
-  r.bias = u.dot(b.w.cross(b.w.cross(r_b)) - a.w.cross(a.w.cross(r_a))) + 2.0 * d_dot.dot(u_dot) +
-           d.dot(a.w.cross(u_dot));
+  r.bias =
+      u.dot(b.w.cross(b.w.cross(r_b)) - a.w.cross(a.w.cross(r_a))) + 2.0 * d_dot.dot(u_dot) + d.dot(a.w.cross(u_dot));
   return r;
 }
 
@@ -70,8 +70,8 @@ void PrismaticJoint::evaluate(const RigidBody& a, const RigidBody& b, Constraint
   const Eigen::Vector3d xb = fb * Eigen::Vector3d::UnitX(), yb = fb * Eigen::Vector3d::UnitY();
   const Eigen::Vector3d pa = a.pointToWorld(point_a_);
   const Eigen::Vector3d pb = b.pointToWorld(point_b_);
-  const JointRow rows[5] = {dotRow(a, za, b, xb), dotRow(a, za, b, yb), dotRow(a, xa, b, yb),
-                            axisRow(a, pa, xa, b, pb), axisRow(a, pa, ya, b, pb)};
+  const JointRow rows[5] = {dotRow(a, za, b, xb), dotRow(a, za, b, yb), dotRow(a, xa, b, yb), axisRow(a, pa, xa, b, pb),
+                            axisRow(a, pa, ya, b, pb)};
   for (int i = 0; i < 5; ++i) {
     out.C(i) = rows[i].C;
     out.ja.row(i) = rows[i].ja;

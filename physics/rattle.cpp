@@ -74,7 +74,7 @@ ConstrainedStepResult rattleStep(double t, double h, const Eigen::VectorXd& lamb
       const Eigen::Vector3d l = start[i].l + 0.5 * h * fc[i].tail<3>();
       b.x = start[i].x + h / b.mass * p;
       b.q = freeRotation(start[i].q, b.inertia, l, h);
-      b.v = p / b.mass;                      // predicted velocity (the second kick's forces)
+      b.v = p / b.mass;  // predicted velocity (the second kick's forces)
       b.w = b.worldInverseInertia() * l;
     }
   };

@@ -91,7 +91,9 @@ struct ReflectProbe {
   void operator()(const char*, T&, const FieldMeta&) {}
 };
 template <class T>
-concept Reflectable = requires(T& t, ReflectProbe& v) { t.reflect(v); };
+concept Reflectable = requires(T& t, ReflectProbe& v) {
+  t.reflect(v);
+};
 
 // The metadata of the field at a dotted key ("chain.links", "head.animation.clip") below a
 // reflectable struct, with `apply` resolved through the enclosing sections. Lists are leaves

@@ -47,7 +47,7 @@ struct BodyProperties {
   enum class Kind { Dynamic, Kinematic };
 
   Kind kind = Kind::Dynamic;
-  std::string name;  // for status messages ("link 3", "head")
+  std::string name;                                   // for status messages ("link 3", "head")
   double mass = 1.0;                                  // kg (dynamic bodies)
   Eigen::Vector3d inertia = Eigen::Vector3d::Ones();  // kg m^2, principal, body frame (dynamic bodies)
   KinematicMotion motion;                             // kinematic bodies only

@@ -177,8 +177,8 @@ ContactPoint roundedAgainst(const Core& c, const PlacedShape& b, double* at = nu
           best = i;
         }
       }
-      s = minimizeConvex(f, std::max(0, best - 1) / static_cast<double>(n), std::min(n, best + 1) / static_cast<double>(n),
-                         1e-9);
+      s = minimizeConvex(f, std::max(0, best - 1) / static_cast<double>(n),
+                         std::min(n, best + 1) / static_cast<double>(n), 1e-9);
     } else {
       s = minimizeConvex(f, 0.0, 1.0);
     }

@@ -70,9 +70,9 @@ PlacedShape place(const Shape& shape, const Eigen::Vector3d& body_x, const Eigen
 
 // One point of contact between shapes a and b.
 struct ContactPoint {
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();   // world, midway between the surfaces
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ(); // unit, world, from b towards a
-  double gap = 0.0;                                  // signed distance between the surfaces (< 0: overlap)
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();    // world, midway between the surfaces
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit, world, from b towards a
+  double gap = 0.0;                                   // signed distance between the surfaces (< 0: overlap)
 };
 
 // Signed distance of the world point x to a placed shape (negative inside) and its gradient
@@ -85,8 +85,8 @@ bool supported(ShapeType a, ShapeType b);
 // Appends the contacts between a and b whose gap is below `reach` (m; 0 = touching or
 // overlapping only). Normals point from b towards a. A sphere gives one point; a capsule its
 // deepest point first, then its end spheres when they too are within reach (a capsule lying on a
-// surface rests on a segment); a box its corners (up to 8). Pairs that are only supported the other way round are swapped
-// (and their normals turned). Returns the number appended.
+// surface rests on a segment); a box its corners (up to 8). Pairs that are only supported the other way round are
+// swapped (and their normals turned). Returns the number appended.
 int collide(const PlacedShape& a, const PlacedShape& b, double reach, std::vector<ContactPoint>& out);
 
 // Exact geometry used above and by the tests.

@@ -22,7 +22,10 @@ class StabilityMonitor {
  public:
   static constexpr double kGrowth = 3.0;
 
-  void reset() { has_previous_ = false; strikes_ = 0; }
+  void reset() {
+    has_previous_ = false;
+    strikes_ = 0;
+  }
   // The state and its derivative at the start of a step of h. Returns true when the last two
   // steps were unstable (then hRho() and growth() say by how much).
   bool observe(double h, const State& y, const Accelerations& f, double limit);

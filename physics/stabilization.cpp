@@ -41,8 +41,8 @@ ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constrai
   return result;
 }
 
-std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints,
-                              ConstraintSystem& system, ConstraintSolver& solver, Eigen::VectorXd* impulses) {
+std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
+                              ConstraintSolver& solver, Eigen::VectorXd* impulses) {
   system.evaluate(bodies, constraints);
   if (impulses) impulses->resize(0);
   if (system.rows() == 0) return "";

@@ -35,8 +35,7 @@ ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constrai
 // Velocities of the dynamic bodies onto J v = -J_k v_k (kinematic bodies' velocities as they
 // are). Returns "" or what failed. `impulses` (optional): the multiplier y of every row (N s),
 // dv = M^-1 J^T y; a contact reads its own rows' impulse from it.
-std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints,
-                              ConstraintSystem& system, ConstraintSolver& solver,
-                              Eigen::VectorXd* impulses = nullptr);
+std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
+                              ConstraintSolver& solver, Eigen::VectorXd* impulses = nullptr);
 
 }  // namespace ponyhop

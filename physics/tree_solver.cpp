@@ -1,11 +1,11 @@
 #include "physics/tree_solver.h"
 
-#include "physics/small_matrix.h"
-
 #include <algorithm>
 #include <numeric>
 #include <type_traits>
 #include <utility>
+
+#include "physics/small_matrix.h"
 
 namespace ponyhop {
 
@@ -147,7 +147,8 @@ bool TreeSolver::buildStructure(const std::vector<RigidBody>& bodies, const Cons
     n.d_inv.resize(n.size, n.size);
     n.l.resize(n.near.size());
     if (n.clique < 0) continue;
-    for (size_t i = 0; i < n.near.size(); ++i) n.l[i].resize(nodes_[cliques_[n.clique].members[n.near[i]]].size, n.size);
+    for (size_t i = 0; i < n.near.size(); ++i)
+      n.l[i].resize(nodes_[cliques_[n.clique].members[n.near[i]]].size, n.size);
   }
   jm_.resize(widest);
   order_.assign(bfs.rbegin(), bfs.rend());
@@ -346,8 +347,10 @@ void TreeSolver::treeSolveInPlace(Eigen::VectorXd& y) const {
 
 void TreeSolver::treeSolve(const Eigen::VectorXd& r_tree, Eigen::VectorXd& y_tree) const {
   y_tree = r_tree;
-  if (all_three_) treeSolveInPlace<3>(y_tree);
-  else treeSolveInPlace<Eigen::Dynamic>(y_tree);
+  if (all_three_)
+    treeSolveInPlace<3>(y_tree);
+  else
+    treeSolveInPlace<Eigen::Dynamic>(y_tree);
 }
 
 Eigen::VectorXd TreeSolver::solve(const Eigen::VectorXd& rhs) const {

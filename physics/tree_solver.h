@@ -52,15 +52,15 @@ class TreeSolver final : public ConstraintSolver {
 
   // A joint of the tree (a node of the elimination).
   struct Node {
-    int block = -1;       // its block in the ConstraintSystem
-    int size = 0;         // rows
-    int row = 0;          // first row in the tree-only vector
-    int clique = -1;      // clique of its parent body (-1 for a root joint)
-    int slot = -1;        // its position in that clique
-    std::vector<int> near;  // clique positions of the joints it updates (eliminated after it)
+    int block = -1;            // its block in the ConstraintSystem
+    int size = 0;              // rows
+    int row = 0;               // first row in the tree-only vector
+    int clique = -1;           // clique of its parent body (-1 for a root joint)
+    int slot = -1;             // its position in that clique
+    std::vector<int> near;     // clique positions of the joints it updates (eliminated after it)
     std::vector<int> cliques;  // every clique it belongs to, with its slot there (pairs)
-    Block d_inv;            // D_j^-1
-    std::vector<Block> l;   // L_xj for x in near
+    Block d_inv;               // D_j^-1
+    std::vector<Block> l;      // L_xj for x in near
   };
   // The joints that touch one dynamic body: A's blocks between them (dense, k x k blocks).
   struct Clique {
@@ -91,7 +91,7 @@ class TreeSolver final : public ConstraintSolver {
   std::vector<int> loop_row_of_;  // per system row: row in the loop vector or -1
   int tree_rows_ = 0;
   int loop_rows_ = 0;
-  bool all_three_ = false;  // every tree joint has 3 rows (chains of spherical joints): fixed 3 x 3 blocks
+  bool all_three_ = false;         // every tree joint has 3 rows (chains of spherical joints): fixed 3 x 3 blocks
   std::vector<JacobianBlock> jm_;  // step 1 work space: J_xb M_b^-1 per clique member
 
   // Numbers (refreshed by every factor()).

@@ -37,8 +37,8 @@ struct RangeCheck {
   void check(const std::string& key, double value, const FieldMeta& m, bool integer) {
     if (!error.empty() || inRange(value, m)) return;
     error = key + " = " + number(value) + ": must be " + (integer ? "an integer" : "a finite number") + " in [" +
-            number(m.min) + ", " + number(m.max) + "]" + (*m.unit ? std::string(" ") + m.unit : "") + " (" +
-            m.help + ")";
+            number(m.min) + ", " + number(m.max) + "]" + (*m.unit ? std::string(" ") + m.unit : "") + " (" + m.help +
+            ")";
   }
 
   template <class T>

@@ -109,7 +109,8 @@ void World::step() {
   // start of dt; substep() splits further when the motion speeds up within dt.
   int n = params_.substeps;
   const double theta = params_.max_step_rotation * std::numbers::pi / 180.0;
-  if (theta > 0.0) n = std::max(n, static_cast<int>(std::min(4096.0, std::ceil(params_.dt * maxAngularSpeed() / theta))));
+  if (theta > 0.0)
+    n = std::max(n, static_cast<int>(std::min(4096.0, std::ceil(params_.dt * maxAngularSpeed() / theta))));
   const double h = params_.dt / n;
   for (int i = 0; i < n && ok(); ++i) substep(h);
 }
@@ -217,7 +218,8 @@ void World::followTeleports(double h) {
     if (parent.isDynamic() || !parent.motion) continue;
     const KinematicState next = parent.motion(time_ + h);
     const Eigen::Vector3d x_pred = parent.x + h * parent.v + 0.5 * h * h * parent.a;
-    const Eigen::Quaterniond q_pred = quaternionFromRotationVector(h * parent.w + 0.5 * h * h * parent.alpha) * parent.q;
+    const Eigen::Quaterniond q_pred =
+        quaternionFromRotationVector(h * parent.w + 0.5 * h * h * parent.alpha) * parent.q;
     const Eigen::Quaterniond jump = (next.q.normalized() * q_pred.conjugate()).normalized();
     if (!next.x.allFinite() || !jump.coeffs().allFinite()) continue;  // the external-force check reports it
     if ((next.x - x_pred).norm() < kTeleportDistance && rotationVector(jump).norm() < kTeleportAngle) continue;
@@ -366,7 +368,10 @@ void World::integrate(double h) {
   const auto timed = clock_.time(Stage::Integrate);
   if (!ok()) return;
   if (params_.integrator == Integrator::Rattle || params_.integrator == Integrator::ImplicitEuler) {
-    ConstrainedStep cs{bodies_, joints_, system_, *solver_,
+    ConstrainedStep cs{bodies_,
+                       joints_,
+                       system_,
+                       *solver_,
                        [this](double t) {
                          updateKinematicBodies(t);
                          applyExternalForces();
@@ -395,8 +400,9 @@ void World::integrate(double h) {
       symplecticEulerStep(h, acc_scratch_, state);
       break;
     case Integrator::RK4:
-      rk4Step(time_, h, acc_scratch_,
-              [this](double t, const State& s, Accelerations& out) { accelerationsAt(t, s, out); }, state);
+      rk4Step(
+          time_, h, acc_scratch_, [this](double t, const State& s, Accelerations& out) { accelerationsAt(t, s, out); },
+          state);
       break;
     default:
       break;
@@ -452,14 +458,16 @@ void World::resolveContacts() {
 void World::reducedStep(double h) {
   // ABA and the joint-space integration: one stage, charged to joint forces.
   const auto timed = clock_.time(Stage::JointForces);
-  const ReducedHooks hooks{[this](double t) { updateKinematicBodies(t); }, [this] {
+  const ReducedHooks hooks{[this](double t) { updateKinematicBodies(t); },
+                           [this] {
                              applyExternalForces();
                              applyControllerForces();
                              return ok();
                            }};
   std::string e = reduced_->build(bodies_, joints_);
   if (e.empty()) {
-    e = h > 0.0 ? reduced_->step(time_, h, params_.integrator, bodies_, hooks) : reduced_->evaluate(time_, bodies_, hooks);
+    e = h > 0.0 ? reduced_->step(time_, h, params_.integrator, bodies_, hooks)
+                : reduced_->evaluate(time_, bodies_, hooks);
   }
   if (!e.empty()) {
     return stop("reduced step", e, "the scene needs what reduced coordinates cannot express (docs/SOLVERS.md)");
@@ -493,10 +501,13 @@ void World::evaluate() {
 void World::projectVelocities() {
   if (!ok()) return;
   updateKinematicBodies(time_);
-  if (std::string e = projectVelocitiesOntoJoints(); !e.empty()) stop("velocity projection", e, "redundant or duplicate joints");
+  if (std::string e = projectVelocitiesOntoJoints(); !e.empty())
+    stop("velocity projection", e, "redundant or duplicate joints");
 }
 
-ProjectionResult World::projectPositionsOntoJoints() { return ponyhop::projectPositions(bodies_, joints_, system_, *solver_); }
+ProjectionResult World::projectPositionsOntoJoints() {
+  return ponyhop::projectPositions(bodies_, joints_, system_, *solver_);
+}
 
 std::string World::projectVelocitiesOntoJoints(Eigen::VectorXd* impulses) {
   return ponyhop::projectVelocities(bodies_, joints_, system_, *solver_, impulses);
@@ -518,7 +529,8 @@ World::SavedState World::saveState() const {
 void World::restoreState(const SavedState& s) {
   for (size_t i = 0; i < bodies_.size() && i < s.bodies.size(); ++i) bodies_[i].state() = s.bodies[i];
   time_ = stage_time_ = s.time;
-  for (size_t i = 0; i < controllers_.size() && i < s.controllers.size(); ++i) controllers_[i]->restoreState(s.controllers[i]);
+  for (size_t i = 0; i < controllers_.size() && i < s.controllers.size(); ++i)
+    controllers_[i]->restoreState(s.controllers[i]);
   for (size_t i = 0; i < contacts_.size() && i < s.contacts.size(); ++i) contacts_[i]->restoreState(s.contacts[i]);
   monitor_ = s.monitor;
   tolerance_substeps_ = s.tolerance_substeps;
@@ -605,7 +617,8 @@ double World::maxJointError() const {
 
 double World::constraintPower() const {
   double p = 0.0;
-  for (int i : dynamic_) p += bodies_[i].constraint_force.dot(bodies_[i].v) + bodies_[i].constraint_torque.dot(bodies_[i].w);
+  for (int i : dynamic_)
+    p += bodies_[i].constraint_force.dot(bodies_[i].v) + bodies_[i].constraint_torque.dot(bodies_[i].w);
   return p;
 }
 

@@ -18,9 +18,9 @@
 #include "physics/integrator.h"
 #include "physics/physics_params.h"
 #include "physics/rigid_body.h"
-#include "physics/stage_times.h"
 #include "physics/stability_monitor.h"
 #include "physics/stabilization.h"
+#include "physics/stage_times.h"
 
 namespace ponyhop {
 
@@ -106,7 +106,7 @@ class World {
   double kineticEnergy() const;    // J, dynamic bodies
   double potentialEnergy() const;  // J, gravity + springs - reference
   double energy() const { return kineticEnergy() + potentialEnergy(); }
-  double maxJointError() const;    // max |C| over joints at the current state (m)
+  double maxJointError() const;  // max |C| over joints at the current state (m)
   // Power of the constraint forces on the dynamic bodies at the last evaluation, W:
   // sum F_c . v + t_c . w (zero for workless joints with fixed kinematic parents).
   double constraintPower() const;
@@ -121,7 +121,7 @@ class World {
   void integrate(double h);
   void stabilize();
   void resolveContacts();
-  bool impactInside() const;  // any contact set's impact within the substep just taken
+  bool impactInside() const;   // any contact set's impact within the substep just taken
   void reducedStep(double h);  // featherstone: replaces joint forces + integrate + stabilize
 
   void substep(double h, int depth = 0);
@@ -170,8 +170,8 @@ class World {
   std::string split_reason_;  // set by a stage that wants the substep split ("" = fine)
   int last_substeps_ = 0;
   double last_error_ = 0.0;
-  int tolerance_substeps_ = 0;  // tolerance mode: substeps to start the next dt with
-  int tolerance_misses_ = 0;    // substeps accepted above the tolerance at the deepest split
+  int tolerance_substeps_ = 0;            // tolerance mode: substeps to start the next dt with
+  int tolerance_misses_ = 0;              // substeps accepted above the tolerance at the deepest split
   std::vector<Snapshot> substep_starts_;  // substep()'s snapshot per split depth
   State state_scratch_;                   // watchStability() and integrate()
   Accelerations acc_scratch_;

@@ -83,7 +83,8 @@ float findNeck(const MeshData& m, int up, float top, float height) {
 UpAxis detectUpAxis(const std::string& path, const MeshData& mesh, std::string* reason) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  static const std::set<std::string> y_up{".gltf", ".glb", ".dae", ".zae", ".x", ".b3d", ".ms3d", ".ac", ".acc", ".irrmesh", ".fbx"};
+  static const std::set<std::string> y_up{".gltf", ".glb", ".dae", ".zae",     ".x",  ".b3d",
+                                          ".ms3d", ".ac",  ".acc", ".irrmesh", ".fbx"};
   static const std::set<std::string> z_up{".md2", ".md3", ".mdl", ".mdc", ".iqm", ".3ds", ".blend", ".smd", ".dxf"};
   if (y_up.count(ext)) {
     if (reason) *reason = ext + " files are y up";
@@ -177,8 +178,9 @@ Eigen::Vector3d headAnchorInMesh(const HeadParams& head, const HeadFit& fit, con
   return best;
 }
 
-double anchorStandOff(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& anchor, const Eigen::Vector3d& out,
-                      const Eigen::Vector3d& dir, double link_length, const std::vector<double>& radii) {
+double anchorStandOff(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& anchor,
+                      const Eigen::Vector3d& out, const Eigen::Vector3d& dir, double link_length,
+                      const std::vector<double>& radii) {
   if (radii.size() < 2) return 0.0;
   const Eigen::Vector3d d = dir.normalized();
   const auto clear = [&](const Eigen::Vector3d& a) {

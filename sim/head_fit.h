@@ -18,11 +18,11 @@
 namespace ponyhop {
 
 struct HeadFit {
-  UpAxis up = UpAxis::Y;                   // resolved (never Auto)
-  std::string up_reason;                   // how it was chosen, for messages
-  Eigen::AlignedBox3f head_bounds;         // mesh coordinates: the whole mesh, or above the neck
-  bool whole_body = false;                 // the mesh is taller than a head: its top part was taken
-  float neck = 0.0f;                       // mesh units along the up axis, whole_body only
+  UpAxis up = UpAxis::Y;                            // resolved (never Auto)
+  std::string up_reason;                            // how it was chosen, for messages
+  Eigen::AlignedBox3f head_bounds;                  // mesh coordinates: the whole mesh, or above the neck
+  bool whole_body = false;                          // the mesh is taller than a head: its top part was taken
+  float neck = 0.0f;                                // mesh units along the up axis, whole_body only
   Eigen::Vector3d pivot = Eigen::Vector3d::Zero();  // mesh coordinates of the body origin
 };
 
@@ -46,7 +46,8 @@ Eigen::Vector3d headAnchorInMesh(const HeadParams& head, const HeadFit& fit, con
 // anchor along `out` (away from the head) so that every link but the first (which holds the
 // anchor) keeps its radius clear of `points`: the least of 0, r0/4, ..., r0 that does, else r0
 // (r0: the first link's radius, so the first link always stays on the head).
-double anchorStandOff(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& anchor, const Eigen::Vector3d& out,
-                      const Eigen::Vector3d& dir, double link_length, const std::vector<double>& radii);
+double anchorStandOff(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& anchor,
+                      const Eigen::Vector3d& out, const Eigen::Vector3d& dir, double link_length,
+                      const std::vector<double>& radii);
 
 }  // namespace ponyhop

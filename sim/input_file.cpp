@@ -26,19 +26,18 @@ namespace {
 
 bool kindError(const struct stat& st, const std::string& path, const char* what, std::string* err) {
   if (S_ISREG(st.st_mode)) return false;
-  const char* kind = S_ISDIR(st.st_mode)    ? "a folder"
-                     : S_ISFIFO(st.st_mode) ? "a FIFO (named pipe)"
+  const char* kind = S_ISDIR(st.st_mode)                          ? "a folder"
+                     : S_ISFIFO(st.st_mode)                       ? "a FIFO (named pipe)"
                      : S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) ? "a device"
-                     : S_ISSOCK(st.st_mode)                      ? "a socket"
-                                                                 : "not a regular file";
+                     : S_ISSOCK(st.st_mode)                       ? "a socket"
+                                                                  : "not a regular file";
   if (err) *err = path + ": is " + kind + ", not a " + what;
   return true;
 }
 
 }  // namespace
 
-bool readInputFile(const std::string& path, size_t max_bytes, const char* what, std::string* out,
-                   std::string* err) {
+bool readInputFile(const std::string& path, size_t max_bytes, const char* what, std::string* out, std::string* err) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) {
     if (err) *err = path + ": " + (errno == ENOENT ? std::string("no such file") : std::strerror(errno));

@@ -14,8 +14,8 @@ namespace ponyhop {
 // Materials, when the file has them (all empty otherwise): colours are linear RGBA (a material's
 // base colour times the vertex colour, as glTF defines them), textures are sRGB base-colour maps.
 struct MeshPart {
-  uint32_t first = 0;  // first index
-  uint32_t count = 0;  // indices
+  uint32_t first = 0;    // first index
+  uint32_t count = 0;    // indices
   int32_t texture = -1;  // into MeshData::textures
 };
 
@@ -29,13 +29,13 @@ struct MeshTexture {
 struct MeshData {
   std::vector<Eigen::Vector3f> positions;
   std::vector<Eigen::Vector3f> normals;
-  std::vector<uint32_t> indices;  // 3 per triangle
-  Eigen::AlignedBox3f bbox;       // of positions (empty when there are none)
+  std::vector<uint32_t> indices;        // 3 per triangle
+  Eigen::AlignedBox3f bbox;             // of positions (empty when there are none)
   std::vector<Eigen::Vector4f> colors;  // per vertex, or empty
   std::vector<Eigen::Vector2f> uvs;     // per vertex (v = 0 at the image's top row), or empty
   std::vector<MeshPart> parts;          // index ranges by texture, or empty
   std::vector<MeshTexture> textures;
-  std::vector<std::string> warnings;    // e.g. a texture that cannot be read
+  std::vector<std::string> warnings;  // e.g. a texture that cannot be read
 
   size_t triangleCount() const { return indices.size() / 3; }
   // More than one plain colour: vertex colours, several base colours, or a texture.

@@ -27,12 +27,12 @@ struct CameraParams {
   CameraMode mode = CameraMode::Fixed;
   Eigen::Vector3d position{0.9, -1.4, 0.55};  // m (fixed mode)
   Eigen::Vector3d target{0.0, 0.0, 0.0};      // m (fixed and orbit: the point looked at)
-  double fov = 35.0;             // deg, vertical field of view
-  double orbit_distance = 1.6;   // m (orbit, follow)
-  double orbit_height = 0.35;    // m above the target (orbit, follow)
-  double orbit_speed = 10.0;     // deg/s around the target (orbit)
-  double orbit_angle = -60.0;    // deg, azimuth at t = 0 (orbit, follow), from +x toward +y
-  std::string follow = "";       // follow mode: "head", "hopper" or "chain" (its first link)
+  double fov = 35.0;                          // deg, vertical field of view
+  double orbit_distance = 1.6;                // m (orbit, follow)
+  double orbit_height = 0.35;                 // m above the target (orbit, follow)
+  double orbit_speed = 10.0;                  // deg/s around the target (orbit)
+  double orbit_angle = -60.0;                 // deg, azimuth at t = 0 (orbit, follow), from +x toward +y
+  std::string follow = "";                    // follow mode: "head", "hopper" or "chain" (its first link)
 
   template <class V>
   void reflect(V& v) {
@@ -51,13 +51,13 @@ struct CameraParams {
 };
 
 struct LightParams {
-  Eigen::Vector3d direction{-0.5, 0.6, -1.0};   // toward which the key light shines (world)
-  Eigen::Vector3d color{1.0, 0.96, 0.9};        // rgb 0..1
-  double intensity = 2.6;                        // key light multiplier
-  double ambient = 0.28;                         // hemispheric ambient / fill strength
-  double fill = 0.35;                            // second, shadowless fill light from the camera side
-  int shadow_size = 2048;                        // px, shadow map resolution
-  double shadow_softness = 1.5;                  // texels, PCF filter radius
+  Eigen::Vector3d direction{-0.5, 0.6, -1.0};  // toward which the key light shines (world)
+  Eigen::Vector3d color{1.0, 0.96, 0.9};       // rgb 0..1
+  double intensity = 2.6;                      // key light multiplier
+  double ambient = 0.28;                       // hemispheric ambient / fill strength
+  double fill = 0.35;                          // second, shadowless fill light from the camera side
+  int shadow_size = 2048;                      // px, shadow map resolution
+  double shadow_softness = 1.5;                // texels, PCF filter radius
 
   template <class V>
   void reflect(V& v) {
@@ -88,26 +88,29 @@ struct EnumNames<AntiAlias> {
 };
 
 struct RenderParams {
-  int width = 1280;           // px
-  int height = 720;           // px
-  double fps = 30.0;          // frames per second of output
-  int frames = 150;           // frames rendered by `ponyhop render` without --frames
-  int samples = 4;            // anti-aliasing: 1 = off; > 1 = on (MSAA samples with antialias = msaa)
+  int width = 1280;   // px
+  int height = 720;   // px
+  double fps = 30.0;  // frames per second of output
+  int frames = 150;   // frames rendered by `ponyhop render` without --frames
+  int samples = 4;    // anti-aliasing: 1 = off; > 1 = on (MSAA samples with antialias = msaa)
   AntiAlias antialias = AntiAlias::Post;
   RenderQuality quality = RenderQuality::Final;
-  Eigen::Vector3d background{0.80, 0.84, 0.88};  // rgb 0..1 (top of the gradient)
+  Eigen::Vector3d background{0.80, 0.84, 0.88};    // rgb 0..1 (top of the gradient)
   Eigen::Vector3d ground_color{0.72, 0.72, 0.70};  // rgb 0..1
-  double grid_spacing = 0.25;  // m, ground checker size (0: plain)
-  bool ground = true;          // draw the ground plane
-  double ground_height = 0.0;  // m, height of the drawn ground plane (z)
-  bool transparent = false;    // no background: PNGs with alpha (the ground is drawn when `ground`)
+  double grid_spacing = 0.25;                      // m, ground checker size (0: plain)
+  bool ground = true;                              // draw the ground plane
+  double ground_height = 0.0;                      // m, height of the drawn ground plane (z)
+  bool transparent = false;                        // no background: PNGs with alpha (the ground is drawn when `ground`)
 
   template <class V>
   void reflect(V& v) {
     v("width", width, {.unit = "px", .min = 16, .max = 8192, .help = "Image width", .soft_min = 16, .soft_max = 3840});
-    v("height", height, {.unit = "px", .min = 16, .max = 8192, .help = "Image height", .soft_min = 16, .soft_max = 2160});
-    v("fps", fps, {.unit = "1/s", .min = 1, .max = 1000, .help = "Frames per second of output", .soft_min = 1, .soft_max = 240});
-    v("frames", frames, {.min = 1, .max = 1000000, .help = "Frames rendered by default", .soft_min = 1, .soft_max = 3000});
+    v("height", height,
+      {.unit = "px", .min = 16, .max = 8192, .help = "Image height", .soft_min = 16, .soft_max = 2160});
+    v("fps", fps,
+      {.unit = "1/s", .min = 1, .max = 1000, .help = "Frames per second of output", .soft_min = 1, .soft_max = 240});
+    v("frames", frames,
+      {.min = 1, .max = 1000000, .help = "Frames rendered by default", .soft_min = 1, .soft_max = 3000});
     v("samples", samples, {.min = 1, .max = 16, .help = "Anti-aliasing: 1 = off, more = on (MSAA: samples per pixel)"});
     v("antialias", antialias, {.help = "post: an edge filter on the finished frame (cheap); msaa: multisampling"});
     v("quality", quality, {.help = "final: as configured; draft: no AA, smaller plainer shadows (previews)"});
@@ -116,7 +119,8 @@ struct RenderParams {
     v("grid_spacing", grid_spacing, {.unit = "m", .min = 0, .max = 100, .help = "Ground checker size (0: plain)"});
     v("ground", ground, {.help = "Draw the ground plane"});
     v("ground_height", ground_height, {.unit = "m", .min = -1e3, .max = 1e3, .help = "Height of the ground plane"});
-    v("transparent", transparent, {.help = "No background: PNG frames with alpha (set ground false for the object alone)"});
+    v("transparent", transparent,
+      {.help = "No background: PNG frames with alpha (set ground false for the object alone)"});
   }
 };
 
@@ -153,9 +157,9 @@ struct EnumNames<HeadMaterials> {
 // bounds, the pivot and the anchor.
 struct HeadParams {
   std::string mesh = "assets/head/head.gltf";  // path, relative to the repository or the scene file
-  UpAxis up_axis = UpAxis::Auto;  // the mesh's up axis (auto: from the format, else the shape)
-  double height = 0.25;           // m, rescale so the head (not a whole body) is this tall (0: use `scale`)
-  double scale = 1.0;             // mesh units to m (when height is 0)
+  UpAxis up_axis = UpAxis::Auto;               // the mesh's up axis (auto: from the format, else the shape)
+  double height = 0.25;                     // m, rescale so the head (not a whole body) is this tall (0: use `scale`)
+  double scale = 1.0;                       // mesh units to m (when height is 0)
   Eigen::Vector3d offset{0.0, 0.0, 0.0};    // m, added after scale and rotation (body frame)
   Eigen::Vector3d rotation{0.0, 0.0, 0.0};  // deg, Euler x, y, z applied after the up-axis fix
   HeadPivot pivot = HeadPivot::Auto;  // auto: the mesh origin when it lies near the head's centre, else the centre
@@ -173,17 +177,38 @@ struct HeadParams {
   template <class V>
   void reflect(V& v) {
     v("mesh", mesh, {.help = "Mesh file (OBJ, glTF/GLB, FBX, PLY, STL, ...)", .apply = Apply::Restart});
-    v("up_axis", up_axis, {.help = "The mesh's up axis (auto: glTF/Collada/X y, Quake/3DS/Blender z, else the longer of y and z)", .apply = Apply::Restart});
-    v("height", height, {.unit = "m", .min = 0, .max = 100, .help = "Rescale so the head (above the neck of a whole body) is this tall (0: use scale)", .apply = Apply::Restart});
+    v("up_axis", up_axis,
+      {.help = "The mesh's up axis (auto: glTF/Collada/X y, Quake/3DS/Blender z, else the longer of y and z)",
+       .apply = Apply::Restart});
+    v("height", height,
+      {.unit = "m",
+       .min = 0,
+       .max = 100,
+       .help = "Rescale so the head (above the neck of a whole body) is this tall (0: use scale)",
+       .apply = Apply::Restart});
     v("scale", scale, {.min = 1e-6, .max = 1e6, .help = "Mesh units to metres", .log = true, .apply = Apply::Restart});
-    v("offset", offset, {.unit = "m", .min = -1e3, .max = 1e3, .help = "Offset in the body frame", .apply = Apply::Restart});
-    v("rotation", rotation, {.unit = "deg", .min = -360, .max = 360, .help = "Mesh rotation, Euler x, y, z", .apply = Apply::Restart});
-    v("pivot", pivot, {.help = "Head body origin: auto (the mesh origin if near the head's centre), mesh, bounds (centre)", .apply = Apply::Restart});
-    v("anchor_space", anchor_space, {.help = "Ponytail anchor from anchor_in_bounds (bounds) or anchor (mesh)", .apply = Apply::Restart});
+    v("offset", offset,
+      {.unit = "m", .min = -1e3, .max = 1e3, .help = "Offset in the body frame", .apply = Apply::Restart});
+    v("rotation", rotation,
+      {.unit = "deg", .min = -360, .max = 360, .help = "Mesh rotation, Euler x, y, z", .apply = Apply::Restart});
+    v("pivot", pivot,
+      {.help = "Head body origin: auto (the mesh origin if near the head's centre), mesh, bounds (centre)",
+       .apply = Apply::Restart});
+    v("anchor_space", anchor_space,
+      {.help = "Ponytail anchor from anchor_in_bounds (bounds) or anchor (mesh)", .apply = Apply::Restart});
     v("anchor_in_bounds", anchor_in_bounds,
-      {.min = 0, .max = 1, .help = "Anchor as fractions of the head's bounds: x right..left, y face..back, z bottom..top", .apply = Apply::Restart});
-    v("anchor", anchor, {.min = -1e6, .max = 1e6, .help = "Ponytail anchor in the mesh's coordinates (anchor_space mesh)", .apply = Apply::Restart});
-    v("materials", materials, {.help = "auto: the file's textures, vertex colours, colours when it has more than one plain colour; color: head.color"});
+      {.min = 0,
+       .max = 1,
+       .help = "Anchor as fractions of the head's bounds: x right..left, y face..back, z bottom..top",
+       .apply = Apply::Restart});
+    v("anchor", anchor,
+      {.min = -1e6,
+       .max = 1e6,
+       .help = "Ponytail anchor in the mesh's coordinates (anchor_space mesh)",
+       .apply = Apply::Restart});
+    v("materials", materials,
+      {.help = "auto: the file's textures, vertex colours, colours when it has more than one plain colour; color: "
+               "head.color"});
     v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Skin colour"});
     v("animation", animation, {.help = "Keyframed motion of the head", .apply = Apply::Restart});
   }
@@ -220,7 +245,7 @@ struct HopperSection : HopperParams {
 // head's mesh (a signed distance grid built from its triangles at load) and a swing cone at the
 // root. Absent from the file: no collisions are built or stepped.
 struct CollisionSection : HeadCollisionParams {
-  bool head = true;    // the chain's links collide with the head (a chain attached to a head)
+  bool head = true;  // the chain's links collide with the head (a chain attached to a head)
 
   template <class V>
   void reflect(V& v) {
@@ -230,8 +255,8 @@ struct CollisionSection : HeadCollisionParams {
 };
 
 struct Scene {
-  std::string path;     // the file it was read from ("" when built in code)
-  std::string name;     // a short title
+  std::string path;       // the file it was read from ("" when built in code)
+  std::string name;       // a short title
   double duration = 5.0;  // s, simulated by `ponyhop sim` without --duration
   RenderParams render;
   CameraParams camera;
@@ -249,7 +274,13 @@ struct Scene {
   void reflect(V& v) {
     v("name", name, {.help = "Title of the scene", .apply = Apply::Live});
     v("duration", duration,
-      {.unit = "s", .min = 0, .max = 1e6, .help = "Simulated time for `ponyhop sim`", .apply = Apply::Live, .soft_min = 0, .soft_max = 120});
+      {.unit = "s",
+       .min = 0,
+       .max = 1e6,
+       .help = "Simulated time for `ponyhop sim`",
+       .apply = Apply::Live,
+       .soft_min = 0,
+       .soft_max = 120});
     v("render", render, {.help = "Output image settings", .apply = Apply::Live});
     v("camera", camera, {.help = "Camera", .apply = Apply::Live});
     v("light", light, {.help = "Lighting", .apply = Apply::Live});

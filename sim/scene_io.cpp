@@ -9,9 +9,9 @@
 #include <sstream>
 #include <type_traits>
 
+#include "physics/hopper.h"
 #include "sim/data_dir.h"
 #include "sim/input_file.h"
-#include "physics/hopper.h"
 
 namespace ponyhop {
 namespace {
@@ -59,8 +59,8 @@ std::string shortDump(const json& j) {
 // unbounded depth is a stack overflow), no key twice in one object (nlohmann keeps the last one
 // silently), and a number that does not fit a double named by its field.
 json parseJsonLimited(const std::string& text, const std::string& source) {
-  std::vector<std::string> path;                 // keys from the root to the current value
-  std::vector<std::set<std::string>> seen;       // keys met in each open object
+  std::vector<std::string> path;            // keys from the root to the current value
+  std::vector<std::set<std::string>> seen;  // keys met in each open object
   const auto where = [&path]() {
     std::string p;
     for (const auto& k : path) {
@@ -103,8 +103,8 @@ json parseJsonLimited(const std::string& text, const std::string& source) {
     std::string msg = e.what();
     const auto q = msg.find("number overflow");
     if (q != std::string::npos) msg = msg.substr(q);
-    throw SceneError(source + ": " + (path.empty() ? std::string("the document") : where()) + ": " +
-                     shortText(msg) + " (numbers must be finite doubles, |x| < 1.8e308)");
+    throw SceneError(source + ": " + (path.empty() ? std::string("the document") : where()) + ": " + shortText(msg) +
+                     " (numbers must be finite doubles, |x| < 1.8e308)");
   } catch (const json::exception& e) {
     throw SceneError(source + ": not valid JSON: " + shortText(e.what()));
   }
@@ -135,8 +135,7 @@ class JsonReader {
   }
 
   template <class T>
-  static void readStruct(const json& j, T& out, const std::string& key,
-                         std::vector<std::string>& errors) {
+  static void readStruct(const json& j, T& out, const std::string& key, std::vector<std::string>& errors) {
     if (!j.is_object()) {
       errors.push_back(key + ": must be an object { ... }, got " + std::string(j.type_name()));
       return;
@@ -248,8 +247,7 @@ class JsonWriter {
 // Range checks of a struct edited in code (the panel), through the same field list.
 class RangeChecker {
  public:
-  RangeChecker(std::string prefix, std::vector<std::string>& errors)
-      : prefix_(std::move(prefix)), errors_(errors) {}
+  RangeChecker(std::string prefix, std::vector<std::string>& errors) : prefix_(std::move(prefix)), errors_(errors) {}
 
   template <class T>
   void operator()(const char* name, T& field, const FieldMeta& meta) {
@@ -286,8 +284,7 @@ class RangeChecker {
 };
 
 std::string joinErrors(const std::string& source, const std::vector<std::string>& errors) {
-  std::string msg = source + ": " + std::to_string(errors.size()) +
-                    (errors.size() == 1 ? " problem" : " problems");
+  std::string msg = source + ": " + std::to_string(errors.size()) + (errors.size() == 1 ? " problem" : " problems");
   for (const auto& e : errors) msg += "\n  " + e;
   return msg;
 }
@@ -509,24 +506,27 @@ void validateScene(const Scene& scene_in, const std::string& source) {
   }
   if (scene.collision && scene.collision->head) {
     if (!scene.chain || scene.chain->attach != ChainAttach::Head || !scene.head) {
-      errors.push_back("collision.head: the ponytail collides with the head only when chain.attach is \"head\" and "
-                       "the scene has a head (set collision.head false, or leave the collision section out)");
+      errors.push_back(
+          "collision.head: the ponytail collides with the head only when chain.attach is \"head\" and "
+          "the scene has a head (set collision.head false, or leave the collision section out)");
     }
     if (scene.physics.solver == SolverKind::Featherstone) {
-      errors.push_back("collision: physics.solver \"featherstone\" takes no contact or limit rows (reduced "
-                       "coordinates); use \"tree\" or \"dense\", or leave the collision section out");
+      errors.push_back(
+          "collision: physics.solver \"featherstone\" takes no contact or limit rows (reduced "
+          "coordinates); use \"tree\" or \"dense\", or leave the collision section out");
     }
   }
   {
     // camera.follow names a body the scene has ("" = the scene's main body).
     const std::string& f = scene.camera.follow;
     const bool has_hopper = scene.hopper || !scene.hoppers.empty();
-    const bool exists = f.empty() || (f == "head" && scene.head) || (f == "hopper" && has_hopper) ||
-                        (f == "chain" && scene.chain);
+    const bool exists =
+        f.empty() || (f == "head" && scene.head) || (f == "hopper" && has_hopper) || (f == "chain" && scene.chain);
     if (!exists) {
       std::string have;
       for (const auto& [name, present] : {std::pair<const char*, bool>{"head", bool(scene.head)},
-                                          {"hopper", has_hopper}, {"chain", bool(scene.chain)}}) {
+                                          {"hopper", has_hopper},
+                                          {"chain", bool(scene.chain)}}) {
         if (present) have += std::string(have.empty() ? "" : ", ") + '"' + name + '"';
       }
       errors.push_back("camera.follow: \"" + shortText(f) + "\" is not a body of this scene (allowed: \"\"" +
@@ -544,8 +544,8 @@ void validateScene(const Scene& scene_in, const std::string& source) {
   }
   if (scene.render.width % 2 || scene.render.height % 2) {
     // H.264 in yuv420p needs even sizes; keep every output consistent with the video.
-    errors.push_back("render.width/height: must be even (got " + std::to_string(scene.render.width) +
-                     "x" + std::to_string(scene.render.height) + ")");
+    errors.push_back("render.width/height: must be even (got " + std::to_string(scene.render.width) + "x" +
+                     std::to_string(scene.render.height) + ")");
   }
   if (!errors.empty()) throw SceneError(joinErrors(source, errors));
 }
@@ -564,13 +564,20 @@ class DocWriter {
  private:
   template <class T>
   static std::string typeName() {
-    if constexpr (std::is_same_v<T, bool>) return "bool";
-    else if constexpr (std::is_same_v<T, int>) return "integer";
-    else if constexpr (std::is_same_v<T, double>) return "number";
-    else if constexpr (std::is_same_v<T, std::string>) return "string";
-    else if constexpr (std::is_same_v<T, Eigen::Vector3d>) return "[x, y, z]";
-    else if constexpr (std::is_enum_v<T>) return enumChoices<T>();
-    else return "";
+    if constexpr (std::is_same_v<T, bool>)
+      return "bool";
+    else if constexpr (std::is_same_v<T, int>)
+      return "integer";
+    else if constexpr (std::is_same_v<T, double>)
+      return "number";
+    else if constexpr (std::is_same_v<T, std::string>)
+      return "string";
+    else if constexpr (std::is_same_v<T, Eigen::Vector3d>)
+      return "[x, y, z]";
+    else if constexpr (std::is_enum_v<T>)
+      return enumChoices<T>();
+    else
+      return "";
   }
 
   template <class T>
@@ -586,18 +593,16 @@ class DocWriter {
       typename T::value_type def{};
       DocWriter w(key + ".N.", out_);
       def.reflect(w);
-    } else if constexpr (std::is_class_v<T> && !std::is_same_v<T, std::string> &&
-                         !std::is_same_v<T, Eigen::Vector3d>) {
+    } else if constexpr (std::is_class_v<T> && !std::is_same_v<T, std::string> && !std::is_same_v<T, Eigen::Vector3d>) {
       DocWriter w(key + ".", out_);
       field.reflect(w);
     } else {
       std::string range;
-      if constexpr (std::is_same_v<T, int> || std::is_same_v<T, double> ||
-                    std::is_same_v<T, Eigen::Vector3d>) {
+      if constexpr (std::is_same_v<T, int> || std::is_same_v<T, double> || std::is_same_v<T, Eigen::Vector3d>) {
         range = rangeText(meta);
       }
-      out_ += "| `" + key + "` | " + typeName<T>() + " | `" + JsonWriter::write(field).dump() + "` | " +
-              range + " | " + meta.help + " |\n";
+      out_ += "| `" + key + "` | " + typeName<T>() + " | `" + JsonWriter::write(field).dump() + "` | " + range + " | " +
+              meta.help + " |\n";
     }
   }
 
@@ -608,8 +613,7 @@ class DocWriter {
 }  // namespace
 
 std::string sceneReferenceMarkdown() {
-  std::string out =
-      "| key | type | default | allowed | meaning |\n|---|---|---|---|---|\n";
+  std::string out = "| key | type | default | allowed | meaning |\n|---|---|---|---|---|\n";
   Scene scene;
   DocWriter w("", out);
   scene.reflect(w);

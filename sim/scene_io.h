@@ -39,12 +39,10 @@ Scene loadScene(const std::string& path, const std::vector<Override>& overrides 
 
 // The same from the file's text (`source` names it in messages): the limits above, a key twice
 // in one object, a number beyond a double's range are all SceneErrors naming source and field.
-Scene parseSceneText(const std::string& text, const std::string& source,
-                     const std::vector<Override>& overrides = {});
+Scene parseSceneText(const std::string& text, const std::string& source, const std::vector<Override>& overrides = {});
 
 // The same from JSON already parsed (`source` names it in messages).
-Scene parseScene(const nlohmann::json& j, const std::string& source,
-                 const std::vector<Override>& overrides = {});
+Scene parseScene(const nlohmann::json& j, const std::string& source, const std::vector<Override>& overrides = {});
 
 // Every field of the scene, sections that exist only. Reading the result gives the same scene.
 nlohmann::json sceneToJson(const Scene& scene);

@@ -69,7 +69,8 @@ Eigen::Vector3d Sim::standOffAnchor(const ChainParams& c) const {
   const RigidBody& head = world_.body(head_body_);
   std::vector<Eigen::Vector3d> points;
   points.reserve(head_->mesh.positions.size());
-  for (const auto& p : head_->mesh.positions) points.push_back(head.pointToWorld(head_->mesh_to_body * p.cast<double>()));
+  for (const auto& p : head_->mesh.positions)
+    points.push_back(head.pointToWorld(head_->mesh_to_body * p.cast<double>()));
   std::vector<double> radii;
   for (int i = 0; i < c.links; ++i) {
     const double s = c.links > 1 ? double(i) / (c.links - 1) : 0.0;
@@ -176,7 +177,8 @@ void Sim::restore(const SimSnapshot& s) { world_.restoreState(s.world); }
 
 bool Sim::carryStateFrom(const Sim& from_sim, double time_shift) {
   const World& from = from_sim.world();
-  if (!from.ok() || from.bodyCount() != world_.bodyCount() || from.joints().size() != world_.joints().size()) return false;
+  if (!from.ok() || from.bodyCount() != world_.bodyCount() || from.joints().size() != world_.joints().size())
+    return false;
   // Reduced coordinates (physics.solver = featherstone) keep their own state: not carried.
   if (from.reduced() || world_.reduced()) return false;
   for (int i = 0; i < world_.bodyCount(); ++i) {

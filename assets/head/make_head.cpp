@@ -11,11 +11,7 @@
 //
 // Usage: make_head --out DIR [--cell METRES]
 
-#include "marching_cubes.h"
-#include "sdf.h"
-
 #include <Eigen/Geometry>
-
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -27,6 +23,9 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "marching_cubes.h"
+#include "sdf.h"
 
 namespace ponyhop::headgen {
 namespace {
@@ -64,16 +63,14 @@ double sd_body(const Vec3& p, bool ears = true) {
   d = smin(d, sd_sphere(s, Vec3(0.035, -0.020, 0.058), 0.024), 0.02);
   // Brow ridge: a tapered bar over each eye, leaning back towards the temples.
   // Each bar starts just past the midline so the two merge into one soft brow.
-  d = smin(d, sd_tapered_capsule(s, Vec3(-0.004, 0.032, 0.086), Vec3(0.046, 0.030, 0.070), 0.0062, 0.005),
-           0.012);
+  d = smin(d, sd_tapered_capsule(s, Vec3(-0.004, 0.032, 0.086), Vec3(0.046, 0.030, 0.070), 0.0062, 0.005), 0.012);
 
   // Eye sockets carved under the brow, then the eyeballs set into them with a crisp seam and an
   // upper lid (the part of a slightly larger sphere above a plane) for the sleepy toy look.
   d = ssub(d, sd_ellipsoid(s, kEyeCentre + Vec3(0.0, 0.0, 0.022), Vec3(0.022, 0.017, 0.016)), 0.008);
   d = smin(d, sd_sphere(s, kEyeCentre, kEyeRadius), 0.003);
-  const double lid =
-      smax(sd_sphere(s, kEyeCentre, kEyeRadius + 0.0026), (kEyeCentre.y() + 0.0115) - s.y() - 0.3 * (s.z() - kEyeCentre.z()),
-           0.0045);
+  const double lid = smax(sd_sphere(s, kEyeCentre, kEyeRadius + 0.0026),
+                          (kEyeCentre.y() + 0.0115) - s.y() - 0.3 * (s.z() - kEyeCentre.z()), 0.0045);
   d = smin(d, lid, 0.0025);
 
   // Nose: a tapered bridge to a round tip, with two nostril wings.
@@ -89,7 +86,8 @@ double sd_body(const Vec3& p, bool ears = true) {
                            sd_ellipsoid(b, Vec3(0.0, -0.0535, 0.078), Vec3(0.0175, 0.0065, 0.0085)), 0.004);
   d = smin(d, lips, 0.006);
   // The mouth line is a capsule (round ends stay resolvable at a 3 mm grid; a tapering slit does not).
-  d = ssub(d, sd_tapered_capsule(b, Vec3(-0.0155, -0.048, 0.0855), Vec3(0.0155, -0.048, 0.0855), 0.0021, 0.0021), 0.004);
+  d = ssub(d, sd_tapered_capsule(b, Vec3(-0.0155, -0.048, 0.0855), Vec3(0.0155, -0.048, 0.0855), 0.0021, 0.0021),
+           0.004);
 
   // Ears: a flat ellipsoid tilted back 15 degrees and flared 20 degrees away from the head at the
   // back, with a bowl (concha) scooped out of the outer face and a small lobe.
@@ -142,7 +140,7 @@ Vec3 bun_base() {
 }
 
 const Vec3 kBunRadii(0.025, 0.019, 0.025);  // local frame, y along the bun axis
-constexpr double kBunLift = 0.013;           // bun centre above the hair surface
+constexpr double kBunLift = 0.013;          // bun centre above the hair surface
 
 double sd_head(const Vec3& p) {
   double d = smin(sd_body(p), sd_hair(p), 0.004);
@@ -251,9 +249,9 @@ void relax(TriMesh& m, double cell) {
 }
 
 struct MeshCheck {
-  double volume = 0.0;           // signed, m^3: positive when triangles wind outwards (CCW)
-  std::size_t flipped = 0;       // triangles whose face normal opposes the SDF normals
-  std::size_t bad_edges = 0;     // directed edges not matched by exactly one opposite edge
+  double volume = 0.0;        // signed, m^3: positive when triangles wind outwards (CCW)
+  std::size_t flipped = 0;    // triangles whose face normal opposes the SDF normals
+  std::size_t bad_edges = 0;  // directed edges not matched by exactly one opposite edge
 };
 
 MeshCheck check(const TriMesh& m) {
@@ -306,8 +304,8 @@ void write_obj(const std::filesystem::path& path, const TriMesh& m, const Vec3& 
     out << line;
   }
   for (const auto& t : m.triangles) {
-    std::snprintf(line, sizeof line, "f %u//%u %u//%u %u//%u\n", t[0] + 1, t[0] + 1, t[1] + 1, t[1] + 1,
-                  t[2] + 1, t[2] + 1);
+    std::snprintf(line, sizeof line, "f %u//%u %u//%u %u//%u\n", t[0] + 1, t[0] + 1, t[1] + 1, t[1] + 1, t[2] + 1,
+                  t[2] + 1);
     out << line;
   }
 }
@@ -389,7 +387,8 @@ void write_gltf(const std::filesystem::path& path, const std::string& bin_name, 
   }
   j << "],\n";
   j << "  \"bufferViews\": [\n"
-    << "    {\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": " << vbytes << ", \"byteStride\": 12, \"target\": 34962},\n"
+    << "    {\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": " << vbytes
+    << ", \"byteStride\": 12, \"target\": 34962},\n"
     << "    {\"buffer\": 0, \"byteOffset\": " << vbytes << ", \"byteLength\": " << vbytes
     << ", \"byteStride\": 12, \"target\": 34962},\n"
     << "    {\"buffer\": 0, \"byteOffset\": " << 2 * vbytes << ", \"byteLength\": " << nindices * 4
@@ -402,14 +401,15 @@ void write_gltf(const std::filesystem::path& path, const std::string& bin_name, 
   }
   j << "\n  ],\n";
   j << "  \"accessors\": [\n"
-    << "    {\"bufferView\": 0, \"componentType\": 5126, \"count\": " << nverts << ", \"type\": \"VEC3\", \"min\": "
-    << json_floats(pmin) << ", \"max\": " << json_floats(pmax) << "},\n"
+    << "    {\"bufferView\": 0, \"componentType\": 5126, \"count\": " << nverts
+    << ", \"type\": \"VEC3\", \"min\": " << json_floats(pmin) << ", \"max\": " << json_floats(pmax) << "},\n"
     << "    {\"bufferView\": 1, \"componentType\": 5126, \"count\": " << nverts << ", \"type\": \"VEC3\"},\n"
     << "    {\"bufferView\": 2, \"componentType\": 5125, \"count\": " << nindices << ", \"type\": \"SCALAR\"}";
   if (clip) {
     const std::size_t keys = clip->times.size();
-    j << ",\n    {\"bufferView\": 3, \"componentType\": 5126, \"count\": " << keys << ", \"type\": \"SCALAR\", \"min\": ["
-      << fmt("%.9g", clip->times.front()) << "], \"max\": [" << fmt("%.9g", clip->times.back()) << "]},\n"
+    j << ",\n    {\"bufferView\": 3, \"componentType\": 5126, \"count\": " << keys
+      << ", \"type\": \"SCALAR\", \"min\": [" << fmt("%.9g", clip->times.front()) << "], \"max\": ["
+      << fmt("%.9g", clip->times.back()) << "]},\n"
       << "    {\"bufferView\": 4, \"componentType\": 5126, \"count\": " << keys << ", \"type\": \"VEC4\"},\n"
       << "    {\"bufferView\": 5, \"componentType\": 5126, \"count\": " << keys << ", \"type\": \"VEC3\"}";
   }
@@ -448,9 +448,10 @@ int run(const std::filesystem::path& out_dir, double cell) {
   for (const auto& p : mesh.positions) mesh.normals.push_back(gradient(p).normalized());
 
   const MeshCheck c = check(mesh);
-  std::printf("cleaned: %zu vertices, %zu triangles; volume %.6f m^3; %zu triangles against the SDF normal; "
-              "%zu non-manifold edges\n",
-              mesh.positions.size(), mesh.triangles.size(), c.volume, c.flipped, c.bad_edges);
+  std::printf(
+      "cleaned: %zu vertices, %zu triangles; volume %.6f m^3; %zu triangles against the SDF normal; "
+      "%zu non-manifold edges\n",
+      mesh.positions.size(), mesh.triangles.size(), c.volume, c.flipped, c.bad_edges);
   if (c.volume <= 0.0) {
     std::fprintf(stderr, "make_head: mesh winds inwards (volume %.6f)\n", c.volume);
     return 1;

@@ -147,8 +147,7 @@ TriMesh marching_cubes(const Grid& grid, const std::function<double(const Eigen:
           for (int m = 0; m < 3; ++m) {
             const int e = tri[static_cast<std::size_t>(m)];
             const int c0 = kEdges[static_cast<std::size_t>(e)][0];
-            t[static_cast<std::size_t>(m)] =
-                vertex_on(i + (c0 & 1), j + ((c0 >> 1) & 1), k + ((c0 >> 2) & 1), e / 4);
+            t[static_cast<std::size_t>(m)] = vertex_on(i + (c0 & 1), j + ((c0 >> 1) & 1), k + ((c0 >> 2) & 1), e / 4);
           }
           mesh.triangles.push_back(t);
         }

@@ -9,7 +9,6 @@
 #pragma once
 
 #include <Eigen/Core>
-
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -24,8 +23,8 @@ struct TriMesh {
 };
 
 struct Grid {
-  Eigen::Vector3d origin;  // position of sample (0,0,0), metres
-  double cell = 0.0;       // spacing, metres
+  Eigen::Vector3d origin;      // position of sample (0,0,0), metres
+  double cell = 0.0;           // spacing, metres
   int nx = 0, ny = 0, nz = 0;  // samples per axis
 };
 

@@ -3,11 +3,12 @@
 // after 0.1 s of the released 8-link chain at dt = 1/1920 s the tip is where ponyhop's reduced
 // RK4 puts it, within what a first-order step can reach. Engines not found at configure time
 // are skipped (the bench then has no rows for them).
+#include "app/bench_peers.h"
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
 
-#include "app/bench_peers.h"
 #include "sim/scene_io.h"
 #include "sim/sim.h"
 
@@ -15,8 +16,12 @@ namespace ponyhop {
 namespace {
 
 std::vector<Override> chainOverrides(const std::string& solver) {
-  return {{"chain.links", "8"}, {"anchor.motion", "fixed"}, {"physics.solver", solver},
-          {"physics.integrator", "rk4"}, {"physics.stabilization", "none"}, {"physics.dt", "0.000520833333333333"},
+  return {{"chain.links", "8"},
+          {"anchor.motion", "fixed"},
+          {"physics.solver", solver},
+          {"physics.integrator", "rk4"},
+          {"physics.stabilization", "none"},
+          {"physics.dt", "0.000520833333333333"},
           {"physics.max_step_rotation", "0"}};
 }
 

@@ -1,11 +1,10 @@
 // Smoke test of `ponyhop bench --quick`: the real executable runs headless and writes its CSV and
 // Markdown; every number in them is finite, or its row says it failed and why.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
-#include <unistd.h>
-
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -75,20 +74,20 @@ bool finiteOrEmpty(const std::string& s) {
 
 bool isNumber(const std::string& s) { return !s.empty() && finiteOrEmpty(s); }
 
-const std::set<std::string> kText{"case",   "anchor", "method",      "solver",      "integrator", "stabilization",
-                                  "step",   "status", "reason",      "long_status", "long_reason", "reference"};
+const std::set<std::string> kText{"case", "anchor", "method", "solver",      "integrator",  "stabilization",
+                                  "step", "status", "reason", "long_status", "long_reason", "reference"};
 
 class BenchSmoke : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     // ctest runs each TEST in its own process, in parallel: each process gets its own folder.
     const auto* info = ::testing::UnitTest::GetInstance();
-    out_ = fs::path(PONYHOP_TEST_OUT) / ("bench-" + std::to_string(info->random_seed()) + "-" +
-                                         std::to_string(static_cast<long>(::getpid())));
+    out_ = fs::path(PONYHOP_TEST_OUT) /
+           ("bench-" + std::to_string(info->random_seed()) + "-" + std::to_string(static_cast<long>(::getpid())));
     fs::remove_all(out_);
     fs::create_directories(out_);
-    const std::string cmd = std::string(PONYHOP_EXE) + " bench --quick --out " + out_.string() + " 2>" +
-                            (out_ / "stderr.txt").string();
+    const std::string cmd =
+        std::string(PONYHOP_EXE) + " bench --quick --out " + out_.string() + " 2>" + (out_ / "stderr.txt").string();
     rc_ = std::system(cmd.c_str());
   }
   static fs::path out_;
@@ -154,7 +153,8 @@ TEST_F(BenchSmoke, StepControlRowsTakeSubsteps) {
   ASSERT_GE(step, 0);
   int seen = 0;
   for (const auto& row : csv.rows) {
-    if (row[csv.column("case")] != "chain8_fixed" || std::abs(std::strtod(row[dt].c_str(), nullptr) - 1.0 / 120) > 1e-9) {
+    if (row[csv.column("case")] != "chain8_fixed" ||
+        std::abs(std::strtod(row[dt].c_str(), nullptr) - 1.0 / 120) > 1e-9) {
       continue;
     }
     if (row[method] == "tree/rattle/none+auto" || row[method] == "tree/rattle/none+tol") {

@@ -9,9 +9,9 @@
 #include <map>
 
 #include "app/pose_sampling.h"
+#include "common/run_util.h"
 #include "engine/asset_loader.h"
 #include "sim/scene_io.h"
-#include "common/run_util.h"
 
 namespace ponyhop {
 namespace {
@@ -54,7 +54,8 @@ RoundTrip roundTrip(const std::string& scene_path, double fps, int frames) {
   Sim sim(loadScene(scene_path), &assimpAssets());
   const std::vector<std::string> ids = bodyIds(sim.world());
   std::map<std::string, const aiNodeAnim*> channels;
-  for (unsigned c = 0; c < anim->mNumChannels; ++c) channels[anim->mChannels[c]->mNodeName.C_Str()] = anim->mChannels[c];
+  for (unsigned c = 0; c < anim->mNumChannels; ++c)
+    channels[anim->mChannels[c]->mNodeName.C_Str()] = anim->mChannels[c];
   rt_err.nodes = int(ids.size());
   for (const std::string& id : ids) {
     const aiNode* node = findNode(s->mRootNode, id);
@@ -108,8 +109,8 @@ TEST(GltfExport, HeadAndPonytailRoundTripThroughAssimp) {
 
 TEST(GltfExport, HopperWithItsPonytailRoundTripsThroughAssimp) {
   const RoundTrip e = roundTrip("assets/scenes/ponytail_hopper.json", 50.0, 50);  // dt 1 ms: 20 steps a frame
-  std::printf("ponytail_hopper: %d nodes x %d frames, max error %.3g m, %.3g rad\n", e.nodes, e.frames,
-              e.max_position, e.max_angle);
+  std::printf("ponytail_hopper: %d nodes x %d frames, max error %.3g m, %.3g rad\n", e.nodes, e.frames, e.max_position,
+              e.max_angle);
   EXPECT_EQ(e.frames, 50);
   EXPECT_LT(e.max_position, 1e-5);
   EXPECT_LT(e.max_angle, 1e-5);

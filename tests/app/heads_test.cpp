@@ -7,13 +7,13 @@
 
 #include <filesystem>
 
+#include "common/run_util.h"
+#include "engine/asset_loader.h"
 #include "engine/frame_writer.h"
 #include "engine/mesh.h"
 #include "sim/head_fit.h"
 #include "sim/scene_io.h"
-#include "engine/asset_loader.h"
 #include "sim/sim.h"
-#include "common/run_util.h"
 
 namespace ponyhop {
 namespace {
@@ -36,7 +36,7 @@ const HeadCase kHeads[] = {
     // Not the Collada duck: a whole bird whose tail is the "back of the head"; with the anchor
     // 60 % up its back, the straight ponytail of t = 0 touches the tail (at 75 % it clears the
     // duck but cuts through round skulls like Suzanne's). Left out, named in docs/HEADS.md.
-    {"sydney", "MD2/sydney.md2"},            // a whole body, Quake's z up, textured
+    {"sydney", "MD2/sydney.md2"},  // a whole body, Quake's z up, textured
 };
 
 std::vector<Override> headOverrides(const std::string& mesh) {
@@ -65,9 +65,9 @@ TEST_P(Heads, LandWellWithThePonytailOnTheBackOfTheHead) {
       box.extend(head.q.conjugate() * (w - head.x));  // body frame
     }
   }
-  std::printf("%s: up %s (%s), %s, head %.3f m tall, pivot (%.3g %.3g %.3g)\n", c.name,
-              fit.up == UpAxis::Z ? "z" : "y", fit.up_reason.c_str(), fit.whole_body ? "whole body" : "a head",
-              box.sizes().z(), fit.pivot.x(), fit.pivot.y(), fit.pivot.z());
+  std::printf("%s: up %s (%s), %s, head %.3f m tall, pivot (%.3g %.3g %.3g)\n", c.name, fit.up == UpAxis::Z ? "z" : "y",
+              fit.up_reason.c_str(), fit.whole_body ? "whole body" : "a head", box.sizes().z(), fit.pivot.x(),
+              fit.pivot.y(), fit.pivot.z());
   EXPECT_NEAR(box.sizes().z(), scene.head->height, 0.01 * scene.head->height) << "the head is head.height tall";
   // Recentred: the head's bounds hold the body origin (the pivot of its keyframes).
   EXPECT_TRUE(box.contains(Eigen::Vector3d::Zero())) << "the head's bounds hold its pivot";

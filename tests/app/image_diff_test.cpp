@@ -1,5 +1,7 @@
 // The snapshot comparator (engine/image_diff) and `ponyhop diff`, on synthetic pictures drawn
 // here with supersampled anti-aliasing, so that edges look like a renderer's.
+#include "engine/image_diff.h"
+
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -11,12 +13,11 @@
 #include <fstream>
 #include <random>
 #include <sstream>
-#include <utility>
 #include <string>
+#include <utility>
 
-#include "engine/image.h"
-#include "engine/image_diff.h"
 #include "common/run_util.h"
+#include "engine/image.h"
 
 namespace ponyhop {
 namespace {
@@ -93,7 +94,7 @@ TEST(ImageDiff, IdenticalImagesPass) {
 TEST(ImageDiff, YiqScaleAndAlphaOverWhite) {
   const uint8_t red[4] = {255, 0, 0, 255}, cyan[4] = {0, 255, 255, 255};
   const uint8_t white[4] = {255, 255, 255, 255}, clear_black[4] = {0, 0, 0, 0}, black[4] = {0, 0, 0, 255};
-  EXPECT_NEAR(yiqDelta(red, cyan), kMaxYiqDelta, 1.0);  // the largest distance: the scale of t
+  EXPECT_NEAR(yiqDelta(red, cyan), kMaxYiqDelta, 1.0);   // the largest distance: the scale of t
   EXPECT_NEAR(yiqDelta(white, clear_black), 0.0, 1e-9);  // transparent = background white
   EXPECT_GT(yiqDelta(white, black), 0.9 * kMaxYiqDelta);
 }
@@ -147,8 +148,7 @@ TEST(ImageDiff, OnePixelShiftOfSmoothEdgesPasses) {
   // edges keep blending between the same two flat areas, so only anti-aliasing changes.
   for (auto [dx, dy] : {std::pair{1.0, 0.0}, std::pair{0.0, 1.0}, std::pair{0.7, -0.4}}) {
     const DiffResult r = compareImages(scene(0, 0), scene(dx, dy), DiffOptions{}, nullptr);
-    EXPECT_TRUE(r.pass) << "shift " << dx << "," << dy << ": " << r.message << " (antialiased " << r.antialiased
-                        << ")";
+    EXPECT_TRUE(r.pass) << "shift " << dx << "," << dy << ": " << r.message << " (antialiased " << r.antialiased << ")";
     EXPECT_GT(r.antialiased, 100);
   }
   // Two pixels is a real move: too many pixels change beyond what an edge blend explains.
@@ -435,7 +435,8 @@ TEST(ImageDiffCli, ExitCodesAndDiffImage) {
   testing::RunResult aa_off = runExe("diff --no-aa " + q(file("a.png")) + " " + q(file("a_aa.png")));
   EXPECT_EQ(aa_off.code, 1) << aa_off.out;
 
-  testing::RunResult differ = runExe("diff " + q(file("a.png")) + " " + q(file("nobar.png")) + " --out " + q(file("d.png")));
+  testing::RunResult differ =
+      runExe("diff " + q(file("a.png")) + " " + q(file("nobar.png")) + " --out " + q(file("d.png")));
   EXPECT_EQ(differ.code, 1) << differ.out;
   EXPECT_NE(differ.out.find("FAIL"), std::string::npos) << differ.out;
   EXPECT_NE(differ.out.find("differing pixels"), std::string::npos) << differ.out;

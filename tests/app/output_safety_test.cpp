@@ -1,12 +1,12 @@
 // Faults a run must survive without losing output (docs/RELIABILITY.md): SIGINT and SIGTERM sent
 // to a rendering child, SIGKILL and the next run, two renders into one folder, a full disk
 // (RLIMIT_FSIZE), outputs that are inputs or devices, values CLI11 would let through.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/mount.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
-#include <fcntl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -16,8 +16,8 @@
 #include <filesystem>
 #include <thread>
 
-#include "engine/image.h"
 #include "common/run_util.h"
+#include "engine/image.h"
 
 namespace ponyhop {
 namespace {
@@ -116,8 +116,8 @@ bool waitForStagedFrame(const std::string& dir) {
 
 // A long render (small frames, many of them) into OUT.
 std::vector<std::string> longRender(const std::string& out) {
-  return {"render", "assets/scenes/chain.json", "--frames", "100000", "--size", "64x48", "--set", "render.samples=1",
-          "--out", out};
+  return {"render", "assets/scenes/chain.json", "--frames", "100000", "--size", "64x48",
+          "--set",  "render.samples=1",         "--out",    out};
 }
 
 // OUT with two frames from an earlier run whose bytes we can recognise.
@@ -188,8 +188,8 @@ TEST(OutputSafety, FullDiskFailsClearlyAndKeepsThePreviousOutput) {
   const std::string out = dir + "/out";
   previousOutput(out);
   // 2 KB per file: the log fits, a 320x240 frame does not.
-  Child c({"render", "assets/scenes/chain.json", "--frames", "5", "--size", "320x240", "--out", out},
-          dir + "/log.txt", 2048);
+  Child c({"render", "assets/scenes/chain.json", "--frames", "5", "--size", "320x240", "--out", out}, dir + "/log.txt",
+          2048);
   EXPECT_EQ(c.wait(), 1) << c.output();
   EXPECT_NE(c.output().find("File too large"), std::string::npos) << c.output();
   EXPECT_NE(c.output().find("is untouched"), std::string::npos) << c.output();
@@ -209,9 +209,9 @@ TEST(OutputSafety, VideoToAnUnwritablePlaceFailsBeforeRendering) {
   const std::string out = dir + "/out";
   previousOutput(out);
   writeFile(dir + "/a_file", "x");
-  const auto r = runPonyhop("render assets/scenes/chain.json --frames 3 --size 64x48 --out " + out + " --video " + dir +
-                                "/a_file/v.mp4",
-                            "video_unwritable");
+  const auto r = runPonyhop(
+      "render assets/scenes/chain.json --frames 3 --size 64x48 --out " + out + " --video " + dir + "/a_file/v.mp4",
+      "video_unwritable");
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("--video"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("render: frame"), std::string::npos) << "rendered before failing:\n" << r.out;
@@ -305,9 +305,9 @@ TEST(OutputSafety, ARealFullDiskAndAnOutThatIsAMountPoint) {
   Tmpfs mnt(dir + "/mnt", "size=8m");
   ASSERT_TRUE(mnt.ok);
   for (const int frames : {4, 2}) {
-    const auto r = runPonyhop("render assets/scenes/chain.json --frames " + std::to_string(frames) +
-                                  " --size 64x48 --out " + mnt.path,
-                              "tmpfs_mount" + std::to_string(frames));
+    const auto r = runPonyhop(
+        "render assets/scenes/chain.json --frames " + std::to_string(frames) + " --size 64x48 --out " + mnt.path,
+        "tmpfs_mount" + std::to_string(frames));
     ASSERT_EQ(r.code, 0) << r.out;
     EXPECT_EQ(countFrames(mnt.path), frames);
     EXPECT_FALSE(loadPng(mnt.path + "/frame_00001.png").empty());

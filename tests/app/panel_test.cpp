@@ -1,20 +1,21 @@
 // The tuning panel driven headless with synthetic mouse and keyboard input, the way a user would
 // use it: drag sliders, press buttons and keys, pull on the hair, save and load presets. Most tests
 // build ImGui frames without GL (fast); the last ones render real frames through OSMesa.
+#include "app/panel.h"
+
 #include <gtest/gtest.h>
 #include <imgui.h>
 
 #include <cmath>
 #include <filesystem>
 
-#include "app/panel.h"
 #include "app/ui_headless.h"
 #include "app/ui_sim.h"
-#include "engine/frame_writer.h"
+#include "common/run_util.h"
 #include "engine/asset_loader.h"
+#include "engine/frame_writer.h"
 #include "engine/render_session.h"
 #include "sim/scene_io.h"
-#include "common/run_util.h"
 
 namespace ponyhop {
 namespace {
@@ -236,7 +237,8 @@ TEST(PanelTest, AnInvalidEditIsNotAppliedAndSaysWhy) {
 // Projects a world point into the scene view (pixels, top-left origin).
 Eigen::Vector2f toPixel(const Camera& cam, const Eigen::Vector3d& p, const PanelLayout& l) {
   const double aspect = double(l.sceneWidth()) / l.height;
-  const Eigen::Vector4d c = cam.projection(aspect, 0.01, 100.0) * cam.view() * Eigen::Vector4d(p.x(), p.y(), p.z(), 1.0);
+  const Eigen::Vector4d c =
+      cam.projection(aspect, 0.01, 100.0) * cam.view() * Eigen::Vector4d(p.x(), p.y(), p.z(), 1.0);
   return {float((c.x() / c.w() * 0.5 + 0.5) * l.sceneWidth()), float((0.5 - c.y() / c.w() * 0.5) * l.height)};
 }
 
@@ -312,7 +314,8 @@ TEST(PanelTest, HeadlessFramesShowTheSceneAndThePanel) {
   EXPECT_GT(panel_px.stddev, 5.0) << "the panel is not blank";
   EXPECT_GT(panel_px.colours, 12) << "text, sliders and headers";
   std::string err;
-  EXPECT_TRUE(writePngAtomic(testing::scratch("panel_frames") + "/panel.png", ui.width(), ui.height(), rgba.data(), &err))
+  EXPECT_TRUE(
+      writePngAtomic(testing::scratch("panel_frames") + "/panel.png", ui.width(), ui.height(), rgba.data(), &err))
       << err;
 
   // Clicking in the panel of a rendered frame works the same: pause with the Run button.

@@ -5,11 +5,11 @@
 #include <cmath>
 #include <filesystem>
 
+#include "common/run_util.h"
 #include "engine/image.h"
 #include "engine/image_diff.h"
 #include "engine/render_session.h"
 #include "sim/scene_io.h"
-#include "common/run_util.h"
 
 namespace ponyhop {
 namespace {

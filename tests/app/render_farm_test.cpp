@@ -6,8 +6,8 @@
 #include <chrono>
 #include <filesystem>
 
-#include "engine/frame_writer.h"
 #include "common/run_util.h"
+#include "engine/frame_writer.h"
 
 namespace ponyhop {
 namespace {
@@ -62,7 +62,8 @@ TEST(RenderFarm, TwoChunksThroughParallelMatchOneRunByteForByte) {
   EXPECT_NE(r.out.find("2 rendered, 14 already there"), std::string::npos) << r.out;
   EXPECT_EQ(fs::last_write_time(FrameWriter::framePath(dir + "/farm", 5)), before);
   for (int i : {3, 9}) {
-    EXPECT_TRUE(readFile(FrameWriter::framePath(dir + "/full", i)) == readFile(FrameWriter::framePath(dir + "/farm", i)))
+    EXPECT_TRUE(readFile(FrameWriter::framePath(dir + "/full", i)) ==
+                readFile(FrameWriter::framePath(dir + "/farm", i)))
         << "frame " << i;
   }
 }
@@ -70,8 +71,9 @@ TEST(RenderFarm, TwoChunksThroughParallelMatchOneRunByteForByte) {
 TEST(RenderFarm, BadRangesAreRefused) {
   const std::string dir = scratch("render_farm_bad");
   for (const char* bad : {"5:2", "0:99", "x", "-1:3"}) {
-    const auto r = runPonyhop("render assets/scenes/chain.json --frames 10 --size 64x64 --out " + dir + "/o --range " + bad,
-                              "render_farm_bad");
+    const auto r =
+        runPonyhop("render assets/scenes/chain.json --frames 10 --size 64x64 --out " + dir + "/o --range " + bad,
+                   "render_farm_bad");
     EXPECT_EQ(r.code, 2) << bad << ": " << r.out;
     EXPECT_NE(r.out.find("--range"), std::string::npos) << r.out;
   }
@@ -80,7 +82,8 @@ TEST(RenderFarm, BadRangesAreRefused) {
 
 TEST(Video, ContainerFollowsTheExtensionOrIsRefused) {
   const std::string dir = scratch("video_containers");
-  const auto r = runPonyhop("render assets/scenes/chain.json --frames 4 --size 64x48 --out " + dir + "/f", "video_frames");
+  const auto r =
+      runPonyhop("render assets/scenes/chain.json --frames 4 --size 64x48 --out " + dir + "/f", "video_frames");
   ASSERT_EQ(r.code, 0) << r.out;
   // Magic bytes of each container.
   const auto starts = [](const std::string& s, size_t at, const std::string& magic) {
@@ -104,9 +107,9 @@ TEST(Video, ContainerFollowsTheExtensionOrIsRefused) {
       EXPECT_TRUE(starts(bytes, 4, "ftypqt")) << ext;
     }
   }
-  const auto bad = runPonyhop("render assets/scenes/chain.json --frames 2 --size 64x48 --out " + dir + "/g --video " + dir +
-                                  "/x.avi",
-                              "video_bad");
+  const auto bad = runPonyhop(
+      "render assets/scenes/chain.json --frames 2 --size 64x48 --out " + dir + "/g --video " + dir + "/x.avi",
+      "video_bad");
   EXPECT_EQ(bad.code, 2) << bad.out;
   EXPECT_NE(bad.out.find(".webm"), std::string::npos) << bad.out;
   EXPECT_FALSE(fs::exists(dir + "/g"));
@@ -114,9 +117,9 @@ TEST(Video, ContainerFollowsTheExtensionOrIsRefused) {
 
 TEST(Transparent, BackgroundHasAlphaZeroAndTheObjectIsOpaque) {
   const std::string dir = scratch("transparent");
-  const auto r = runPonyhop("render assets/scenes/head.json --frames 1 --size 96x96 --transparent --set render.ground=false --out " +
-                                dir,
-                            "transparent");
+  const auto r = runPonyhop(
+      "render assets/scenes/head.json --frames 1 --size 96x96 --transparent --set render.ground=false --out " + dir,
+      "transparent");
   ASSERT_EQ(r.code, 0) << r.out;
   std::string err;
   const auto img = readPng(FrameWriter::framePath(dir, 0), &err);

@@ -28,10 +28,12 @@ TEST(SimCommand, SimWritesTheHopperColumnsAndTakesCommands) {
   const std::string dir = scratch("hopper_sim");
   const std::string csv = dir + "/hop.csv";
   // The course's script is cleared so that the command alone drives the hopper.
-  const auto r = runPonyhop("sim assets/scenes/hopper.json --duration 8 --set hopper.script=[] "
-                            "--set hopper.command.vx=0.6 --set hopper.command.vy=-0.3 --set hopper.command.height=1.1 "
-                            "--csv " + csv,
-                            "hopper_sim");
+  const auto r = runPonyhop(
+      "sim assets/scenes/hopper.json --duration 8 --set hopper.script=[] "
+      "--set hopper.command.vx=0.6 --set hopper.command.vy=-0.3 --set hopper.command.height=1.1 "
+      "--csv " +
+          csv,
+      "hopper_sim");
   ASSERT_EQ(r.code, 0) << r.out;
   std::stringstream in(readFile(csv));
   std::string line;
@@ -61,8 +63,8 @@ TEST(SimCommand, SimWritesTheHopperColumnsAndTakesCommands) {
   EXPECT_EQ(phases, (std::set<std::string>{"flight", "loading", "compression", "thrust", "unloading"}));
   EXPECT_GT(contact_rows, 1000);
   const double vx = (std::stod(last[1]) - x4) / 4.0, vy = (std::stod(last[2]) - y4) / 4.0;
-  std::printf("[ sim --set ] mean velocity 4-8 s (%.3f, %.3f) m/s (command (0.6, -0.3)), highest apex %.3f m (1.1)\n", vx,
-              vy, max_z);
+  std::printf("[ sim --set ] mean velocity 4-8 s (%.3f, %.3f) m/s (command (0.6, -0.3)), highest apex %.3f m (1.1)\n",
+              vx, vy, max_z);
   EXPECT_NEAR(vx, 0.6, 0.1);
   EXPECT_NEAR(vy, -0.3, 0.1);
   EXPECT_NEAR(max_z, 1.1, 0.03);

@@ -5,9 +5,9 @@
 #include <sstream>
 
 #include "app/pose_sampling.h"
+#include "common/run_util.h"
 #include "engine/asset_loader.h"
 #include "sim/scene_io.h"
-#include "common/run_util.h"
 
 namespace ponyhop {
 namespace {
@@ -51,7 +51,8 @@ std::vector<Row> readPoses(const std::string& path, std::string* header) {
 void expectRowsMatchWorld(const std::string& scene_path, double duration, int expected_bodies) {
   const std::string dir = scratch("sim_poses");
   const std::string csv = dir + "/poses.csv";
-  const auto r = runPonyhop("sim " + scene_path + " --duration " + std::to_string(duration) + " --poses " + csv, "sim_poses");
+  const auto r =
+      runPonyhop("sim " + scene_path + " --duration " + std::to_string(duration) + " --poses " + csv, "sim_poses");
   ASSERT_EQ(r.code, 0) << r.out;
   std::string header;
   const std::vector<Row> rows = readPoses(csv, &header);
@@ -75,7 +76,9 @@ void expectRowsMatchWorld(const std::string& scene_path, double duration, int ex
       ASSERT_NEAR(row.t, rt.time(), 1e-9);
       const double want[13] = {b.x.x(), b.x.y(), b.x.z(), b.q.w(), b.q.x(), b.q.y(), b.q.z(),
                                b.v.x(), b.v.y(), b.v.z(), b.w.x(), b.w.y(), b.w.z()};
-      for (int c = 0; c < 13; ++c) ASSERT_NEAR(row.v[c], want[c], 1e-9 * (1.0 + std::abs(want[c]))) << "step " << k << " body " << i << " column " << c;
+      for (int c = 0; c < 13; ++c)
+        ASSERT_NEAR(row.v[c], want[c], 1e-9 * (1.0 + std::abs(want[c])))
+            << "step " << k << " body " << i << " column " << c;
     }
   }
 }
@@ -93,7 +96,8 @@ TEST(SimPoses, HeadAndLinksAtEveryStep) {
 
 TEST(SimPoses, RequestedTimesAreRowsAtThoseTimes) {
   const std::string dir = scratch("sim_poses_at");
-  const auto r = runPonyhop("sim assets/scenes/chain.json --poses " + dir + "/p.csv --at 0,0.01,0.0125,0.3", "sim_poses_at");
+  const auto r =
+      runPonyhop("sim assets/scenes/chain.json --poses " + dir + "/p.csv --at 0,0.01,0.0125,0.3", "sim_poses_at");
   ASSERT_EQ(r.code, 0) << r.out;
   std::string header;
   const std::vector<Row> rows = readPoses(dir + "/p.csv", &header);
@@ -103,7 +107,8 @@ TEST(SimPoses, RequestedTimesAreRowsAtThoseTimes) {
   EXPECT_DOUBLE_EQ(rows[size_t(2 * n)].t, 0.0125);
   EXPECT_DOUBLE_EQ(rows[size_t(3 * n)].t, 0.3);
   // --rate gives k / rate; a bad --at is refused.
-  const auto rate = runPonyhop("sim assets/scenes/chain.json --duration 0.5 --poses " + dir + "/q.csv --rate 100", "sim_poses_rate");
+  const auto rate =
+      runPonyhop("sim assets/scenes/chain.json --duration 0.5 --poses " + dir + "/q.csv --rate 100", "sim_poses_rate");
   ASSERT_EQ(rate.code, 0) << rate.out;
   EXPECT_EQ(readPoses(dir + "/q.csv", &header).size(), size_t(51 * n));
   const auto bad = runPonyhop("sim assets/scenes/chain.json --poses " + dir + "/b.csv --at 0.2,0.1", "sim_poses_bad");
@@ -150,8 +155,10 @@ MidpointErrors midpointErrors(double h) {
     e.mid = std::max(e.mid, poseDistance(c, f));
     e.held = std::max(e.held, poseDistance(held, f));
   }
-  std::printf("h = 1/%.0f s: max position error against h = 1/1920 s: at steps %.3g m, interpolated midpoints %.3g m, "
-              "held %.3g m\n", 1.0 / h, e.step, e.mid, e.held);
+  std::printf(
+      "h = 1/%.0f s: max position error against h = 1/1920 s: at steps %.3g m, interpolated midpoints %.3g m, "
+      "held %.3g m\n",
+      1.0 / h, e.step, e.mid, e.held);
   return e;
 }
 

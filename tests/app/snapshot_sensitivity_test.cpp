@@ -5,11 +5,11 @@
 
 #include <cmath>
 
+#include "app/ui_headless.h"
 #include "engine/image.h"
 #include "engine/image_diff.h"
 #include "engine/render_session.h"
 #include "sim/scene_io.h"
-#include "app/ui_headless.h"
 
 namespace ponyhop {
 namespace {

@@ -13,12 +13,12 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "app/ui_headless.h"
+#include "engine/asset_loader.h"
 #include "engine/image.h"
 #include "engine/image_diff.h"
 #include "engine/render_session.h"
 #include "sim/scene_io.h"
-#include "engine/asset_loader.h"
-#include "app/ui_headless.h"
 
 namespace ponyhop {
 namespace {
@@ -140,9 +140,9 @@ TEST_P(Snapshot, MatchesGolden) {
     std::ifstream rec(kGoldenDir + "/RENDERER.txt");
     std::string recorded;
     std::getline(rec, recorded);
-    ADD_FAILURE() << shot.name << ": " << r.differing << " pixels differ (" << 100.0 * r.share
-                  << " %, allowed " << 100.0 * options.max_diff_share << " %), largest difference "
-                  << r.max_delta << ", " << r.antialiased << " anti-aliased pixels ignored\n"
+    ADD_FAILURE() << shot.name << ": " << r.differing << " pixels differ (" << 100.0 * r.share << " %, allowed "
+                  << 100.0 * options.max_diff_share << " %), largest difference " << r.max_delta << ", "
+                  << r.antialiased << " anti-aliased pixels ignored\n"
                   << "  expected: " << golden << "\n  actual:   " << a << "\n  diff:     " << d
                   << "\n  goldens made by: " << recorded << "\n  this run:        " << renderer
                   << "\n  (if the change is intended: make update-snapshots, review, commit)";

@@ -8,8 +8,8 @@
 #include <fstream>
 
 #include "app/panel.h"
-#include "engine/frame_writer.h"
 #include "common/run_util.h"
+#include "engine/frame_writer.h"
 
 namespace ponyhop {
 namespace {
@@ -131,8 +131,8 @@ wait $pid                                   # still again until the last frame
   while (std::getline(in, line)) {
     int frame = 0, running = 0, active = 0, mouse = 0;
     char mode[16] = {};
-    ASSERT_EQ(std::sscanf(line.c_str(), "frame %d %15s running=%d item_active=%d mouse_down=%d", &frame, mode,
-                          &running, &active, &mouse),
+    ASSERT_EQ(std::sscanf(line.c_str(), "frame %d %15s running=%d item_active=%d mouse_down=%d", &frame, mode, &running,
+                          &active, &mouse),
               5)
         << line;
     ++lines;

@@ -1,6 +1,8 @@
 // Keyframes imported through assimp (engine/animation_import.h): a small animated glTF written
 // here (position and rotation keyed at different times), and the committed
 // assets/head/head_animated.gltf (a 2 s nod).
+#include "engine/animation_import.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,8 +10,6 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
-
-#include "engine/animation_import.h"
 
 using namespace ponyhop;
 using Eigen::AngleAxisd;
@@ -39,7 +39,7 @@ std::string writeTinyGltf(const std::string& name, bool animated) {
     const float h = static_cast<float>(deg(a) / 2);
     data.insert(data.end(), {0.0f, std::sin(h), 0.0f, std::cos(h)});
   }
-  data.insert(data.end(), tt, tt + 3);                          // offset 136, 12 bytes
+  data.insert(data.end(), tt, tt + 3);                            // offset 136, 12 bytes
   data.insert(data.end(), {0, 0, 0, 0.1f, 0.2f, 0.3f, 0, 0, 0});  // offset 148, 36 bytes
   const std::string bin = name + ".bin";
   std::ofstream(dir / bin, std::ios::binary)
@@ -58,7 +58,8 @@ std::string writeTinyGltf(const std::string& name, bool animated) {
   "scenes": [{"nodes": [0]}],
   "nodes": [{"name": "box", "mesh": 0}],
   "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
-  "buffers": [{"uri": ")" + bin + R"(", "byteLength": 184}],
+  "buffers": [{"uri": ")" + bin +
+                           R"(", "byteLength": 184}],
   "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 20},
                   {"buffer": 0, "byteOffset": 56, "byteLength": 80}, {"buffer": 0, "byteOffset": 136, "byteLength": 12},
                   {"buffer": 0, "byteOffset": 148, "byteLength": 36}],

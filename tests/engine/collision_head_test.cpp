@@ -14,10 +14,10 @@
 
 #include "engine/asset_loader.h"
 #include "engine/mesh.h"
-#include "sim/scene_io.h"
-#include "sim/sim.h"
 #include "physics/mesh_sdf.h"
 #include "physics/shapes.h"
+#include "sim/scene_io.h"
+#include "sim/sim.h"
 
 namespace ponyhop {
 namespace {
@@ -56,7 +56,9 @@ class TriangleDistance {
           const auto it = buckets_.find(key(Eigen::Vector3i(c + Eigen::Vector3i(dx, dy, dz))));
           if (it == buckets_.end()) continue;
           for (int t : it->second)
-            best = std::min(best, (p - closestPointOnTriangle(p, v_[idx_[3 * t]], v_[idx_[3 * t + 1]], v_[idx_[3 * t + 2]])).norm());
+            best = std::min(
+                best,
+                (p - closestPointOnTriangle(p, v_[idx_[3 * t]], v_[idx_[3 * t + 1]], v_[idx_[3 * t + 2]])).norm());
         }
     if (best >= within) return best;
     return ponyhop::signedDistanceToTriangles(v_, idx_, p) < 0.0 ? -best : best;

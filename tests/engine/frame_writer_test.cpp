@@ -1,4 +1,6 @@
 // PNG output (atomic files, async writer) and mp4 encoding with ffmpeg.
+#include "engine/frame_writer.h"
+
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -6,7 +8,6 @@
 #include <filesystem>
 #include <fstream>
 
-#include "engine/frame_writer.h"
 #include "engine/video.h"
 
 using namespace ponyhop;

@@ -1,6 +1,7 @@
 // Mesh import (assimp) and the HeadParams placement of a mesh in its body frame.
-#include <gtest/gtest.h>
+#include "engine/mesh.h"
 
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -8,15 +9,14 @@
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
-#include <memory>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <numbers>
 #include <tuple>
 
 #include "engine/isolated.h"
-#include "engine/mesh.h"
 
 using namespace ponyhop;
 
@@ -38,7 +38,8 @@ std::string writeFile(const std::string& name, const std::string& text) {
 std::string octahedronObj(double s = 1.0) {
   std::string o = "# octahedron, no normals\n";
   const double v[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  for (const auto& p : v) o += "v " + std::to_string(s * p[0]) + " " + std::to_string(s * p[1]) + " " + std::to_string(s * p[2]) + "\n";
+  for (const auto& p : v)
+    o += "v " + std::to_string(s * p[0]) + " " + std::to_string(s * p[1]) + " " + std::to_string(s * p[2]) + "\n";
   o += "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n";
   return o;
 }
@@ -107,7 +108,9 @@ TEST(Mesh, PlyAndStlLoad) {
     n.normalize();
     stl += " facet normal " + std::to_string(n.x()) + " " + std::to_string(n.y()) + " " + std::to_string(n.z()) +
            "\n  outer loop\n";
-    for (int k : t) stl += "   vertex " + std::to_string(v[k][0]) + " " + std::to_string(v[k][1]) + " " + std::to_string(v[k][2]) + "\n";
+    for (int k : t)
+      stl +=
+          "   vertex " + std::to_string(v[k][0]) + " " + std::to_string(v[k][1]) + " " + std::to_string(v[k][2]) + "\n";
     stl += "  endloop\n endfacet\n";
   }
   stl += "endsolid octa\n";
@@ -170,8 +173,12 @@ TEST(MeshIsolation, CrashAbortHangAndMemoryOfTheChildAreMessages) {
   IsolationLimits limits;
   limits.seconds = 2.0;
   limits.memory_bytes = size_t(256) << 20;
-  EXPECT_FALSE(runIsolated([](std::string&, std::string&) -> bool { std::raise(SIGSEGV); return true; }, limits,
-                           &out, &err));
+  EXPECT_FALSE(runIsolated(
+      [](std::string&, std::string&) -> bool {
+        std::raise(SIGSEGV);
+        return true;
+      },
+      limits, &out, &err));
   EXPECT_NE(err.find("crashed with SIGSEGV"), std::string::npos) << err;
   EXPECT_FALSE(runIsolated([](std::string&, std::string&) -> bool { std::abort(); }, limits, &out, &err));
   EXPECT_NE(err.find("crashed with SIGABRT"), std::string::npos) << err;
@@ -198,10 +205,19 @@ TEST(MeshIsolation, CrashAbortHangAndMemoryOfTheChildAreMessages) {
       limits, &out, &err));
   EXPECT_NE(err.find("ran out of its memory limit of 256 MB"), std::string::npos) << err;
 #endif
-  EXPECT_FALSE(runIsolated([](std::string&, std::string& e) { e = "refused"; return false; }, limits, &out, &err));
+  EXPECT_FALSE(runIsolated(
+      [](std::string&, std::string& e) {
+        e = "refused";
+        return false;
+      },
+      limits, &out, &err));
   EXPECT_EQ(err, "refused");
-  ASSERT_TRUE(runIsolated([](std::string& r, std::string&) { r = std::string(1 << 20, 'z') + "end"; return true; },
-                          limits, &out, &err));
+  ASSERT_TRUE(runIsolated(
+      [](std::string& r, std::string&) {
+        r = std::string(1 << 20, 'z') + "end";
+        return true;
+      },
+      limits, &out, &err));
   EXPECT_EQ(out.size(), (1u << 20) + 3);
   EXPECT_EQ(out.substr(out.size() - 3), "end");
 }

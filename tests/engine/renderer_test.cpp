@@ -1,10 +1,12 @@
 // Headless rendering: a lit, shadowed, anti-aliased, deterministic frame (OSMesa llvmpipe).
+#include "engine/renderer.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <numeric>
@@ -13,7 +15,6 @@
 #include "engine/frame_writer.h"
 #include "engine/gl_context.h"
 #include "engine/mesh.h"
-#include "engine/renderer.h"
 
 using namespace ponyhop;
 
@@ -107,9 +108,9 @@ void save(const std::string& name, const std::vector<uint8_t>& px, int w = kW, i
   EXPECT_TRUE(writePngAtomic(outDir() + "/" + name, w, h, px.data(), &err)) << err;
 }
 
-#define REQUIRE_GL()                                         \
-  do {                                                       \
-    ASSERT_TRUE(gl().renderer) << "no GL: " << gl().error;   \
+#define REQUIRE_GL()                                       \
+  do {                                                     \
+    ASSERT_TRUE(gl().renderer) << "no GL: " << gl().error; \
   } while (0)
 
 }  // namespace
@@ -175,8 +176,10 @@ TEST(Renderer, ShadowDarkensTheGroundUnderTheSphere) {
   const RenderParams rp = testParams(4, true);
   LightParams light = testLight();
   light.direction = Eigen::Vector3d(1.0, 0.3, -1.0);  // shadow falls to +x: in view, beside the sphere
-  const auto empty = render(cam, rp, [](Renderer&) {}, light);
-  const auto img = render(cam, rp, [](Renderer& r) { r.drawSphere(kSphereC, kSphereR, red()); }, light);
+  const auto empty = render(
+      cam, rp, [](Renderer&) {}, light);
+  const auto img = render(
+      cam, rp, [](Renderer& r) { r.drawSphere(kSphereC, kSphereR, red()); }, light);
   save("sphere_shadow.png", img);
   save("empty_ground.png", empty);
   // Where the light ray through the centre meets z = 0: the middle of the shadow.
@@ -418,7 +421,8 @@ TEST(Renderer, DemoFrame720p) {
   dark.color = Eigen::Vector3f(0.2f, 0.2f, 0.22f);
   auto scene = [&](Renderer& rr) {
     // Head turned to a three-quarter view so that the ponytail (from the bun, back-top) shows.
-    const Eigen::Affine3d pose = Eigen::Translation3d(0.0, 0.0, 0.35) * Eigen::AngleAxisd(1.1, Eigen::Vector3d::UnitZ());
+    const Eigen::Affine3d pose =
+        Eigen::Translation3d(0.0, 0.0, 0.35) * Eigen::AngleAxisd(1.1, Eigen::Vector3d::UnitZ());
     rr.drawMesh(h, pose, skin);
     Eigen::Vector3d prev = pose * Eigen::Vector3d(0.0, 0.1, 0.09);
     for (int i = 1; i <= 16; ++i) {
@@ -428,7 +432,8 @@ TEST(Renderer, DemoFrame720p) {
       prev = p;
     }
     // Hopper: body box, leg capsule, foot sphere.
-    const Eigen::Affine3d body = Eigen::Translation3d(0.45, 0.3, 0.45) * Eigen::AngleAxisd(0.15, Eigen::Vector3d::UnitY());
+    const Eigen::Affine3d body =
+        Eigen::Translation3d(0.45, 0.3, 0.45) * Eigen::AngleAxisd(0.15, Eigen::Vector3d::UnitY());
     rr.drawBox(body, Eigen::Vector3d(0.08, 0.06, 0.05), metal);
     rr.drawTaperedCapsule(body * Eigen::Vector3d(0, 0, -0.05), body * Eigen::Vector3d(0, 0, -0.38), 0.018, 0.012, dark);
     rr.drawSphere(body * Eigen::Vector3d(0, 0, -0.4), 0.02, dark);
@@ -450,10 +455,11 @@ TEST(Renderer, DemoFrame720p) {
   std::string werr;
   ASSERT_TRUE(writePngAtomic(outDir() + "/demo_720p.png", rp.width, rp.height, px.data(), &werr)) << werr;
   const double encode = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("demo 1280x720, %zu triangles (%zu in the head), %d samples: render %.1f ms/frame (submit %.1f, "
-              "readback+finish %.1f), PNG encode %.1f ms; %s / %s\n",
-              r.stats().triangles, head.triangleCount(), r.stats().samples, total / n, submit / n, readback / n, encode,
-              gl().ctx->rendererName().c_str(), gl().ctx->version().c_str());
+  std::printf(
+      "demo 1280x720, %zu triangles (%zu in the head), %d samples: render %.1f ms/frame (submit %.1f, "
+      "readback+finish %.1f), PNG encode %.1f ms; %s / %s\n",
+      r.stats().triangles, head.triangleCount(), r.stats().samples, total / n, submit / n, readback / n, encode,
+      gl().ctx->rendererName().c_str(), gl().ctx->version().c_str());
   ASSERT_EQ(px.size(), size_t(1280 * 720 * 4));
   r.release(h);
 }

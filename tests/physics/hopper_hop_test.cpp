@@ -76,7 +76,7 @@ double mean(const std::vector<double>& v) {
 }
 
 TEST(HopperHop, HopsInPlaceForAMinute) {
-  HopperParams hp;  // defaults: command (0, 0), apex 1.05 m
+  HopperParams hp;                                  // defaults: command (0, 0), apex 1.05 m
   hp.velocity = Eigen::Vector3d(0.05, -0.05, 0.0);  // a small initial push: the controller must work
   HopRun run(hp);
   run.until(60.0);
@@ -88,9 +88,8 @@ TEST(HopperHop, HopsInPlaceForAMinute) {
       "max drift %.2e m\n"
       "[ in place 60 s ] stance slip %.2e m, lowest foot point %.2e m, knee |C| <= %.2e, hip |C| <= %.2e, "
       "touchdown kinetic energy change <= %.3f J, sliding touchdowns %d, slips %d\n",
-      run.hopper->hops(), run.max_tilt * kRad, mean(apexes), spread(apexes), apexes.size(), run.max_drift,
-      run.max_slip, run.min_foot_z, run.max_knee, run.max_hip, cs.max_touchdown_energy_gain, cs.sliding_touchdowns,
-      cs.slips);
+      run.hopper->hops(), run.max_tilt * kRad, mean(apexes), spread(apexes), apexes.size(), run.max_drift, run.max_slip,
+      run.min_foot_z, run.max_knee, run.max_hip, cs.max_touchdown_energy_gain, cs.sliding_touchdowns, cs.slips);
   EXPECT_GT(run.hopper->hops(), 90) << "about one hop per 0.6 s";
   EXPECT_LT(run.max_tilt * kRad, 15.0) << "the body must never fall";
   EXPECT_GT(apexes.size(), 80u);
@@ -169,9 +168,10 @@ TEST(HopperHop, RecoversFromASidewaysShoveInFlight) {
     std::snprintf(buf, sizeof(buf), " %.3f", s);
     list += buf;
   }
-  std::printf("[ shove 0.5 m/s ] at t = %.3f s (hop %d); speed at the next touchdowns:%s m/s; recovered after %d hops; "
-              "max tilt %.3f deg\n",
-              push_time, hops_at_push, list.c_str(), recovered_at, shoved.max_tilt * kRad);
+  std::printf(
+      "[ shove 0.5 m/s ] at t = %.3f s (hop %d); speed at the next touchdowns:%s m/s; recovered after %d hops; "
+      "max tilt %.3f deg\n",
+      push_time, hops_at_push, list.c_str(), recovered_at, shoved.max_tilt * kRad);
   EXPECT_GE(recovered_at, 1) << "a shove of 0.5 m/s must be visible at the first touchdown";
   EXPECT_LE(recovered_at, 5) << "recovered within five hops";
   EXPECT_LT(shoved.max_tilt * kRad, 15.0);

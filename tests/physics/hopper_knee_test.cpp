@@ -45,8 +45,8 @@ void expectDerivativesMatch(const Constraint& c, const RigidBody& a, const Rigid
   const Eigen::VectorXd cddot_fd = (rp.C - 2.0 * r0.C + rm.C) / (h * h);
   for (int i = 0; i < c.dimension(); ++i) {
     EXPECT_NEAR(cdot(i), cdot_fd(i), 1e-6 * (1.0 + std::abs(cdot(i)))) << c.typeName() << " row " << i << ": J q'";
-    EXPECT_NEAR(r0.bias(i), cddot_fd(i), 1e-4 * (1.0 + std::abs(r0.bias(i)))) << c.typeName() << " row " << i
-                                                                                << ": J'q'";
+    EXPECT_NEAR(r0.bias(i), cddot_fd(i), 1e-4 * (1.0 + std::abs(r0.bias(i))))
+        << c.typeName() << " row " << i << ": J'q'";
   }
 }
 
@@ -56,8 +56,9 @@ TEST(HopperKnee, PrismaticJacobianAndBiasMatchFiniteDifferences) {
     const RigidBody a = randomBody(rng, Eigen::Vector3d(0.0, 0.0, 0.6));
     const RigidBody b = randomBody(rng, Eigen::Vector3d(0.0, 0.0, 0.3));
     // Points off the centres of mass and a tilted joint frame exercise every term.
-    const PrismaticJoint knee(0, Eigen::Vector3d(0.01, -0.02, -0.1), quaternionFromRotationVector(Eigen::Vector3d(0.2, -0.1, 0.3)),
-                              1, Eigen::Vector3d(-0.03, 0.01, 0.15), quaternionFromRotationVector(Eigen::Vector3d(0.1, 0.2, -0.2)));
+    const PrismaticJoint knee(
+        0, Eigen::Vector3d(0.01, -0.02, -0.1), quaternionFromRotationVector(Eigen::Vector3d(0.2, -0.1, 0.3)), 1,
+        Eigen::Vector3d(-0.03, 0.01, 0.15), quaternionFromRotationVector(Eigen::Vector3d(0.1, 0.2, -0.2)));
     expectDerivativesMatch(knee, a, b, false);
   }
 }

@@ -55,9 +55,10 @@ TEST(HopperRun, RunsAlongXThenYThenDiagonallyThenStops) {
     const Eigen::Vector2d v = run.meanVelocity(leg.t0, leg.t1);
     ASSERT_TRUE(run.world.ok()) << run.world.status();
     const double error = (v - leg.command).norm() / leg.command.norm();
-    std::printf("[ run %-8s ] command (%.3f, %.3f) m/s, mean over %.0f-%.0f s (%.4f, %.4f) m/s: speed %.4f m/s, "
-                "vector error %.2f %%\n",
-                leg.name, leg.command.x(), leg.command.y(), leg.t0, leg.t1, v.x(), v.y(), v.norm(), 100.0 * error);
+    std::printf(
+        "[ run %-8s ] command (%.3f, %.3f) m/s, mean over %.0f-%.0f s (%.4f, %.4f) m/s: speed %.4f m/s, "
+        "vector error %.2f %%\n",
+        leg.name, leg.command.x(), leg.command.y(), leg.t0, leg.t1, v.x(), v.y(), v.norm(), 100.0 * error);
     EXPECT_LT(error, 0.10) << leg.name;
   }
   // Stop: the command returns to zero at 44 s.

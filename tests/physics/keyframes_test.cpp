@@ -1,6 +1,8 @@
 // The head's keyframe track (physics/keyframes.h): analytic derivatives against finite
 // differences, C2 continuity across keys, interpolation, loop seams, clamping, unwrapping of
 // spins, input validation, and the shipped clips (assets/animations/*.json).
+#include "physics/keyframes.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,8 +11,6 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <random>
-
-#include "physics/keyframes.h"
 
 using namespace ponyhop;
 using Eigen::Quaterniond;
@@ -32,9 +32,9 @@ Vector3d logQ(Quaterniond q) {
 // A lively clip: non-uniform spacing, large rotations about several axes, translation.
 std::vector<Keyframe> busyKeys() {
   return {
-      {0.0, {0.0, 0.0, 0.35}, {0, 0, 0}},        {0.4, {0.02, -0.01, 0.37}, {25, 5, -10}},
-      {0.7, {0.05, 0.00, 0.33}, {-20, 15, 60}},  {1.5, {-0.03, 0.04, 0.40}, {10, -30, 120}},
-      {1.8, {0.00, 0.02, 0.36}, {40, 10, 170}},  {2.6, {0.01, -0.02, 0.35}, {-35, 0, 30}},
+      {0.0, {0.0, 0.0, 0.35}, {0, 0, 0}},       {0.4, {0.02, -0.01, 0.37}, {25, 5, -10}},
+      {0.7, {0.05, 0.00, 0.33}, {-20, 15, 60}}, {1.5, {-0.03, 0.04, 0.40}, {10, -30, 120}},
+      {1.8, {0.00, 0.02, 0.36}, {40, 10, 170}}, {2.6, {0.01, -0.02, 0.35}, {-35, 0, 30}},
   };
 }
 
@@ -100,8 +100,8 @@ TEST(Keyframes, ExpRotationVectorDerivativesAtAndNearZero) {
     EXPECT_LE((j.ddq.coeffs() - fd2).norm(), tol) << "t = " << t;
     // The value is the rotation of angle |r| about r/|r|.
     const Vector3d rv = r(t);
-    const Quaterniond ref = rv.norm() > 0 ? Quaterniond(Eigen::AngleAxisd(rv.norm(), rv.normalized()))
-                                          : Quaterniond::Identity();
+    const Quaterniond ref =
+        rv.norm() > 0 ? Quaterniond(Eigen::AngleAxisd(rv.norm(), rv.normalized())) : Quaterniond::Identity();
     EXPECT_LE((j.q.coeffs() - ref.coeffs()).norm(), 1e-14) << "t = " << t;
   }
 }
@@ -163,10 +163,10 @@ TEST(Keyframes, PassesThroughKeysWithAmplitude) {
 
 TEST(Keyframes, EulerConventionIsRzRyRx) {
   const Vector3d deg(30, -20, 75);
-  const Eigen::Matrix3d R = (Eigen::AngleAxisd(75 * kPi / 180, Vector3d::UnitZ()) *
-                             Eigen::AngleAxisd(-20 * kPi / 180, Vector3d::UnitY()) *
-                             Eigen::AngleAxisd(30 * kPi / 180, Vector3d::UnitX()))
-                                .toRotationMatrix();
+  const Eigen::Matrix3d R =
+      (Eigen::AngleAxisd(75 * kPi / 180, Vector3d::UnitZ()) * Eigen::AngleAxisd(-20 * kPi / 180, Vector3d::UnitY()) *
+       Eigen::AngleAxisd(30 * kPi / 180, Vector3d::UnitX()))
+          .toRotationMatrix();
   EXPECT_LE((eulerDegToQuat(deg).toRotationMatrix() - R).norm(), 1e-14);
   // A nod about x tips the face (-y) downward (-z) for a positive angle.
   EXPECT_LT((eulerDegToQuat({20, 0, 0}) * Vector3d(0, -1, 0)).z(), -0.3);
@@ -275,7 +275,8 @@ TEST(Keyframes, SpinOf720DegreesUnwrapsWithoutFlips) {
   // A spin about a tilted axis, keyed as quaternion samples every 120 deg.
   const Vector3d axis = Vector3d(0.3, -0.5, 1.0).normalized();
   std::vector<PoseSample> samples;
-  for (int i = 0; i <= 6; ++i) samples.push_back({0.3 * i, Vector3d::Zero(), Quaterniond(Eigen::AngleAxisd(i * 2 * kPi / 3, axis))});
+  for (int i = 0; i <= 6; ++i)
+    samples.push_back({0.3 * i, Vector3d::Zero(), Quaterniond(Eigen::AngleAxisd(i * 2 * kPi / 3, axis))});
   std::string err;
   const auto tr = KeyframeTrack::fromSamples(samples, {LoopMode::Clamp, 1.0, 1.0}, &err);
   ASSERT_TRUE(tr) << err;
@@ -322,16 +323,23 @@ TEST(Keyframes, BadInputsAreRejectedWithTheKeyAndField) {
   expectError(busyKeys(), {LoopMode::Clamp, 0.0, 1.0}, {"speed"});
   expectError(busyKeys(), {LoopMode::Clamp, 1.0, -1.0}, {"amplitude"});
   // A loop whose keys make a net full turn cannot close seamlessly.
-  expectError({{0, {0, 0, 0}, {0, 0, 0}}, {1, {0, 0, 0}, {0, 0, 120}}, {2, {0, 0, 0}, {0, 0, 240}}, {3, {0, 0, 0}, {0, 0, 360}}},
+  expectError({{0, {0, 0, 0}, {0, 0, 0}},
+               {1, {0, 0, 0}, {0, 0, 120}},
+               {2, {0, 0, 0}, {0, 0, 240}},
+               {3, {0, 0, 0}, {0, 0, 360}}},
               {LoopMode::Loop, 1.0, 1.0}, {"loop", "net 360 deg"});
   // Quaternion samples: zero quaternion.
   std::string err;
-  std::vector<PoseSample> s{{0, Vector3d::Zero(), Quaterniond::Identity()}, {1, Vector3d::Zero(), Quaterniond(0, 0, 0, 0)}};
+  std::vector<PoseSample> s{{0, Vector3d::Zero(), Quaterniond::Identity()},
+                            {1, Vector3d::Zero(), Quaterniond(0, 0, 0, 0)}};
   EXPECT_FALSE(KeyframeTrack::fromSamples(s, ok, &err));
   EXPECT_NE(err.find("key 1"), std::string::npos) << err;
   // The same spin keys are fine in clamp mode.
-  EXPECT_TRUE(KeyframeTrack::fromKeyframes(
-      {{0, {0, 0, 0}, {0, 0, 0}}, {1, {0, 0, 0}, {0, 0, 120}}, {2, {0, 0, 0}, {0, 0, 240}}, {3, {0, 0, 0}, {0, 0, 360}}}, ok));
+  EXPECT_TRUE(KeyframeTrack::fromKeyframes({{0, {0, 0, 0}, {0, 0, 0}},
+                                            {1, {0, 0, 0}, {0, 0, 120}},
+                                            {2, {0, 0, 0}, {0, 0, 240}},
+                                            {3, {0, 0, 0}, {0, 0, 360}}},
+                                           ok));
 }
 
 TEST(Keyframes, MakeMotionPlaysTheTrack) {
@@ -381,12 +389,12 @@ TEST(Keyframes, ShippedClipsAreValidAndPlausible) {
       zmin = std::min(zmin, s.x.z());
       zmax = std::max(zmax, s.x.z());
     }
-    EXPECT_LT(vmax, 4.0) << path;           // m/s
-    EXPECT_LT(amax, 60.0) << path;          // m/s^2 (a jump's push-off; about 6 g)
-    EXPECT_LT(wmax, 25.0) << path;          // rad/s (a fast whip is ~15-20 rad/s)
-    EXPECT_LT(alphamax, 600.0) << path;     // rad/s^2
-    EXPECT_GT(wmax + vmax, 0.5) << path;    // it moves
-    EXPECT_GT(zmin, 0.15) << path;          // the head stays around its rest height 0.35 m
+    EXPECT_LT(vmax, 4.0) << path;         // m/s
+    EXPECT_LT(amax, 60.0) << path;        // m/s^2 (a jump's push-off; about 6 g)
+    EXPECT_LT(wmax, 25.0) << path;        // rad/s (a fast whip is ~15-20 rad/s)
+    EXPECT_LT(alphamax, 600.0) << path;   // rad/s^2
+    EXPECT_GT(wmax + vmax, 0.5) << path;  // it moves
+    EXPECT_GT(zmin, 0.15) << path;        // the head stays around its rest height 0.35 m
     EXPECT_LT(zmax, 0.8) << path;
     if (name == "showcase") {
       EXPECT_GE(tr->period(), 8.0);

@@ -7,18 +7,18 @@
 #include <random>
 #include <vector>
 
+#include "common/physics_util.h"
 #include "physics/chain.h"
 #include "physics/spherical_joint.h"
-#include "common/physics_util.h"
 
 namespace ponyhop {
 namespace {
 
+using testing::expectRatio;
 using testing::linkPositions;
 using testing::maxDistance;
-using testing::runFor;
-using testing::expectRatio;
 using testing::maxEnergyDrift;
+using testing::runFor;
 
 ChainWorld chainWorld(Integrator integrator, Stabilization stabilization, double dt, int links = 8,
                       AnchorParams anchor = {}) {
@@ -177,7 +177,7 @@ TEST(PhysicsChain, KelvinInitialVelocities) {
   std::vector<Vector6d> vel(world.bodyCount());
   for (int i = 0; i < world.bodyCount(); ++i) vel[i] << world.body(i).v, world.body(i).w;
   EXPECT_LT(system.times(vel).lpNorm<Eigen::Infinity>(), 1e-12);  // J v + J_k v_k = 0
-  EXPECT_GT(world.body(cw.anchor).v.norm(), 0.5);                   // the anchor does move
+  EXPECT_GT(world.body(cw.anchor).v.norm(), 0.5);                 // the anchor does move
 
   const double ke = world.kineticEnergy();
   EXPECT_GT(ke, 0.0);

@@ -98,7 +98,8 @@ TEST(CollisionGeometry, TaperedCapsuleAgainstSphereMatchesDenseSampling) {
 
 TEST(CollisionGeometry, BoxSignedDistanceInsideAndOutside) {
   const Shape box = Shape::box(Vector3d(0.1, 0.2, 0.3));
-  const PlacedShape p = place(box, Vector3d(1, 0, 0), Quaterniond(Eigen::AngleAxisd(0.5 * std::numbers::pi, Vector3d::UnitZ())));
+  const PlacedShape p =
+      place(box, Vector3d(1, 0, 0), Quaterniond(Eigen::AngleAxisd(0.5 * std::numbers::pi, Vector3d::UnitZ())));
   // The box turned 90 deg about z: its x half extent lies along world y.
   Vector3d g;
   EXPECT_NEAR(signedDistance(p, Vector3d(1, 0.15, 0), &g), 0.05, 1e-12);
@@ -118,7 +119,8 @@ TEST(CollisionGeometry, BoxRestingOnAPlaneTouchesAtItsFourLowerCorners) {
     EXPECT_NEAR(std::abs(c.point.x()), 0.1, 1e-12);
   }
   // A sphere in a box's corner region: distance to the corner.
-  const ContactPoint s = only(Shape::sphere(0.01), Vector3d(0.13, 0.14, 0.05), kIdentity, box, Vector3d::Zero(), kIdentity);
+  const ContactPoint s =
+      only(Shape::sphere(0.01), Vector3d(0.13, 0.14, 0.05), kIdentity, box, Vector3d::Zero(), kIdentity);
   EXPECT_NEAR(s.gap, std::hypot(0.03, 0.04) - 0.01, 1e-12);
 }
 
@@ -134,10 +136,10 @@ TEST(CollisionGeometry, ClosestPointOnTriangleInEveryRegion) {
 // An icosphere (subdivided icosahedron projected onto the sphere), outward winding.
 void icosphere(double radius, int levels, std::vector<Vector3d>& v, std::vector<uint32_t>& idx) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-       {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  idx = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
-         3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+  v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+       {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  idx = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4,  11, 10, 2,  10, 7, 6, 7, 1, 8,
+         3, 9,  4, 3, 4, 2, 3, 2, 6, 3, 6, 8,  3, 8,  9,  4, 9, 5, 2, 4,  11, 6,  2,  10, 8,  6, 7, 9, 8, 1};
   for (auto& p : v) p.normalize();
   for (int l = 0; l < levels; ++l) {
     std::vector<uint32_t> next;
@@ -205,7 +207,7 @@ TEST(MeshSdf, BoxMeshFieldIsExactOnFacesAndBoundedAtEdges) {
     std::sort(c.begin(), c.end());
     if (c[1] > 0.011) worst_face = std::max(worst_face, err_here);
   }
-  EXPECT_LT(worst_face, 1e-6);  // float storage
+  EXPECT_LT(worst_face, 1e-6);    // float storage
   EXPECT_LT(worst, 0.3 * 0.005);  // at edges and corners: a fraction of a cell
   EXPECT_FALSE(g.build(v, {}, 0.005, 0.0, &err));
   EXPECT_NE(err.find("no triangles"), std::string::npos);

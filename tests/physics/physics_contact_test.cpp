@@ -39,7 +39,8 @@ RigidBody solidBox(double m, const Vector3d& h, const Vector3d& x, const Quatern
   RigidBody b;
   b.name = "box";
   b.mass = m;
-  b.inertia = m / 3.0 * Vector3d(h.y() * h.y() + h.z() * h.z(), h.x() * h.x() + h.z() * h.z(), h.x() * h.x() + h.y() * h.y());
+  b.inertia =
+      m / 3.0 * Vector3d(h.y() * h.y() + h.z() * h.z(), h.x() * h.x() + h.z() * h.z(), h.x() * h.x() + h.y() * h.y());
   b.x = x;
   b.q = q;
   return b;
@@ -158,7 +159,8 @@ TEST(Contact, InelasticImpactsNeverRaiseTheEnergy) {
   // total (kinetic + potential) never rises from one step to the next.
   World world(params());
   const Vector3d h(0.1, 0.05, 0.03);
-  const int box = world.addDynamicBody(solidBox(1.0, h, Vector3d(0, 0, 0.5), Quaterniond(Eigen::AngleAxisd(0.6, Vector3d(1, 1, 0).normalized()))));
+  const int box = world.addDynamicBody(
+      solidBox(1.0, h, Vector3d(0, 0, 0.5), Quaterniond(Eigen::AngleAxisd(0.6, Vector3d(1, 1, 0).normalized()))));
   world.body(box).v = Vector3d(1.0, 0.5, -1.0);
   world.body(box).w = Vector3d(3.0, -2.0, 5.0);
   CollisionParams cp;
@@ -200,7 +202,7 @@ TEST(Contact, ChainFallingOnTheGroundKeepsItsJointsAndLosesEnergy) {
     CollisionParams cp;
     cp.friction = 0.3;
     auto shared = std::make_shared<Collisions>(cp, solver);
-  Collisions& col = *shared;
+    Collisions& col = *shared;
     const int ground = col.addShape(kWorldBody, Shape::plane(Vector3d::UnitZ(), Vector3d(0, 0, -0.2)));
     for (int i = 0; i < chain.links; ++i) {
       const double ra = cw.chain.radii[i], rb = i + 1 < chain.links ? cw.chain.radii[i + 1] : ra;

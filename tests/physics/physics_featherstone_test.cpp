@@ -7,11 +7,11 @@
 #include <random>
 #include <vector>
 
+#include "common/physics_util.h"
 #include "physics/chain.h"
 #include "physics/featherstone.h"
 #include "physics/prismatic_joint.h"
 #include "physics/spherical_joint.h"
-#include "common/physics_util.h"
 
 namespace ponyhop {
 namespace {
@@ -55,8 +55,8 @@ World makeSystem(int which, SolverKind solver) {
     addChain(world, cp, h, Eigen::Vector3d(-0.05, 0, 0.01));
     return world;
   }
-  world.addJoint(std::make_unique<SphericalJoint>(kWorldBody, Eigen::Vector3d(0.1, 0.2, 1.1), h,
-                                                  Eigen::Vector3d(0, 0, 0.1)));
+  world.addJoint(
+      std::make_unique<SphericalJoint>(kWorldBody, Eigen::Vector3d(0.1, 0.2, 1.1), h, Eigen::Vector3d(0, 0, 0.1)));
   RigidBody foot;
   foot.name = "foot";
   foot.mass = 0.2;

@@ -10,8 +10,8 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
-#include <string>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "physics/chain.h"
@@ -84,8 +84,8 @@ TEST(PhysicsIntegrator, RattleEnergyStaysBoundedOverLongRuns) {
   EXPECT_LT(r_last, 2.0 * r_first) << "RATTLE's energy error grows";
   const auto [k_first, k_last] = windows(Integrator::RK4);
   EXPECT_GT(k_last, 3.0 * k_first) << "RK4 + projection was expected to drift (else this test shows nothing)";
-  std::printf("pendulum dt=1/60 60 s: rattle |dE|/E0 first %.2e last %.2e; rk4 first %.2e last %.2e\n", r_first,
-              r_last, k_first, k_last);
+  std::printf("pendulum dt=1/60 60 s: rattle |dE|/E0 first %.2e last %.2e; rk4 first %.2e last %.2e\n", r_first, r_last,
+              k_first, k_last);
 }
 
 // The canonical 8-link chain, fixed anchor, default parameters at dt = 1/240 for 5 s: energy
@@ -136,9 +136,9 @@ TEST(PhysicsIntegrator, FreeRotationIsExactForSymmetricBodies) {
   const Eigen::Vector3d L = q0 * Eigen::Vector3d(1.0, -0.5, 4.0);  // world
   const double t = 1.7;
   const double pi3 = (q0.conjugate() * L).z();
-  const Eigen::Quaterniond exact = quaternionFromRotationVector(t / inertia.x() * L) * q0 *
-                                   quaternionFromRotationVector(t * (1.0 / inertia.z() - 1.0 / inertia.x()) * pi3 *
-                                                                Eigen::Vector3d::UnitZ());
+  const Eigen::Quaterniond exact =
+      quaternionFromRotationVector(t / inertia.x() * L) * q0 *
+      quaternionFromRotationVector(t * (1.0 / inertia.z() - 1.0 / inertia.x()) * pi3 * Eigen::Vector3d::UnitZ());
   EXPECT_LT(rotationVector(freeRotation(q0, inertia, L, t) * exact.conjugate()).norm(), 1e-12);
 
   const Eigen::Vector3d asym(1.0, 2.0, 3.0);
@@ -261,7 +261,9 @@ TEST(PhysicsIntegrator, ToleranceCountsSubstepsItCouldNotBringBelow) {
 // The default method on the canonical chain: N = 8, 32; fixed and shaking anchor; dt 1/60..1/1920;
 // 5 s each.
 TEST(PhysicsIntegrator, DISABLED_DefaultMethodTable) {
-  std::printf("| N | anchor | dt | result | max abs(E-E0)/E0 | max joint error (m) | substeps per dt (mean, max) | ms/simulated s |\n");
+  std::printf(
+      "| N | anchor | dt | result | max abs(E-E0)/E0 | max joint error (m) | substeps per dt (mean, max) | "
+      "ms/simulated s |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (int links : {8, 32}) {
     for (AnchorMotion motion : {AnchorMotion::Fixed, AnchorMotion::Shake}) {

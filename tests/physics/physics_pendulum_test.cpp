@@ -79,8 +79,7 @@ TEST(PhysicsPendulum, LargeAmplitudePeriodRK4) {
 TEST(PhysicsPendulum, LargeAmplitudePeriodSymplecticEuler) {
   const double theta0 = 120.0 * std::numbers::pi / 180.0;
   double expected = 0.0;
-  const double period =
-      measuredPeriod(Integrator::SymplecticEuler, Stabilization::Projection, theta0, 1e-4, &expected);
+  const double period = measuredPeriod(Integrator::SymplecticEuler, Stabilization::Projection, theta0, 1e-4, &expected);
   // First order, and post-stabilized symplectic Euler gains energy at a relative rate ~ h w^2
   // (the centripetal term is taken at the old state), so the swing grows and the period
   // lengthens: 0.25% after these two periods. A wrong inertia or gyroscopic term is off by more.

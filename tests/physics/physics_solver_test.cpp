@@ -8,12 +8,12 @@
 #include <random>
 #include <vector>
 
+#include "common/physics_util.h"
 #include "physics/chain.h"
 #include "physics/dense_solver.h"
 #include "physics/hopper.h"
 #include "physics/spherical_joint.h"
 #include "physics/tree_solver.h"
-#include "common/physics_util.h"
 
 namespace ponyhop {
 namespace {
@@ -98,7 +98,8 @@ int addHub(World& world) {
   hub.mass = 0.3;
   hub.inertia = Eigen::Vector3d(1e-3, 2e-3, 1.5e-3);
   const int h = world.addDynamicBody(hub);
-  world.addJoint(std::make_unique<SphericalJoint>(kWorldBody, Eigen::Vector3d(0, 0, 0.05), h, Eigen::Vector3d(0, 0, 0.05)));
+  world.addJoint(
+      std::make_unique<SphericalJoint>(kWorldBody, Eigen::Vector3d(0, 0, 0.05), h, Eigen::Vector3d(0, 0, 0.05)));
   return h;
 }
 

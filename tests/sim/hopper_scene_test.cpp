@@ -61,9 +61,10 @@ TEST(HopperScene, PonytailOnTheHopperHopsForThirtySeconds) {
   }
   ASSERT_TRUE(rt.ok()) << rt.status();
   const double mean_pull = pull_sum / samples;
-  std::printf("[ ponytail hopper ] 30 s: max tilt %.2f deg, lowest body %.3f m, max joint error %.2e, "
-              "mean pull of the chain on the body %.2f N (its weight %.2f N), %d hops\n",
-              max_tilt * 180.0 / std::numbers::pi, min_z, max_joint, mean_pull, chain_mass * 9.81, rt.hopper()->hops());
+  std::printf(
+      "[ ponytail hopper ] 30 s: max tilt %.2f deg, lowest body %.3f m, max joint error %.2e, "
+      "mean pull of the chain on the body %.2f N (its weight %.2f N), %d hops\n",
+      max_tilt * 180.0 / std::numbers::pi, min_z, max_joint, mean_pull, chain_mass * 9.81, rt.hopper()->hops());
   EXPECT_LT(max_tilt * 180.0 / std::numbers::pi, 15.0) << "the hopper must not fall";
   EXPECT_GT(min_z, 0.6);
   EXPECT_LT(max_joint, 1e-9);

@@ -1,12 +1,11 @@
 // Scene files: every field through reflect(), errors that name the file, the key and the range.
-#include <gtest/gtest.h>
+#include "sim/scene_io.h"
 
+#include <gtest/gtest.h>
 #include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
-
-#include "sim/scene_io.h"
 
 namespace ponyhop {
 namespace {
@@ -46,8 +45,9 @@ TEST(SceneIo, ReadsNestedSectionsAndEnums) {
 }
 
 TEST(SceneIo, HoppersListIsReadAndEachEntryChecked) {
-  const Scene s = parseScene(json::parse(R"({"hopper": {}, "hoppers": [{"position": [1, 0, 1.05]}, {"position": [2, 0, 1.1]}]})"),
-                             "test.json", {});
+  const Scene s =
+      parseScene(json::parse(R"({"hopper": {}, "hoppers": [{"position": [1, 0, 1.05]}, {"position": [2, 0, 1.1]}]})"),
+                 "test.json", {});
   ASSERT_EQ(s.hoppers.size(), 2u);
   EXPECT_DOUBLE_EQ(s.hoppers[1].position.x(), 2.0);
   const std::string e = errorOf(json::parse(R"({"hoppers": [{}, {"min_length": 0.85}]})"));
@@ -70,14 +70,10 @@ TEST(SceneIo, WrongTypeAndRange) {
   const std::string e = errorOf(json::parse(R"({"physics": {"dt": -1}})"));
   EXPECT_NE(e.find("physics.dt"), std::string::npos) << e;
   EXPECT_NE(e.find("[1e-06, 0.1] s"), std::string::npos) << e;
-  EXPECT_NE(errorOf(json::parse(R"({"anchor": {}, "chain": {"links": 0}})")).find("chain.links"),
-            std::string::npos);
-  EXPECT_NE(errorOf(json::parse(R"({"anchor": {}, "chain": {"links": 2.5}})")).find("whole number"),
-            std::string::npos);
-  EXPECT_NE(errorOf(json::parse(R"({"physics": {"integrator": "leapfrog"}})")).find("\"rk4\""),
-            std::string::npos);
-  EXPECT_NE(errorOf(json::parse(R"({"physics": {"gravity": [0, 0]}})")).find("3 numbers"),
-            std::string::npos);
+  EXPECT_NE(errorOf(json::parse(R"({"anchor": {}, "chain": {"links": 0}})")).find("chain.links"), std::string::npos);
+  EXPECT_NE(errorOf(json::parse(R"({"anchor": {}, "chain": {"links": 2.5}})")).find("whole number"), std::string::npos);
+  EXPECT_NE(errorOf(json::parse(R"({"physics": {"integrator": "leapfrog"}})")).find("\"rk4\""), std::string::npos);
+  EXPECT_NE(errorOf(json::parse(R"({"physics": {"gravity": [0, 0]}})")).find("3 numbers"), std::string::npos);
 }
 
 TEST(SceneIo, EveryProblemIsListed) {
@@ -87,8 +83,9 @@ TEST(SceneIo, EveryProblemIsListed) {
 
 TEST(SceneIo, OverridesApplyAndAreValidated) {
   const json j = json::parse(R"({"anchor": {}, "chain": {"links": 8}})");
-  const Scene s = parseScene(j, "t.json", {parseOverride("chain.links=32"), parseOverride("physics.dt=0.001"),
-                                           parseOverride("physics.integrator=rk4")});
+  const Scene s = parseScene(
+      j, "t.json",
+      {parseOverride("chain.links=32"), parseOverride("physics.dt=0.001"), parseOverride("physics.integrator=rk4")});
   EXPECT_EQ(s.chain->links, 32);
   EXPECT_DOUBLE_EQ(s.physics.dt, 0.001);
   const std::string e = errorOf(j, {parseOverride("physics.dt=nan")});
@@ -254,11 +251,12 @@ TEST(SceneIoHostile, LongChainsWithoutASolverGetTheLinearOne) {
   EXPECT_EQ(s.physics.solver, SolverKind::Dense);
   ASSERT_EQ(s.notes.size(), 1u);
   EXPECT_NE(s.notes[0].find("s per step"), std::string::npos) << s.notes[0];
-  s = parseSceneText(R"({"anchor": {}, "chain": {"links": 8}})", "long.json", {parseOverride("chain.links=4096"),
-                                                                               parseOverride("physics.solver=dense")});
+  s = parseSceneText(R"({"anchor": {}, "chain": {"links": 8}})", "long.json",
+                     {parseOverride("chain.links=4096"), parseOverride("physics.solver=dense")});
   EXPECT_EQ(s.physics.solver, SolverKind::Dense);
   // Short chains (every shipped scene) are untouched.
-  for (const char* f : {"assets/scenes/ponytail.json", "assets/scenes/chain.json", "assets/scenes/ponytail_hopper.json"}) {
+  for (const char* f :
+       {"assets/scenes/ponytail.json", "assets/scenes/chain.json", "assets/scenes/ponytail_hopper.json"}) {
     const Scene shipped = loadScene(f);
     EXPECT_EQ(shipped.physics.solver, SolverKind::Dense) << f;
     EXPECT_TRUE(shipped.notes.empty()) << f;
@@ -281,9 +279,11 @@ TEST(SceneIo, CollisionSectionNeedsAChainOnAHeadAndASolverThatTakesRows) {
       << no_head;
   const std::string reduced = errorOf(json::parse(
       R"({"head": {}, "chain": {"attach": "head"}, "physics": {"solver": "featherstone"}, "collision": {}})"));
-  EXPECT_NE(reduced.find("collision: physics.solver \"featherstone\" takes no contact or limit rows"), std::string::npos)
+  EXPECT_NE(reduced.find("collision: physics.solver \"featherstone\" takes no contact or limit rows"),
+            std::string::npos)
       << reduced;
-  EXPECT_NE(errorOf(json::parse(R"({"collision": {"margin": -1}})")).find("collision.margin: must be"), std::string::npos);
+  EXPECT_NE(errorOf(json::parse(R"({"collision": {"margin": -1}})")).find("collision.margin: must be"),
+            std::string::npos);
   // Without a head to collide with, collision.head false is a valid (empty) section.
   EXPECT_EQ(errorOf(json::parse(R"({"collision": {"head": false}})")), "");
 }

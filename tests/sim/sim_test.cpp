@@ -1,6 +1,8 @@
 // The sim layer: a scene made into a World with any number of controllers and contact sets, the
 // one step order, snapshots that restore bit for bit, state carried across a rebuild, a World
 // that may move, and a library that links no GL and no importer.
+#include "sim/sim.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,7 +13,6 @@
 #include <string>
 
 #include "sim/scene_io.h"
-#include "sim/sim.h"
 
 namespace ponyhop {
 namespace {
@@ -50,10 +51,11 @@ TEST(Sim, TwoHoppersInOneWorldBothHopForTenSeconds) {
   ASSERT_TRUE(again.ok()) << again.status();
   const World& w = sim.world();
   const Eigen::Vector3d pa = w.body(a.model().body).x, pb = w.body(b.model().body).x;
-  std::printf("[ two hoppers ] 10 s: A %d hops, at (%.2f, %.2f), max tilt %.1f deg, lowest %.2f m; "
-              "B %d hops, at (%.2f, %.2f), max tilt %.1f deg, lowest %.2f m, apex %.3f m\n",
-              a.hops(), pa.x(), pa.y(), a_max_tilt * 57.3, a_min_z, b.hops(), pb.x(), pb.y(), b_max_tilt * 57.3, b_min_z,
-              b.lastApex());
+  std::printf(
+      "[ two hoppers ] 10 s: A %d hops, at (%.2f, %.2f), max tilt %.1f deg, lowest %.2f m; "
+      "B %d hops, at (%.2f, %.2f), max tilt %.1f deg, lowest %.2f m, apex %.3f m\n",
+      a.hops(), pa.x(), pa.y(), a_max_tilt * 57.3, a_min_z, b.hops(), pb.x(), pb.y(), b_max_tilt * 57.3, b_min_z,
+      b.lastApex());
   EXPECT_GT(a.hops(), 12);
   EXPECT_GT(b.hops(), 10);
   EXPECT_NEAR(b.attitude(w)[2] * 57.2958, 90.0, 5.0) << "B turns to its own heading";
