@@ -9,6 +9,8 @@
 #include <set>
 #include <vector>
 
+#include "physics/shapes.h"
+
 namespace ponyhop {
 namespace {
 
@@ -17,28 +19,6 @@ int upIndex(UpAxis a) { return a == UpAxis::Z ? 2 : 1; }
 Eigen::Matrix3d upFix(UpAxis a) {
   if (a == UpAxis::Z) return Eigen::Matrix3d::Identity();
   return Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
-}
-
-// Closest point of triangle abc to p (the Voronoi regions of its vertices, edges and face).
-Eigen::Vector3d closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                  const Eigen::Vector3d& c) {
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-  const double denom = 1.0 / (va + vb + vc);
-  return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
 // The head of a whole-body mesh: walking down from the top, the head widens, narrows at the neck
@@ -168,7 +148,7 @@ Eigen::Vector3d headAnchorInMesh(const HeadParams& head, const HeadFit& fit, con
     const Eigen::Vector3f& b = mesh.positions[mesh.indices[t + 1]];
     const Eigen::Vector3f& c = mesh.positions[mesh.indices[t + 2]];
     if (!box.contains(a) || !box.contains(b) || !box.contains(c)) continue;
-    const Eigen::Vector3d q = closestOnTriangle(target, a.cast<double>(), b.cast<double>(), c.cast<double>());
+    const Eigen::Vector3d q = closestPointOnTriangle(target, a.cast<double>(), b.cast<double>(), c.cast<double>());
     const double d2 = (q - target).squaredNorm();
     if (d2 < best_d2) {
       best_d2 = d2;
