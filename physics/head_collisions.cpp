@@ -1,16 +1,77 @@
 #include "physics/head_collisions.h"
 
+#include <mutex>
 #include <numbers>
 
 #include "physics/mesh_sdf.h"
 
 namespace ponyhop {
 
+namespace {
+
+// The last grid built, and what it was built from.
+struct GridCache {
+  std::mutex mutex;
+  uint64_t key = 0;
+  std::shared_ptr<const SignedDistanceGrid> grid;
+};
+GridCache& gridCache() {
+  static GridCache cache;
+  return cache;
+}
+
+// FNV-1a over the bytes of the inputs.
+uint64_t gridKey(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices, double cell,
+                 double pad, const Eigen::AlignedBox3d& region) {
+  uint64_t h = 1469598103934665603ull;
+  const auto bytes = [&h](const void* p, size_t n) {
+    const auto* c = static_cast<const unsigned char*>(p);
+    for (size_t i = 0; i < n; ++i) h = (h ^ c[i]) * 1099511628211ull;
+  };
+  bytes(vertices.data(), vertices.size() * sizeof(Eigen::Vector3d));
+  bytes(indices.data(), indices.size() * sizeof(uint32_t));
+  const double extra[] = {cell,
+                          pad,
+                          region.min().x(),
+                          region.min().y(),
+                          region.min().z(),
+                          region.max().x(),
+                          region.max().y(),
+                          region.max().z()};
+  bytes(extra, sizeof(extra));
+  return h;
+}
+
+std::shared_ptr<const SignedDistanceGrid> cachedGrid(const std::vector<Eigen::Vector3d>& vertices,
+                                                     const std::vector<uint32_t>& indices, double cell, double pad,
+                                                     const Eigen::AlignedBox3d& region, std::string* error) {
+  const uint64_t key = gridKey(vertices, indices, cell, pad, region);
+  GridCache& cache = gridCache();
+  {
+    std::lock_guard<std::mutex> lock(cache.mutex);
+    if (cache.grid && cache.key == key) return cache.grid;
+  }
+  auto grid = std::make_shared<SignedDistanceGrid>();
+  if (!grid->build(vertices, indices, cell, pad, error, 8'000'000, &region)) return nullptr;
+  std::lock_guard<std::mutex> lock(cache.mutex);
+  cache.key = key;
+  cache.grid = grid;
+  return grid;
+}
+
+}  // namespace
+
+void clearHeadColliderCache() {
+  GridCache& cache = gridCache();
+  std::lock_guard<std::mutex> lock(cache.mutex);
+  cache.grid.reset();
+  cache.key = 0;
+}
+
 std::shared_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain, int head_body,
                                                const std::vector<Eigen::Vector3d>& vertices,
                                                const std::vector<uint32_t>& indices, const HeadCollisionParams& params,
                                                std::string* error) {
-  auto grid = std::make_shared<SignedDistanceGrid>();
   // Padding: the thickest link plus a few cells, so every query near the head is inside the grid.
   double thickest = 0.0;
   for (double r : chain.radii) thickest = std::max(thickest, r);
@@ -21,7 +82,8 @@ std::shared_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain,
   const Eigen::Vector3d anchor = hb.q.conjugate() * (chain.anchor(world) - hb.x);
   const double reach = chain.length * static_cast<double>(chain.links.size()) + pad;
   const Eigen::AlignedBox3d region(anchor.array() - reach, anchor.array() + reach);
-  if (!grid->build(vertices, indices, params.cell, pad, error, 8'000'000, &region)) return nullptr;
+  std::shared_ptr<const SignedDistanceGrid> grid = cachedGrid(vertices, indices, params.cell, pad, region, error);
+  if (!grid) return nullptr;
   CollisionParams cp;
   cp.friction = params.friction;
   cp.restitution = params.restitution;

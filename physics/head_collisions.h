@@ -62,4 +62,9 @@ std::shared_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain,
                                                const std::vector<uint32_t>& indices, const HeadCollisionParams& params,
                                                std::string* error);
 
+// makeHeadCollisions keeps the last grid it built and hands it out again for the same triangles,
+// cell, padding and region (a scene rebuilt for a panel edit of friction or damping does not build
+// its 0.7 s grid again). Thread-safe; this empties it (the bench measures the build).
+void clearHeadColliderCache();
+
 }  // namespace ponyhop

@@ -53,7 +53,8 @@ bool SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, con
   if (region) {
     lo = lo.cwiseMax(region->min());
     hi = hi.cwiseMin(region->max());
-    if ((hi.array() < lo.array()).any()) return fail("collider region does not meet the mesh");
+    // At least two nodes a side (trilinear interpolation needs a cell).
+    if (((hi - lo).array() < cell).any()) return fail("collider region does not meet the mesh");
   }
   cell_ = cell;
   origin_ = lo;

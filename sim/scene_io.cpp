@@ -504,6 +504,14 @@ void validateScene(const Scene& scene_in, const std::string& source) {
       errors.push_back("chain.attach: \"hopper\" needs a hopper section in the scene");
     }
   }
+  if (scene.collision && !scene.collision->head) {
+    const auto& c = *scene.collision;
+    if (c.self || c.joint_cone > 0.0 || c.joint_twist > 0.0) {
+      errors.push_back(
+          "collision: self, joint_cone and joint_twist act on the ponytail the head collision builds: they "
+          "need collision.head true (collision.head false builds nothing)");
+    }
+  }
   if (scene.collision && scene.collision->head) {
     if (!scene.chain || scene.chain->attach != ChainAttach::Head || !scene.head) {
       errors.push_back(

@@ -20,7 +20,7 @@ struct RunResult {
 inline RunResult runPonyhop(const std::string& args, const std::string& tag) {
   std::filesystem::create_directories(PONYHOP_TEST_OUT);
   const std::string log = std::string(PONYHOP_TEST_OUT) + "/" + tag + ".log";
-  const std::string cmd = std::string(PONYHOP_EXE) + " " + args + " > " + log + " 2>&1";
+  const std::string cmd = "\"" + std::string(PONYHOP_EXE) + "\" " + args + " > \"" + log + "\" 2>&1";
   const int status = std::system(cmd.c_str());
   RunResult r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -14,6 +14,7 @@
 
 #include "engine/asset_loader.h"
 #include "engine/mesh.h"
+#include "physics/head_collisions.h"
 #include "physics/mesh_sdf.h"
 #include "physics/shapes.h"
 #include "sim/scene_io.h"
@@ -172,6 +173,25 @@ TEST(HeadPenetrationControl, WithoutTheColliderTheShowcaseGoesThroughTheHead) {
   EXPECT_GT(r.deepest, 5e-3);
 }
 
+// A rebuild with the same head (a panel edit of friction) takes the grid already built; a cleared
+// cache builds it again.
+TEST(HeadCollisionsScene, ARebuildWithTheSameHeadReusesItsGrid) {
+  Scene scene = loadScene("assets/scenes/ponytail.json");
+  const auto gridOf = [](const Sim& rt) { return rt.collisions()->shapes().front().sdf.get(); };
+  Sim a(scene, &assimpAssets());
+  scene.collision->friction = 0.6;
+  Sim b(scene, &assimpAssets());
+  EXPECT_EQ(gridOf(a), gridOf(b));
+  EXPECT_EQ(b.collisions()->params().friction, 0.6);
+  clearHeadColliderCache();
+  Sim c(scene, &assimpAssets());
+  EXPECT_NE(gridOf(a), gridOf(c));
+  scene.collision->cell = 0.004;  // another grid
+  Sim d(scene, &assimpAssets());
+  EXPECT_NE(gridOf(c), gridOf(d));
+  EXPECT_EQ(gridOf(d)->cell(), 0.004);
+}
+
 // The optional joint limits of the collision section, through the scene: every joint's swing
 // stays inside joint_cone and its twist inside joint_twist while the showcase throws the hair
 // about. The rows act on velocities; what the integrator carries past the limit within a step is
@@ -205,6 +225,7 @@ TEST(HeadCollisionsScene, JointConesAndTwistLimitsHold) {
   EXPECT_LT(swing, 25.5 * deg);
   EXPECT_LT(twist, 10.5 * deg);
   EXPECT_GT(swing, 20.0 * deg) << "the showcase does bend the joints to their limit";
+  EXPECT_GT(twist, 8.0 * deg) << "the showcase does twist the joints to their limit";
 }
 
 // collision.self: links two or more apart do not pass through each other. The toss clip folds the

@@ -284,8 +284,11 @@ TEST(SceneIo, CollisionSectionNeedsAChainOnAHeadAndASolverThatTakesRows) {
       << reduced;
   EXPECT_NE(errorOf(json::parse(R"({"collision": {"margin": -1}})")).find("collision.margin: must be"),
             std::string::npos);
-  // Without a head to collide with, collision.head false is a valid (empty) section.
+  // Without a head to collide with, collision.head false is a valid (empty) section; options that
+  // act on what the head collision builds are refused with it, not dropped silently.
   EXPECT_EQ(errorOf(json::parse(R"({"collision": {"head": false}})")), "");
+  const std::string dropped = errorOf(json::parse(R"({"collision": {"head": false, "self": true}})"));
+  EXPECT_NE(dropped.find("need collision.head true"), std::string::npos) << dropped;
 }
 
 // How an edit applies is the field's own metadata, inherited from its section.
