@@ -56,16 +56,6 @@ std::string baseHeader(const Sim& rt) {
 // the deepest overlap (m) that stage found before it pushed the bodies apart.
 std::string header(const Sim& rt) { return baseHeader(rt) + (rt.collisions() ? ",contacts,deepest" : ""); }
 
-SimRow baseSample(const Sim& rt);
-SimRow sample(const Sim& rt) {
-  SimRow r = baseSample(rt);
-  if (const Collisions* c = rt.collisions()) {
-    r.values.push_back(c->stats().active);
-    r.values.push_back(c->stats().deepest);
-  }
-  return r;
-}
-
 SimRow baseSample(const Sim& rt) {
   SimRow r;
   if (const Hopper* h = rt.hopper()) {
@@ -83,6 +73,15 @@ SimRow baseSample(const Sim& rt) {
     r.values = {tip.x(), tip.y(), tip.z(), rt.chainEnergy(), rt.maxJointError()};
   } else {
     r.values = {rt.maxJointError()};
+  }
+  return r;
+}
+
+SimRow sample(const Sim& rt) {
+  SimRow r = baseSample(rt);
+  if (const Collisions* c = rt.collisions()) {
+    r.values.push_back(c->stats().active);
+    r.values.push_back(c->stats().deepest);
   }
   return r;
 }
