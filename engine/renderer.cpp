@@ -94,11 +94,12 @@ Eigen::Matrix4d ortho(double l, double r, double b, double t, double n, double f
 }
 
 // Fits the light's orthographic box to the casters and to their shadows on the ground: the points
-// are the bounds' corners and those corners pushed along the light onto z = 0. The square extent
+// are the bounds' corners and those corners pushed along the light onto the ground (z = ground_z).
+// The square extent
 // is rounded up to steps of 2^(1/4) and the centre snapped to whole texels, so that a moving scene
 // changes the shadow map's texel grid rarely and only by whole texels (no crawling edges).
 LightFrustum fitLightFrustum(const Eigen::Vector3d& dir, const Eigen::AlignedBox3d& casters, int size,
-                             double softness_texels) {
+                             double softness_texels, double ground_z) {
   LightFrustum lf;
   const Eigen::Matrix4d V = lookAlong(dir);
   const Eigen::Matrix3d R = V.block<3, 3>(0, 0);
@@ -106,7 +107,8 @@ LightFrustum fitLightFrustum(const Eigen::Vector3d& dir, const Eigen::AlignedBox
   for (int i = 0; i < 8; ++i) {
     const Eigen::Vector3d c = casters.corner(Eigen::AlignedBox3d::CornerType(i));
     ls.extend(R * c);
-    if (dir.z() < -1e-3 && c.z() > 0.0) ls.extend(R * (c + dir * (c.z() / -dir.z())));
+    const double above = c.z() - ground_z;
+    if (dir.z() < -1e-3 && above > 0.0) ls.extend(R * (c + dir * (above / -dir.z())));
   }
   double extent = std::max(ls.sizes().x(), ls.sizes().y());
   extent = std::max(extent, 1e-3);
@@ -756,7 +758,7 @@ void Renderer::endFrame() {
     I.beginPass(Impl::kShadowPass);
     const int size = std::clamp(I.light.shadow_size, 64, 8192);
     I.ensureShadowMap(draft ? std::max(256, size / 4) : size);
-    lf = fitLightFrustum(ld, casters, I.shadow_size, I.light.shadow_softness);
+    lf = fitLightFrustum(ld, casters, I.shadow_size, I.light.shadow_softness, I.params.ground_height);
     I.frustum = lf;
     glBindFramebuffer(GL_FRAMEBUFFER, I.shadow_fbo);
     glViewport(0, 0, I.shadow_size, I.shadow_size);
@@ -786,7 +788,7 @@ void Renderer::endFrame() {
       const Eigen::Matrix4f lvp = lf.view_proj.cast<float>();
       I.setCommonUniforms(I.prog_ground_shadow, lvp, lvp, float(1.5 * lf.texel_world), true);
       setMat4(I.prog_ground_shadow, "u_invLightViewProj", lf.view_proj.inverse().cast<float>());
-      glUniform1f(loc(I.prog_ground_shadow, "u_groundZ"), 0.0f);
+      glUniform1f(loc(I.prog_ground_shadow, "u_groundZ"), float(I.params.ground_height));
       glUniform2f(loc(I.prog_ground_shadow, "u_groundShadowSize"), float(gs), float(gs));
       glBindVertexArray(I.empty_vao);
       glDrawArrays(GL_TRIANGLES, 0, 3);
@@ -806,7 +808,7 @@ void Renderer::endFrame() {
   if (znear <= 0.0) {
     double nearest = D;
     if (!I.draw_bounds.isEmpty()) nearest = std::sqrt(I.draw_bounds.squaredExteriorDistance(cam.eye));
-    if (I.params.ground) nearest = std::min(nearest, std::max(cam.eye.z(), 0.0));
+    if (I.params.ground) nearest = std::min(nearest, std::max(cam.eye.z() - I.params.ground_height, 0.0));
     znear = std::clamp(0.5 * nearest, 0.002 * D + 1e-4, 0.05 * D + 0.01);
   }
   if (zfar <= 0.0) {
@@ -848,7 +850,7 @@ void Renderer::endFrame() {
     setMat4(p, "u_invViewProj", view_proj.inverse());
     glUniform1i(loc(p, "u_groundOn"), I.params.ground ? 1 : 0);
     glUniform1i(loc(p, "u_transparent"), I.params.transparent ? 1 : 0);
-    glUniform1f(loc(p, "u_groundZ"), 0.0f);
+    glUniform1f(loc(p, "u_groundZ"), float(I.params.ground_height));
     setVec3(p, "u_groundAlbedo", srgbToLinear(I.params.ground_color.cast<float>()));
     glUniform1f(loc(p, "u_gridSpacing"), float(std::max(I.params.grid_spacing, 0.0)));
     glUniform3f(loc(p, "u_fadeCenter"), float(cam.target.x()), float(cam.target.y()), 0.0f);

@@ -52,6 +52,9 @@ struct Shot {
   // in flight just past the apex (0). -1: render at t.
   int contact = -1;
   bool panel = false;  // draw the tuning panel beside the scene (render --ui)
+  // What the picture is of, as overrides that recolour one part each (chain.color=..., ...):
+  // ShowsItsSubject asks that each recolouring changes enough of the picture.
+  std::vector<std::string> subject = {};
 };
 
 std::ostream& operator<<(std::ostream& os, const Shot& s) { return os << s.name; }
@@ -149,16 +152,54 @@ TEST_P(Snapshot, MatchesGolden) {
   }
 }
 
+const char* const kHeadRecolor = "head.materials=color,head.color=[0,1,0]";
+const char* const kChainRecolor = "chain.color=[1,0,1]";
+const char* const kHopperRecolor = "hopper.body_color=[0,0,1],hopper.leg_color=[0,0,1],hopper.foot_color=[0,0,1]";
+
 const Shot kShots[] = {
-    {"head", "assets/scenes/head.json", 0.8, {}},
-    {"ponytail_rest", "assets/scenes/ponytail.json", 0.0, {}},
-    {"ponytail_swing", "assets/scenes/ponytail.json", 2.7, {}},
-    {"chain_swing", "assets/scenes/chain.json", 0.45, {}},
-    {"hopper_flight", "assets/scenes/hopper.json", 2.0, {}, 0},
-    {"hopper_stance", "assets/scenes/hopper.json", 2.0, {}, 1},
-    {"ponytail_hopper", "assets/scenes/ponytail_hopper.json", 2.5, {}},
+    {"head", "assets/scenes/head.json", 0.8, {}, -1, false, {kHeadRecolor}},
+    {"ponytail_rest", "assets/scenes/ponytail.json", 0.0, {}, -1, false, {kHeadRecolor, kChainRecolor}},
+    {"ponytail_swing", "assets/scenes/ponytail.json", 2.7, {}, -1, false, {kHeadRecolor, kChainRecolor}},
+    {"chain_swing", "assets/scenes/chain.json", 0.45, {}, -1, false, {kChainRecolor}},
+    {"hopper_flight", "assets/scenes/hopper.json", 2.0, {}, 0, false, {kHopperRecolor}},
+    {"hopper_stance", "assets/scenes/hopper.json", 2.0, {}, 1, false, {kHopperRecolor}},
+    {"ponytail_hopper", "assets/scenes/ponytail_hopper.json", 2.5, {}, -1, false, {kChainRecolor, kHopperRecolor}},
     {"panel", "assets/scenes/ponytail.json", 1.0, {}, -1, true},
 };
+
+// Every golden shows its subject: recolouring each part it is of (the same moment and camera)
+// changes at least 0.2 % of the picture. A golden of an empty floor (the chain drawn under a
+// ground at the wrong height, a camera looking away) fails here.
+TEST_P(Snapshot, ShowsItsSubject) {
+  const Shot& shot = GetParam();
+  if (shot.panel) GTEST_SKIP() << shot.name << ": the panel shot's subject is the panel";
+  ASSERT_FALSE(shot.subject.empty()) << shot.name << ": name what the golden is of";
+  if (!fs::exists(shot.scene)) GTEST_SKIP() << shot.scene << " is not in this tree";
+  const Image plain = renderShot(shotScene(shot), shot.t, nullptr, shot.contact);
+  DiffOptions strict;  // every changed pixel counts
+  strict.threshold = 0.05;
+  strict.detect_antialiasing = false;
+  for (const std::string& recolor : shot.subject) {
+    Shot other = shot;
+    std::string rest = recolor;
+    while (!rest.empty()) {  // "a=1,b=[0,1,0]": split at commas outside brackets
+      int depth = 0;
+      size_t i = 0;
+      for (; i < rest.size(); ++i) {
+        if (rest[i] == '[') ++depth;
+        if (rest[i] == ']') --depth;
+        if (rest[i] == ',' && depth == 0) break;
+      }
+      other.sets.push_back(rest.substr(0, i));
+      rest = i < rest.size() ? rest.substr(i + 1) : "";
+    }
+    const Image recolored = renderShot(shotScene(other), shot.t, nullptr, shot.contact);
+    const double share = compareImages(plain, recolored, strict).share;
+    std::printf("%s: %s changes %.2f %% of the picture\n", shot.name, recolor.c_str(), 100.0 * share);
+    EXPECT_GE(share, 0.002) << shot.name << ": " << recolor << " changes only " << 100.0 * share
+                            << " % of the picture: its subject is not in it (camera, ground or time wrong?)";
+  }
+}
 
 INSTANTIATE_TEST_SUITE_P(Scenes, Snapshot, ::testing::ValuesIn(kShots),
                          [](const ::testing::TestParamInfo<Shot>& i) { return std::string(i.param.name); });
