@@ -11,11 +11,13 @@ extern const char* const kCapsuleVS;    // spheres / capsules / tapered capsules
 extern const char* const kGroundVS;     // the z = 0 plane
 extern const char* const kFullscreenVS; // background (gl_VertexID triangle)
 extern const char* const kLinesVS;      // debug lines
+extern const char* const kHairVS;       // hair strands (camera- or light-facing ribbons) and core tube
 // Fragment shaders.
 extern const char* const kLitFS;        // Blinn-Phong + rim, shadowed key light, fill, hemi ambient
 extern const char* const kGroundFS;     // filtered checker, shadow, fade into the background
 extern const char* const kBackgroundFS; // vertical gradient
 extern const char* const kLinesFS;
+extern const char* const kHairFS;       // Kajiya-Kay two-lobe hair, shadowed key light, fill, ambient
 extern const char* const kDepthFS;      // shadow pass (depth only)
 
 // Compiles and links "#version 330 core" + the given sources. Returns 0 and fills `err` (with the
