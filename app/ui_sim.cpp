@@ -35,7 +35,8 @@ const char* const kRestartKeys[] = {
     "hopper.script",
 };
 // Fields nothing in the world depends on: the next frame shows them.
-const char* const kLiveKeys[] = {"name", "duration", "camera", "light", "render"};
+// The chain's look is drawn from the applied scene (LiveSim::draw), so it is live too.
+const char* const kLiveKeys[] = {"name", "duration", "camera", "light", "render", "chain.color", "chain.hair"};
 
 // True when the only differences are in hopper.command.*.
 bool onlyHopperCommand(const Scene& a, const Scene& b) {
@@ -340,7 +341,7 @@ bool LiveSim::load(const std::string& path) {
 
 void LiveSim::draw(Renderer& renderer) {
   draw_.upload(*runtime_, renderer);
-  draw_.draw(*runtime_, renderer);
+  draw_.draw(*runtime_, renderer, applied_);
   const PerturbationTarget& p = *perturbation_;
   if (p.active() && p.body < runtime_->world().bodyCount()) {
     const Eigen::Vector3d a = p.grabbedPoint(runtime_->world().body(p.body));
