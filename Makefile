@@ -15,7 +15,9 @@ PONYHOP    := $(BUILD)/ponyhop
 DEMO_SCENES ?= ponytail hopper
 DEMO_FRAMES ?= 300
 
-.PHONY: all setup build demo test test-asan test-tsan release fuzz soak format format-check update-snapshots bench bench-quick clean
+PREFIX     ?= /usr/local
+
+.PHONY: all setup build install demo test test-asan test-tsan release fuzz soak format format-check update-snapshots bench bench-quick clean
 
 all: build
 
@@ -26,6 +28,10 @@ build: setup
 	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 	@cmake --build $(BUILD) -j$(JOBS)
 
+# The executable, its assets and docs under PREFIX (bin/, share/ponyhop/, share/doc/ponyhop/).
+install: build
+	@cmake --install $(BUILD) --prefix $(PREFIX)
+
 demo: build
 	@for s in $(DEMO_SCENES); do \
 	  if [ -f assets/scenes/$$s.json ]; then \
@@ -33,6 +39,7 @@ demo: build
 	    echo "demo: frames in out/demo/$$s/, video out/demo/$$s.mp4"; \
 	  fi; \
 	done
+	@echo "demo: the executable is $(PONYHOP) (make install PREFIX=... puts it in PREFIX/bin)"
 
 # Every test, with the normal build (about 5 min from a fresh clone on 2 cores, 30 s of it tests).
 test: build
@@ -105,10 +112,14 @@ update-snapshots: build
 	@PONYHOP_UPDATE_SNAPSHOTS=1 $(BUILD)/tests/snapshot_test
 	@echo "goldens rewritten in tests/snapshots/: review them with git diff before committing"
 
-# The report in docs/bench/ (about 20 min on 2 cores): the whole grid with 10 s long runs, then
+# The report in docs/bench/ (about 20 min on 2 cores), with the peer engines installed first
+# (setup.sh --bench: MuJoCo, Bullet, ODE, DART): the whole grid with 10 s long runs, then
 # the fixed-anchor chains at dt = 1/240 s for 60 s (energy drift). `ponyhop bench` alone runs 60 s
 # long runs on the whole grid (about an hour).
-bench: build
+bench:
+	@bash scripts/setup.sh --bench
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+	@cmake --build $(BUILD) -j$(JOBS)
 	@$(PONYHOP) bench --out docs/bench --long-fixed 10 --long-shake 5 --long-hopper 5
 	@$(PONYHOP) bench --out docs/bench/long60 --links 8,32 --anchors fixed --dts 240 --long-fixed 60 --no-hopper --no-scaling
 

@@ -1,10 +1,9 @@
 // Compiled only when CMake found MuJoCo (app/CMakeLists.txt defines PONYHOP_HAVE_MUJOCO).
-#include "app/bench_mujoco.h"
+#include "app/bench_peers.h"
 
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -16,8 +15,6 @@
 
 namespace ponyhop {
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 std::string vec(const Eigen::Vector3d& v) {
   char b[96];
@@ -63,11 +60,6 @@ std::unique_ptr<Model> load(const std::string& xml) {
   return model;
 }
 
-Eigen::Vector3d tip(const Model& s) {
-  const mjtNum* p = s.d->site_xpos;  // site 0: the free end of the last link
-  return {p[0], p[1], p[2]};
-}
-
 bool finite(const Model& s) {
   for (int i = 0; i < s.m->nq; ++i) {
     if (!std::isfinite(s.d->qpos[i]) || std::abs(s.d->qpos[i]) > 1e10) return false;
@@ -80,9 +72,7 @@ bool finite(const Model& s) {
 
 }  // namespace
 
-std::string mujocoVersion() { return mj_versionString(); }
-
-std::string mujocoChainXml(const MujocoChain& c, const std::string& integrator, double dt) {
+std::string mujocoChainXml(const PeerChain& c, const std::string& integrator, double dt) {
   std::ostringstream x;
   x.precision(17);
   x << "<mujoco model=\"ponyhop chain\">\n"
@@ -120,91 +110,60 @@ std::string mujocoChainXml(const MujocoChain& c, const std::string& integrator, 
   return x.str();
 }
 
-RunResult benchMujocoRun(const MujocoChain& chain, const std::string& integrator, double dt, double horizon,
-                         int repeats, double long_duration, const Trajectory& reference, double e_start) {
-  RunResult r;
-  const std::string xml = mujocoChainXml(chain, integrator, dt);
-  const long n = std::lround(horizon / dt);
-  const long every = std::max(1L, std::lround(kBenchGrid / dt));
-  r.steps = n;
-  Trajectory traj;
-  traj.stride = every * dt;
-  std::vector<double> per_step;
-  std::unique_ptr<Model> first;
-  for (int rep = 0; rep < std::max(1, repeats); ++rep) {
-    auto s = load(xml);
-    if (!s->m) {
-      r.status = "failed";
-      r.reason = s->error;
-      return r;
-    }
-    mj_forward(s->m, s->d);
-    if (rep == 0) traj.p.push_back(tip(*s));
-    Clock::duration total{};
-    long taken = 0;
-    bool ok = true;
-    for (long i = 1; i <= n; ++i) {
-      const auto t0 = Clock::now();
-      mj_step(s->m, s->d);
-      total += Clock::now() - t0;
-      ++taken;
-      if (!(ok = finite(*s))) break;
-      if (rep == 0 && i % every == 0) {
-        mj_kinematics(s->m, s->d);  // site positions at the new state (mj_step leaves the old ones)
-        traj.p.push_back(tip(*s));
-      }
-    }
-    per_step.push_back(std::chrono::duration<double>(total).count() / std::max(1L, taken));
-    if (!ok) {
-      char b[160];
-      std::snprintf(b, sizeof b, "t = %.6g s: MuJoCo's state became non-finite or ran away (%s, dt %.6g s)",
-                    s->d->time, integrator.c_str(), dt);
-      r.status = "failed";
-      r.reason = b;
-      r.steps = taken;
-      break;
-    }
-    if (rep == 0) first = std::move(s);
+namespace {
+
+class MujocoSim final : public PeerSim {
+ public:
+  MujocoSim(const PeerChain& chain, std::unique_ptr<Model> model) : PeerSim(chain), s_(std::move(model)) {
+    mj_forward(s_->m, s_->d);
   }
-  r.us_per_step = 1e6 * median(per_step);
-  r.us_per_sim_second = r.us_per_step / dt;
-  if (r.status != "ok") return r;
-  const auto err = trajectoryError(traj, reference, horizon);
-  r.err_rms = err[0];
-  r.err_max = err[1];
-  // Long run: energy drift (MuJoCo's own energy, against its value at t = 0), joints exact.
-  Model& s = *first;
-  const long total = std::lround(long_duration / dt);
-  const long sample = std::max(1L, std::lround((1.0 / 240.0) / dt));
-  auto fresh = load(xml);
-  mj_forward(fresh->m, fresh->d);
-  const double e0 = fresh->d->energy[0] + fresh->d->energy[1];
-  fresh.reset();
-  double drift = 0.0;
-  Eigen::Vector3d prev = tip(s);
-  bool ok = true;
-  for (long i = n + 1; i <= total; ++i) {
-    mj_step(s.m, s.d);
-    if (!(ok = finite(s))) break;
-    if (i % sample == 0) {
-      mj_forward(s.m, s.d);  // energy and sites at the new state
-      drift = std::max(drift, std::abs(s.d->energy[0] + s.d->energy[1] - e0));
-      const Eigen::Vector3d p = tip(s);
-      r.max_speed = std::max(r.max_speed, (p - prev).norm() / (sample * dt));
-      prev = p;
+  void step() override { mj_step(s_->m, s_->d); }
+  double time() const override { return s_->d->time; }
+  // Body i + 1 is link i (body 0 is the world); its inertial frame is the link's centre.
+  void links(std::vector<PeerLink>& out) override {
+    mj_forward(s_->m, s_->d);  // kinematics, velocities and energy at the new state
+    out.resize(chain_.mass.size());
+    for (size_t i = 0; i < out.size(); ++i) {
+      const int b = static_cast<int>(i) + 1;
+      const mjtNum* x = s_->d->xipos + 3 * b;
+      const mjtNum* q = s_->d->xquat + 4 * b;
+      mjtNum vel[6];
+      mj_objectVelocity(s_->m, s_->d, mjOBJ_BODY, b, vel, 0);
+      out[i].x = {x[0], x[1], x[2]};
+      out[i].q = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
+      out[i].w = {vel[0], vel[1], vel[2]};
+      out[i].v = {vel[3], vel[4], vel[5]};
     }
   }
-  r.long_reached = s.d->time;
-  r.energy_drift = drift;
-  r.energy_rel = std::abs(e_start) > 0.0 ? drift / std::abs(e_start) : drift;
-  if (!ok) {
-    r.long_status = "stopped";
-    r.long_reason = "MuJoCo's state became non-finite or ran away";
-  } else if (r.energy_rel > 1.0) {
-    r.long_status = "unbounded";
-    r.long_reason = "energy drift beyond E0";
+  double energy() override {
+    mj_forward(s_->m, s_->d);
+    return s_->d->energy[0] + s_->d->energy[1];
   }
-  return r;
+  bool finite() override { return ponyhop::finite(*s_); }
+
+ private:
+  std::unique_ptr<Model> s_;
+};
+
+Peer mujocoPeer(const std::string& integrator) {
+  Peer p;
+  p.name = "mujoco/" + integrator;
+  p.version = std::string("MuJoCo ") + mj_versionString() +
+              ": Euler = its semi-implicit Euler, RK4; ball joints, exact masses and inertias, no contact, damping "
+              "or armature";
+  p.make = [integrator](const PeerChain& chain, double dt, std::string& error) -> std::unique_ptr<PeerSim> {
+    auto model = load(mujocoChainXml(chain, integrator, dt));
+    if (!model->m) {
+      error = model->error;
+      return nullptr;
+    }
+    return std::make_unique<MujocoSim>(chain, std::move(model));
+  };
+  return p;
 }
+
+}  // namespace
+
+std::vector<Peer> mujocoPeers() { return {mujocoPeer("Euler"), mujocoPeer("RK4")}; }
 
 }  // namespace ponyhop

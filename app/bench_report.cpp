@@ -64,7 +64,7 @@ void writeBenchCsv(const std::string& path, const std::vector<BenchRow>& rows) {
        "us_per_sim_second,horizon,err_rms,err_max,substeps";
   for (auto n : StageTimes::names) f << ",us_" << n;
   f << ",us_other,long_status,long_reason,long_duration,long_reached,energy_drift,energy_drift_rel,joint_drift,"
-       "max_speed\n";
+       "max_speed,tolerance_misses\n";
   for (const BenchRow& row : rows) {
     const BenchCase& c = *row.bench_case;
     const RunResult& r = row.r;
@@ -80,7 +80,7 @@ void writeBenchCsv(const std::string& path, const std::vector<BenchRow>& rows) {
       << csvField(ok ? r.long_reason : "the horizon run did not complete") << ',' << fmt(c.long_duration, "%.6g")
       << ',' << (ok ? num(r.long_reached) : "") << ',' << (ok ? num(r.energy_drift) : "") << ','
       << (ok ? num(r.energy_rel) : "") << ',' << (ok ? num(r.joint_drift) : "") << ','
-      << (ok ? num(r.max_speed) : "") << '\n';
+      << (ok ? num(r.max_speed) : "") << ',' << (ok ? std::to_string(r.tolerance_misses) : "") << '\n';
   }
 }
 
@@ -158,7 +158,7 @@ std::string plotErrorVsCost(const std::string& dir, const std::vector<BenchRow>&
     << "set key outside right top font ',8'\nset grid\n"
     << "plot ";
   for (size_t i = 0; i < order.size(); ++i) {
-    const bool mj = order[i].rfind("mujoco", 0) == 0;
+    const bool mj = std::count(order[i].begin(), order[i].end(), '/') == 1;  // a peer engine: engine/integrator
     g << "'" << data << "' index " << i << " using 1:2 with linespoints lw " << (mj ? 2.5 : 1) << " pt "
       << (mj ? 7 : static_cast<int>(i % 13) + 1) << " title \"" << gnuplotQuote(order[i]) << "\", ";
   }
@@ -196,7 +196,7 @@ std::string plotScaling(const std::string& dir, const std::vector<ScalingRow>& r
   std::ofstream g = open(script);
   g << "set terminal pngcairo size 1000,700 font ',10'\n"
     << "set output '" << dir << "/scaling.png'\n"
-    << "set title 'Cost per step against chain length (symplectic Euler, no stabilization, hanging chain, dt = 1/1920 s)'\n"
+    << "set title 'Cost per step against chain length (hanging chain, dt = 1/1920 s; ours: symplectic Euler, no stabilization; peers: their own step)'\n"
     << "set logscale xy\nset xlabel 'links N'\nset ylabel 'microseconds per step'\nset key left top\nset grid\n"
     << "plot ";
   for (size_t i = 0; i < solvers.size(); ++i) {

@@ -151,6 +151,7 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
 
   // Long run: the first repeat continued (untimed) to the long duration.
   Sim& rt = *first;
+  r.tolerance_misses = rt.world().toleranceMisses();
   const long total_steps = stepsFor(c.long_duration, dt);
   const long sample = std::max(1L, std::lround(kDriftSample / dt));
   const double e0 = rt.chainEnergy();  // after the horizon: equal to the start's up to the drift so far
@@ -196,13 +197,36 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   return r;
 }
 
+double timeSteps(const std::function<bool()>& step, double budget, int& steps, const std::function<void()>& after_warmup) {
+  // One untimed-for-the-result step: warms caches and estimates the cost.
+  auto t0 = Clock::now();
+  bool ok = step();
+  const double estimate = std::max(1e-7, seconds(Clock::now() - t0));
+  if (after_warmup) after_warmup();
+  const int blocks = 5;
+  const long per_block = std::clamp(std::lround(budget / blocks / estimate), 1L, 2000L);
+  std::vector<double> times;
+  steps = 0;
+  for (int b = 0; b < blocks && ok; ++b) {
+    if (b > 0 && estimate * per_block * b > budget) break;  // slow: fewer blocks
+    t0 = Clock::now();
+    for (long i = 0; i < per_block && (ok = step()); ++i) ++steps;
+    times.push_back(seconds(Clock::now() - t0) / per_block);
+  }
+  return median(times);
+}
+
+std::vector<Override> scalingOverrides(int links) {
+  return {{"chain.links", std::to_string(links)}, {"anchor.motion", "fixed"}, {"chain.direction", "[0,0,-1]"}};
+}
+
 ScalingResult benchScaling(const std::string& scene, const std::string& solver, int links, double budget) {
   ScalingResult s;
   BenchCase c;
   c.scene = scene;
   // Hanging straight down at rest: the same work per step as any motion, and no whip to stop
   // an explicit step, so every N runs its steps.
-  c.overrides = {{"chain.links", std::to_string(links)}, {"anchor.motion", "fixed"}, {"chain.direction", "[0,0,-1]"}};
+  c.overrides = scalingOverrides(links);
   const Method m{solver, "symplectic_euler", "none"};
   auto rt = build(c, m, kBenchGrid);
   if (!rt->ok()) {
@@ -210,25 +234,12 @@ ScalingResult benchScaling(const std::string& scene, const std::string& solver, 
     s.reason = rt->status();
     return s;
   }
-  // One untimed-for-the-result step: warms caches and estimates the cost.
-  auto t0 = Clock::now();
-  rt->step();
-  const double estimate = std::max(1e-7, seconds(Clock::now() - t0));
-  const int blocks = 5;
-  const long per_block = std::clamp(std::lround(budget / blocks / estimate), 1L, 2000L);
-  std::vector<double> times;
-  rt->world().resetStageTimes();
-  for (int b = 0; b < blocks && rt->ok(); ++b) {
-    if (b > 0 && estimate * per_block * b > budget) break;  // slow: fewer blocks
-    t0 = Clock::now();
-    for (long i = 0; i < per_block && rt->step(); ++i) ++s.steps;
-    times.push_back(seconds(Clock::now() - t0) / per_block);
-  }
+  const double per_step = timeSteps([&] { return rt->step(); }, budget, s.steps, [&] { rt->world().resetStageTimes(); });
   if (!rt->ok()) {
     s.status = "failed";
     s.reason = rt->status();
   }
-  s.us_per_step = 1e6 * median(times);
+  s.us_per_step = 1e6 * per_step;
   s.joint_forces_us = 1e6 * rt->world().stageTimes()[Stage::JointForces] / std::max(1, s.steps);
   return s;
 }

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -81,6 +82,7 @@ struct RunResult {
   std::array<double, StageTimes::kCount> stage_us{};  // per step, the median repeat
   double other_us = 0.0;                              // per step: step() minus the stages
   double substeps = 1.0;                              // mean World::lastSubsteps()
+  int tolerance_misses = 0;  // +tol: substeps still above the tolerance at the deepest split (timed run)
   double err_rms = 0.0, err_max = 0.0;                // m, against the reference over the horizon
   // Long run (continues the first repeat to BenchCase::long_duration).
   std::string long_status = "ok";  // ok | stopped | unbounded | skipped
@@ -106,6 +108,13 @@ struct ScalingResult {
   double joint_forces_us = 0.0;  // the joint-force stage's share per step
   int steps = 0;
 };
+// Cost per step (s, median of up to 5 blocks of steps within ~budget seconds) of step(), after
+// one warm-up step that also estimates it (after_warmup runs next). steps: the steps timed.
+double timeSteps(const std::function<bool()>& step, double budget, int& steps,
+                 const std::function<void()>& after_warmup = {});
+
+// The scaling sweep's chain: `links` links hanging straight down at rest from a fixed anchor.
+std::vector<Override> scalingOverrides(int links);
 ScalingResult benchScaling(const std::string& scene, const std::string& solver, int links, double budget);
 
 double median(std::vector<double> v);

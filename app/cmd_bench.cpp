@@ -8,8 +8,9 @@
 //             the released chain is chaotic, so the horizon is where that holds (found, stated);
 //   long runs: energy drift (fixed anchor), joint drift, whether the motion stays bounded;
 //   cost:     microseconds per step and per simulated second (median of repeats), per stage.
-// Scaling: cost per step for N = 2 ... 1024 per solver. MuJoCo's Euler and RK4 run beside them
-// when it was found at configure time. Writes CSV, Markdown and gnuplot PNGs.
+// Scaling: cost per step for N = 2 ... 1024 per solver. The peer engines found at configure time
+// (MuJoCo, Bullet, ODE, DART: app/bench_peers.h) run the fixed-anchor chains and the scaling
+// sweep beside them, with a table of ours / fastest peer per N. Writes CSV, Markdown and PNGs.
 #include <sys/utsname.h>
 
 #include <algorithm>
@@ -24,11 +25,12 @@
 #include <type_traits>
 #include <vector>
 
-#include "app/bench_mujoco.h"
+#include "app/bench_peers.h"
 #include "app/bench_report.h"
 #include "app/bench_run.h"
 #include "physics/validate.h"
 #include "app/commands.h"
+#include "sim/data_dir.h"
 #include "sim/sim.h"
 #include "physics/physics_params.h"
 
@@ -45,12 +47,14 @@ struct BenchArgs {
   std::string chain_scene = "assets/scenes/chain.json";
   std::string hopper_scene = "assets/scenes/hopper.json";
   bool hopper = true;
-  bool mujoco = true;
+  bool peers = true;
   double long_fixed = -1.0, long_shake = -1.0, long_hopper = -1.0;  // s, < 0: the mode's default
   int repeats = -1;
   std::vector<int> links, dts;       // empty: the mode's set
   std::vector<std::string> anchors;  // empty: fixed and shake
   bool scaling = true;
+  bool scaling_only = false;
+  std::vector<int> scaling_links;  // empty: the mode's set
   std::string command_line;
 };
 
@@ -175,24 +179,10 @@ Reference computeReference(const BenchCase& c, const Config& cfg, double target,
   return ref;
 }
 
-#ifdef PONYHOP_HAVE_MUJOCO
-MujocoChain mujocoChainOf(const BenchCase& c) {
-  Sim rt(loadScene(c.scene, c.overrides));
-  MujocoChain m;
-  const Chain& ch = *rt.chain();
-  m.anchor = ch.anchor(rt.world());
-  m.length = ch.length;
-  m.gravity = rt.world().params().gravity;
-  for (size_t i = 0; i < ch.links.size(); ++i) {
-    const RigidBody& b = rt.world().body(ch.links[i]);
-    m.mass.push_back(b.mass);
-    m.inertia.push_back(b.inertia);
-    m.q.push_back(b.q);
-    m.radius.push_back(ch.radii[i]);
-  }
-  return m;
+// The chain of a scene as the peer engines build it (app/bench_peers.h).
+PeerChain peerChainOf(const std::string& scene, const std::vector<Override>& overrides) {
+  return peerChainOf(Sim(loadScene(scene, overrides)));
 }
-#endif
 
 std::string dtName(double dt) { return "1/" + fmt(1.0 / dt, "%.0f"); }
 
@@ -263,6 +253,10 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
       const bool ok = r.status == "ok";
       std::string why = r.reason;
       if (why.size() > 140) why = why.substr(0, 137) + "...";
+      if (ok && r.tolerance_misses > 0) {
+        why = "warning: " + std::to_string(r.tolerance_misses) +
+              " substeps still above the tolerance at the deepest split (1/1024 of dt)";
+      }
       f << "| " << row.method << " | " << r.status << (why.empty() ? "" : ": " + why) << " | "
         << (r.status == "cannot_run" ? "" : fmt(r.substeps, "%.3g")) << " | "
         << (r.status == "cannot_run" ? "" : fmt(r.us_per_step)) << " | "
@@ -286,7 +280,7 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
     f << '\n';
     for (const auto& row : rows) {
       if (row.bench_case != &c || std::abs(row.dt - pick) > 1e-12 || row.r.status != "ok") continue;
-      if (row.solver == "mujoco") continue;
+      if (row.stabilization == "-") continue;  // a peer engine: no stages
       f << "| " << row.method << " |";
       for (double v : row.r.stage_us) f << ' ' << fmt(v) << " |";
       f << ' ' << fmt(row.r.other_us) << " |\n";
@@ -295,8 +289,8 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
 
   if (scaling.empty()) return;
   f << "\n## Scaling\n\n![cost against N](scaling.png)\n\n"
-    << "Symplectic Euler, no stabilization, chain hanging at rest from a fixed anchor, dt = 1/1920 s (one solve "
-       "per step), median of blocks of steps.\n\n| N |";
+    << "Chain hanging at rest from a fixed anchor, dt = 1/1920 s, median of blocks of steps. Ours: symplectic "
+       "Euler, no stabilization (one solve per step); the peers (engine/integrator): their own step.\n\n| N |";
   std::vector<std::string> solvers;
   for (const auto& s : scaling) {
     if (std::find(solvers.begin(), solvers.end(), s.solver) == solvers.end()) solvers.push_back(s.solver);
@@ -314,11 +308,48 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
     }
     f << '\n';
   }
+  // Ours against the fastest peer that stayed finite, per N.
+  std::vector<std::string> ours, theirs;
+  for (const auto& s : solvers) (s.find('/') == std::string::npos ? ours : theirs).push_back(s);
+  if (theirs.empty()) return;
+  f << "\n### Ours / fastest peer\n\nCost per step divided by the cheapest peer engine's at the same N (below 1: "
+       "ours is cheaper).\n\n| N | fastest peer | us/step |";
+  for (const auto& s : ours) f << ' ' << s << " / fastest |";
+  f << "\n|---|---|---|";
+  for (size_t i = 0; i < ours.size(); ++i) f << "---|";
+  f << '\n';
+  const auto cost = [&](const std::string& solver, int n) {
+    for (const auto& r : scaling) {
+      if (r.solver == solver && r.links == n && r.r.status == "ok") return r.r.us_per_step;
+    }
+    return -1.0;
+  };
+  for (int n : cfg.scaling_links) {
+    std::string best;
+    double best_cost = -1.0;
+    for (const auto& s : theirs) {
+      const double c = cost(s, n);
+      if (c > 0.0 && (best_cost < 0.0 || c < best_cost)) {
+        best = s;
+        best_cost = c;
+      }
+    }
+    if (best_cost <= 0.0) continue;
+    f << "| " << n << " | " << best << " | " << fmt(best_cost) << " |";
+    for (const auto& s : ours) {
+      const double c = cost(s, n);
+      f << ' ' << (c > 0.0 ? fmt(c / best_cost, "%.2f") : "") << " |";
+    }
+    f << '\n';
+  }
 }
 
 int runBench(BenchArgs& args) {
   const auto start = Clock::now();
   const std::string load_before = loadAverage();
+  // From any folder: the scenes as given, else ponyhop's own (engine/data_dir.h).
+  args.chain_scene = resolveSceneFile(args.chain_scene);
+  args.hopper_scene = resolveSceneFile(args.hopper_scene);
   Config cfg = makeConfig(args.quick);
   if (args.long_fixed >= 0.0) cfg.long_fixed = args.long_fixed;
   if (args.long_shake >= 0.0) cfg.long_shake = args.long_shake;
@@ -327,6 +358,7 @@ int runBench(BenchArgs& args) {
   if (!args.links.empty()) cfg.links = args.links;
   if (!args.anchors.empty()) cfg.anchors = args.anchors;
   if (!args.dts.empty()) cfg.dt_denominators = args.dts;
+  if (!args.scaling_links.empty()) cfg.scaling_links = args.scaling_links;
   if (!args.scaling) cfg.scaling_links.clear();
   std::filesystem::create_directories(args.out);
   std::vector<std::string> notes;
@@ -335,6 +367,10 @@ int runBench(BenchArgs& args) {
                   std::to_string(EnumNames<Stabilization>::names.size()) + ".");
 
   std::vector<std::unique_ptr<BenchCase>> cases;
+  if (args.scaling_only) {
+    cfg.links.clear();
+    args.hopper = false;
+  }
   for (int n : cfg.links) {
     for (const auto& a : cfg.anchors) {
       auto c = std::make_unique<BenchCase>();
@@ -362,18 +398,12 @@ int runBench(BenchArgs& args) {
     return (a->links == 0 ? 8.5 : a->links) < (b->links == 0 ? 8.5 : b->links);
   });
 
-  const bool with_mujoco =
-#ifdef PONYHOP_HAVE_MUJOCO
-      args.mujoco;
-  notes.push_back(args.mujoco ? "MuJoCo " + mujocoVersion() +
-                                    " runs the fixed-anchor chains (Euler = its semi-implicit Euler, RK4) in the "
-                                    "same process: ball joints, exact masses and inertias, no contact, damping or armature."
-                              : "MuJoCo found but disabled (--no-mujoco).");
-#else
-      false;
-  notes.push_back("MuJoCo was not found at configure time (optional: libmujoco-dev): no MuJoCo rows.");
-#endif
-  (void)with_mujoco;
+  const std::vector<Peer> peers = args.peers ? availablePeers() : std::vector<Peer>{};
+  if (args.peers) {
+    for (const auto& n : peerNotes()) notes.push_back(n);
+  } else {
+    notes.push_back("Peer engines left out (--no-peers).");
+  }
 
   // Scaling first (short), then the cases; the files are rewritten after each case so that a
   // long run that is stopped early still leaves what it measured.
@@ -381,6 +411,15 @@ int runBench(BenchArgs& args) {
   for (auto s : EnumNames<SolverKind>::names) {
     for (int n : cfg.scaling_links) {
       ScalingRow r{std::string(s), n, benchScaling(args.chain_scene, std::string(s), n, cfg.scaling_budget)};
+      std::fprintf(stderr, "bench: scaling %-14s N = %-5d %10.1f us/step %s\n", r.solver.c_str(), n, r.r.us_per_step,
+                   r.r.status.c_str());
+      scaling.push_back(std::move(r));
+    }
+  }
+  for (const Peer& peer : peers) {
+    for (int n : cfg.scaling_links) {
+      const PeerChain chain = peerChainOf(args.chain_scene, scalingOverrides(n));
+      ScalingRow r{peer.name, n, benchPeerScaling(peer, chain, kBenchGrid, cfg.scaling_budget)};
       std::fprintf(stderr, "bench: scaling %-14s N = %-5d %10.1f us/step %s\n", r.solver.c_str(), n, r.r.us_per_step,
                    r.r.status.c_str());
       scaling.push_back(std::move(r));
@@ -437,24 +476,25 @@ int runBench(BenchArgs& args) {
                      row.r.status == "ok" && row.r.long_status != "ok" ? row.r.long_status.c_str() : "");
         rows.push_back(std::move(row));
       }
-#ifdef PONYHOP_HAVE_MUJOCO
-      if (with_mujoco && c.links > 0 && c.anchor == "fixed") {
-        const MujocoChain mc = mujocoChainOf(c);
+      if (!peers.empty() && c.links > 0 && c.anchor == "fixed") {
+        const PeerChain chain = peerChainOf(c.scene, c.overrides);
         Sim rt(loadScene(c.scene, c.overrides));
-        for (const char* integ : {"Euler", "RK4"}) {
-          BenchRow row{&c, std::string("mujoco/") + integ, "mujoco", integ, "-", "fixed", dt, horizon, {}};
-          row.r = benchMujocoRun(mc, integ, dt, horizon, cfg.repeats, c.long_duration, ref.trajectory, rt.chainEnergy());
+        for (const Peer& peer : peers) {
+          const auto slash = peer.name.find('/');
+          BenchRow row{&c, peer.name, peer.name.substr(0, slash), peer.name.substr(slash + 1), "-", "fixed", dt,
+                       horizon, {}};
+          row.r = benchPeerRun(peer, chain, dt, horizon, cfg.repeats, c.long_duration, ref.trajectory,
+                               rt.chainEnergy());
           std::fprintf(stderr, "bench: %-14s %-40s dt 1/%-4d %-10s %9.1f us/step  err %.3g m\n", c.id.c_str(),
                        row.method.c_str(), d, row.r.status.c_str(), row.r.us_per_step, row.r.err_rms);
           rows.push_back(std::move(row));
         }
       }
-#endif
     }
     refs.push_back(std::move(ref));
     writeAll(refs.size());
   }
-
+  if (cases.empty()) writeAll(0);
   return 0;
 }
 
@@ -468,7 +508,7 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--chain-scene", args->chain_scene, "The chain scene");
   cmd->add_option("--hopper-scene", args->hopper_scene, "The hopper scene");
   cmd->add_flag("!--no-hopper", args->hopper, "Leave out the hopper");
-  cmd->add_flag("!--no-mujoco", args->mujoco, "Leave out MuJoCo (when it was found at configure time)");
+  cmd->add_flag("!--no-peers", args->peers, "Leave out the peer engines (MuJoCo, Bullet, ODE, DART when found)");
   cmd->add_option("--long-fixed", args->long_fixed, "Long run of the fixed-anchor chains, s (default 60; quick 0.5)")
       ->check(CLI::Range(0.0, 3600.0));
   cmd->add_option("--long-shake", args->long_shake, "Long run of the shaking-anchor chains, s (default 10; quick 0.5)")
@@ -487,6 +527,10 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
       ->delimiter(',')
       ->check(CLI::Range(1, 100000));
   cmd->add_flag("!--no-scaling", args->scaling, "Leave out the cost-against-N sweep");
+  cmd->add_flag("--scaling-only", args->scaling_only, "Only the cost-against-N sweep (no chains, no hopper)");
+  cmd->add_option("--scaling-links", args->scaling_links, "Chain lengths of the sweep (default 2,4,...,1024; quick 2..32)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 65536));
   cmd->callback([args, &exit_code] {
     const auto list = [](const auto& v) {
       std::string s;
@@ -501,7 +545,7 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
     if (args->quick) args->command_line += " --quick";
     args->command_line += " --out " + args->out;
     if (!args->hopper) args->command_line += " --no-hopper";
-    if (!args->mujoco) args->command_line += " --no-mujoco";
+    if (!args->peers) args->command_line += " --no-peers";
     if (args->long_fixed >= 0.0) args->command_line += " --long-fixed " + fmt(args->long_fixed, "%g");
     if (args->long_shake >= 0.0) args->command_line += " --long-shake " + fmt(args->long_shake, "%g");
     if (args->long_hopper >= 0.0) args->command_line += " --long-hopper " + fmt(args->long_hopper, "%g");
@@ -510,6 +554,8 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
     if (!args->anchors.empty()) args->command_line += " --anchors " + list(args->anchors);
     if (!args->dts.empty()) args->command_line += " --dts " + list(args->dts);
     if (!args->scaling) args->command_line += " --no-scaling";
+    if (args->scaling_only) args->command_line += " --scaling-only";
+    if (!args->scaling_links.empty()) args->command_line += " --scaling-links " + list(args->scaling_links);
     try {
       exit_code = runBench(*args);
     } catch (const std::exception& e) {

@@ -13,6 +13,7 @@
 #include <filesystem>
 
 #include "app/commands.h"
+#include "app/render_range.h"
 #include "app/output_safety.h"
 #include "app/ui_headless.h"
 #include "engine/render_session.h"
@@ -39,6 +40,9 @@ struct RenderArgs {
   std::string out;
   std::string video;
   bool ui = false;
+  std::string range;   // --range A:B (app/render_range.h)
+  bool resume = false;
+  bool transparent = false;
 };
 
 // Progress on stderr: rewritten in place on a terminal, a plain line every ~10 % otherwise.
@@ -70,6 +74,23 @@ int interrupted(int sig, const std::string& out) {
   return InterruptGuard::exitCode(sig);
 }
 
+// --range / --resume (app/render_range.h): a render farm's chunk or a resumed run, straight into
+// `out` frame by frame; then the video of the whole folder when asked (not with --range).
+int renderChunkCommand(const Scene& scene, const std::string& out, const FrameRange& range, const RenderArgs& args) {
+  RenderSession session(scene);
+  const int rc = renderChunk(session, scene.render.fps, out, range, args.resume);
+  if (rc != 0 || args.video.empty()) return rc;
+  VideoOptions vo;
+  vo.fps = scene.render.fps;
+  std::string err;
+  if (!encodeVideo(out, args.video, vo, &err)) {
+    std::fprintf(stderr, "ponyhop render: %s\n", err.c_str());
+    return 1;
+  }
+  std::fprintf(stderr, "render: video %s\n", args.video.c_str());
+  return 0;
+}
+
 int runRender(const RenderArgs& args) {
   // 1. Everything that can be wrong with the input is found before a file is touched.
   Scene scene = args.scene.load();
@@ -84,6 +105,7 @@ int runRender(const RenderArgs& args) {
     scene.render.width = w;
     scene.render.height = h;
   }
+  if (args.transparent) scene.render.transparent = true;
   validateScene(scene, args.scene.path);
   const std::string out = args.out.empty() ? "out/" + fs::path(args.scene.path).stem().string() : args.out;
   std::error_code ec;
@@ -99,6 +121,16 @@ int runRender(const RenderArgs& args) {
     }
     if (!ffmpegAvailable()) throw SceneError("--video " + args.video + ": ffmpeg is not installed (apt-get install ffmpeg)");
   }
+  std::string video_err;
+  if (!args.video.empty() && videoContainer(args.video, &video_err).empty()) throw SceneError("--video " + video_err);
+  const bool chunk = !args.range.empty() || args.resume;
+  if (chunk && args.ui) throw SceneError("--range/--resume: not with --ui (the panel's plots depend on every frame before)");
+  if (!args.range.empty() && !args.video.empty()) {
+    throw SceneError("--range with --video: a chunk is part of a video; encode the merged folder with `ponyhop video`");
+  }
+  const FrameRange range =
+      args.range.empty() ? FrameRange{0, scene.render.frames - 1} : parseFrameRange(args.range, scene.render.frames);
+  if (chunk) return renderChunkCommand(scene, out, range, args);  // without the folder lock: chunks share DIR
   InterruptGuard interrupt;
   FrameFolder folder("--out", out);  // checks DIR, takes its lock, cleans stale staging
 
@@ -219,8 +251,12 @@ void addRenderCommand(CLI::App& app, int& exit_code) {
       ->check(nonEmpty());
   cmd->add_option("--out", args->out, "Output folder (default: out/SCENE_NAME); replaced whole by a run that succeeds")
       ->check(nonEmpty());
-  cmd->add_option("--video", args->video, "Also encode an H.264 mp4 (ffmpeg)")->check(nonEmpty());
+  cmd->add_option("--video", args->video, "Also encode a video: .mp4, .mov (H.264), .webm (VP9) or .gif (ffmpeg)")->check(nonEmpty());
   cmd->add_flag("--ui", args->ui, "Draw the tuning panel beside the scene");
+  cmd->add_option("--range", args->range,
+                  "Render only frames A to B (A:B, inclusive), byte-identical to a full run's (docs/RENDER_FARM.md)");
+  cmd->add_flag("--resume", args->resume, "Keep frames already written whole in --out; render the others");
+  cmd->add_flag("--transparent", args->transparent, "No background: PNG frames with alpha (render.transparent)");
   cmd->callback([args, &exit_code] {
     try {
       exit_code = runRender(*args);

@@ -1,6 +1,9 @@
-// `ponyhop sim SCENE [--duration T] [--set key=value]... --csv FILE`: the physics alone (no GL),
-// one CSV row per millisecond of simulated time. When dt > 1 ms a row takes the step nearest to
-// its time; when dt < 1 ms, rows sample the step nearest to each millisecond.
+// `ponyhop sim SCENE [--duration T] [--set key=value]... [--csv FILE] [--poses FILE [--rate HZ | --at T,...]]`:
+// the physics alone (no GL).
+// --csv: a summary, one row per millisecond of simulated time; a row takes the step nearest to its
+// time (values are held between steps).
+// --poses: every body's pose and velocity, one row per body per step, or at exactly the times
+// asked for (--rate, --at), interpolated between the two steps around each (app/pose_sampling.h).
 #include <unistd.h>
 
 #include <algorithm>
@@ -13,6 +16,7 @@
 
 #include "app/commands.h"
 #include "app/output_safety.h"
+#include "app/pose_sampling.h"
 #include "app/scene_args.h"
 #include "sim/scene_io.h"
 #include "engine/asset_loader.h"
@@ -25,6 +29,9 @@ struct SimArgs {
   SceneArgs scene;
   double duration = -1.0;
   std::string csv;
+  std::string poses;
+  double rate = 0.0;
+  std::vector<double> at;
 };
 
 // The values written for one state; columns depend on what the scene has. A hopper scene's
@@ -74,14 +81,7 @@ void writeRow(std::FILE* f, double t, const SimRow& r) {
   std::fputc('\n', f);
 }
 
-int runSim(const SimArgs& args) {
-  const Scene scene = args.scene.load();
-  const double duration = args.duration >= 0.0 ? args.duration : scene.duration;
-  if (!std::isfinite(duration) || duration > 1e6) {
-    throw SceneError("--duration: must be a number of seconds in [0, 1e6]");
-  }
-  checkOutputFile("--csv", args.csv, sceneInputs(scene));
-  InterruptGuard interrupt;
+int runSummary(const Scene& scene, double duration, const SimArgs& args) {
   Sim rt(scene, &assimpAssets());
 
   // Written to a temporary name and renamed: a failed run never replaces a good CSV.
@@ -145,18 +145,121 @@ int runSim(const SimArgs& args) {
   if (ec) throw SceneError("--csv " + args.csv + ": " + ec.message());
   std::fprintf(stderr, "sim: %ld rows (%.3f s simulated, dt %.6g s) -> %s\n", rows, duration, scene.physics.dt,
                args.csv.c_str());
+  if (const int misses = rt.world().toleranceMisses(); misses > 0) {
+    std::fprintf(stderr,
+                 "sim: warning: %d substeps kept an error estimate above physics.tolerance = %g m even at the "
+                 "deepest split (1/1024 of dt): the tolerance was not met there\n",
+                 misses, scene.physics.tolerance);
+  }
   return 0;
+}
+
+// --poses: "t,body,name,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz" (docs/EXPORT.md).
+void writePoseRows(std::FILE* f, const PoseFrame& fr, const std::vector<std::string>& ids) {
+  for (size_t i = 0; i < fr.bodies.size(); ++i) {
+    const BodyPose& p = fr.bodies[i];
+    std::fprintf(f, "%.9g,%zu,%s,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n",
+                 fr.t, i, ids[i].c_str(), p.x.x(), p.x.y(), p.x.z(), p.q.w(), p.q.x(), p.q.y(), p.q.z(), p.v.x(),
+                 p.v.y(), p.v.z(), p.w.x(), p.w.y(), p.w.z());
+  }
+}
+
+int runPoses(const Scene& scene, double duration, const SimArgs& args) {
+  // The times: --at as given (ascending, within the duration), --rate k/HZ, else every step.
+  std::vector<double> times = args.at;
+  for (size_t i = 0; i < times.size(); ++i) {
+    if (!std::isfinite(times[i]) || times[i] < 0.0 || (i > 0 && times[i] < times[i - 1])) {
+      throw SceneError("--at: times must be ascending seconds >= 0");
+    }
+  }
+  if (args.rate > 0.0) {
+    const long n = static_cast<long>(std::floor(duration * args.rate + 1e-9)) + 1;
+    for (long k = 0; k < n; ++k) times.push_back(double(k) / args.rate);
+  }
+  Sim rt(scene, &assimpAssets());
+  const std::string tmp = args.poses + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), "w");
+  if (!f) throw SceneError("--poses " + args.poses + ": cannot write the file");
+  std::fprintf(f, "t,body,name,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz\n");
+  const std::vector<std::string> ids = bodyIds(rt.world());
+  PoseSampler sampler(rt);
+  PoseFrame fr;
+  long rows = 0;
+  bool ok = true;
+  if (times.empty()) {
+    sampler.at(0.0, fr);
+    writePoseRows(f, fr, ids);
+    ++rows;
+    const double end = duration - 0.5 * scene.physics.dt;
+    while (ok && rt.time() < end) {
+      ok = sampler.nextStep(fr);
+      if (ok) {
+        writePoseRows(f, fr, ids);
+        ++rows;
+      }
+    }
+  } else {
+    for (double t : times) {
+      ok = sampler.at(t, fr);
+      if (!ok) break;
+      writePoseRows(f, fr, ids);
+      ++rows;
+    }
+  }
+  const bool written = std::fflush(f) == 0 && !std::ferror(f);
+  std::fclose(f);
+  if (!ok || !written) {
+    std::remove(tmp.c_str());
+    if (!ok) {
+      std::fprintf(stderr, "ponyhop sim: the simulation stopped: %s\n  %s was not written\n", rt.status().c_str(),
+                   args.poses.c_str());
+      return 1;
+    }
+    throw SceneError("--poses " + args.poses + ": write failed");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, args.poses, ec);
+  if (ec) throw SceneError("--poses " + args.poses + ": " + ec.message());
+  std::fprintf(stderr, "sim: %ld times x %zu bodies -> %s\n", rows, ids.size(), args.poses.c_str());
+  return 0;
+}
+
+int runSim(const SimArgs& args) {
+  const Scene scene = args.scene.load();
+  const double duration = args.duration >= 0.0 ? args.duration : scene.duration;
+  if (!std::isfinite(duration) || duration > 1e6) {
+    throw SceneError("--duration: must be a number of seconds in [0, 1e6]");
+  }
+  if (args.csv.empty() && args.poses.empty()) throw SceneError("nothing to write: give --csv FILE and/or --poses FILE");
+  if (args.poses.empty() && (args.rate > 0.0 || !args.at.empty())) {
+    throw SceneError("--rate and --at choose the times of --poses rows: give --poses FILE");
+  }
+  if (args.rate > 0.0 && !args.at.empty()) throw SceneError("--rate and --at: give one of them");
+  if (!args.csv.empty()) checkOutputFile("--csv", args.csv, sceneInputs(scene));
+  if (!args.poses.empty()) checkOutputFile("--poses", args.poses, sceneInputs(scene));
+  InterruptGuard interrupt;
+  if (!args.csv.empty()) {
+    const int rc = runSummary(scene, duration, args);
+    if (rc != 0) return rc;
+  }
+  return args.poses.empty() ? 0 : runPoses(scene, duration, args);
 }
 
 }  // namespace
 
 void addSimCommand(CLI::App& app, int& exit_code) {
   auto args = std::make_shared<SimArgs>();
-  auto* cmd = app.add_subcommand("sim", "Run the physics alone (no GL) and write one CSV row per millisecond");
+  auto* cmd = app.add_subcommand("sim", "Run the physics alone (no GL): a summary CSV and/or every body's pose");
   args->scene.add(cmd);
   cmd->add_option("--duration", args->duration, "Simulated seconds (default: the scene's duration)")
       ->check(finiteIn(0.0, 1e6));
-  cmd->add_option("--csv", args->csv, "Output CSV file")->required()->check(nonEmpty());
+  cmd->add_option("--csv", args->csv, "Summary CSV, one row per millisecond (tip or hopper state)")->check(nonEmpty());
+  cmd->add_option("--poses", args->poses,
+                  "Every body's pose and velocity as CSV: t,body,name,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz")
+      ->check(nonEmpty());
+  cmd->add_option("--rate", args->rate, "--poses rows at t = k/RATE (interpolated between steps) instead of every step")
+      ->check(finiteIn(1e-3, 1e6));
+  cmd->add_option("--at", args->at, "--poses rows at these times (s, ascending, interpolated)")->delimiter(',');
   cmd->callback([args, &exit_code] {
     try {
       exit_code = runSim(*args);

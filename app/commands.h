@@ -10,6 +10,8 @@ void addDiffCommand(CLI::App& app, int& exit_code);
 void addSceneDocCommand(CLI::App& app, int& exit_code);
 void addRenderCommand(CLI::App& app, int& exit_code);
 void addSimCommand(CLI::App& app, int& exit_code);
+void addExportCommand(CLI::App& app, int& exit_code);  // app/cmd_export.cpp: a glTF bake
+void addVideoCommand(CLI::App& app, int& exit_code);   // app/cmd_video.cpp: frames -> video
 void addBenchCommand(CLI::App& app, int& exit_code);  // app/cmd_bench.cpp: speed against accuracy
 #ifdef PONYHOP_WINDOW
 void addRunCommand(CLI::App& app, int& exit_code);  // app/cmd_run.cpp: the window with the tuning panel

@@ -5,18 +5,22 @@
 #include <exception>
 
 #include "app/commands.h"
+#include "sim/data_dir.h"
 
 int main(int argc, char** argv) {
   // A file size limit (RLIMIT_FSIZE) makes a write fail with EFBIG, reported like a full disk,
   // instead of killing the process with SIGXFSZ halfway through a file.
   std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"ponyhop: a ponytail and a Raibert hopper, simulated with Lagrange multipliers"};
+  app.set_version_flag("--version", std::string("ponyhop ") + ponyhop::versionString());
   app.require_subcommand(1);
   int exit_code = 0;
   ponyhop::addDiffCommand(app, exit_code);
   ponyhop::addSceneDocCommand(app, exit_code);
   ponyhop::addRenderCommand(app, exit_code);
   ponyhop::addSimCommand(app, exit_code);
+  ponyhop::addExportCommand(app, exit_code);
+  ponyhop::addVideoCommand(app, exit_code);
   ponyhop::addBenchCommand(app, exit_code);
 #ifdef PONYHOP_WINDOW
   ponyhop::addRunCommand(app, exit_code);

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <type_traits>
 
+#include "sim/data_dir.h"
 #include "sim/scene_io.h"
 
 namespace ponyhop {
@@ -154,7 +155,7 @@ void tooltip(const std::string& key, const FieldMeta& meta, const std::string& d
 std::vector<std::string> clipNames() {
   std::vector<std::string> names;
   std::error_code ec;
-  for (const auto& e : std::filesystem::directory_iterator(std::string(PONYHOP_SOURCE_DIR) + "/assets/animations", ec)) {
+  for (const auto& e : std::filesystem::directory_iterator(dataDir() + "/assets/animations", ec)) {
     if (e.path().extension() == ".json") names.push_back(e.path().stem().string());
   }
   std::sort(names.begin(), names.end());

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "sim/data_dir.h"
 #include "sim/scene_io.h"
 
 namespace ponyhop {
@@ -9,7 +10,7 @@ namespace ponyhop {
 Scene SceneArgs::load() const {
   std::vector<Override> overrides;
   for (const auto& s : sets) overrides.push_back(parseOverride(s));
-  Scene scene = loadScene(path, overrides);
+  Scene scene = loadScene(resolveSceneFile(path), overrides);
   for (const auto& n : scene.notes) std::fprintf(stderr, "ponyhop: note: %s\n", n.c_str());
   return scene;
 }

@@ -1,7 +1,10 @@
 #include "engine/asset_loader.h"
 
 #include "engine/animation_import.h"
+#include <cstdio>
+
 #include "engine/mesh.h"
+#include "sim/head_fit.h"
 #include "sim/scene_io.h"
 
 namespace ponyhop {
@@ -11,8 +14,16 @@ HeadAsset AssimpAssets::loadHead(const HeadParams& head, const std::string& mesh
   HeadAsset a;
   std::string err;
   if (!loadMesh(mesh_path, a.mesh, &err)) throw SceneError(scene_path + ": head.mesh: " + err);
-  a.mesh_to_body = meshToBody(head, a.mesh.bbox);
-  a.anchor = meshPointToBody(head, a.mesh.bbox, head.anchor);
+  // The file's own colours (textures, vertex colours, several materials) or head.color.
+  for (const std::string& w : a.mesh.warnings) std::fprintf(stderr, "ponyhop: warning: head.mesh: %s\n", w.c_str());
+  if (head.materials == HeadMaterials::Color || (head.materials == HeadMaterials::Auto && !a.mesh.hasOwnColors())) {
+    a.mesh.dropMaterials();
+  }
+  // Placement from the head itself (sim/head_fit.h).
+  const HeadFit fit = fitHead(head, mesh_path, a.mesh);
+  a.mesh_to_body = headMeshToBody(head, fit);
+  a.anchor = a.mesh_to_body * headAnchorInMesh(head, fit, a.mesh);
+  a.centre = a.mesh_to_body * fit.head_bounds.center().cast<double>();
   return a;
 }
 
@@ -21,7 +32,7 @@ std::optional<KeyframeTrack> AssimpAssets::loadMeshAnimation(const HeadParams& h
   // The file's own animation, its keys taken as samples of the node's pose (metres, after the
   // same up-axis fix as the mesh).
   AnimationImportOptions import;
-  import.y_up_to_z_up = head.up_axis == UpAxis::Y;
+  import.y_up_to_z_up = (head.up_axis == UpAxis::Auto ? detectUpAxis(mesh_path, MeshData{}, nullptr) : head.up_axis) == UpAxis::Y;
   return importAnimationTrack(mesh_path, import, options, error);
 }
 

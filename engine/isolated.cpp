@@ -54,8 +54,10 @@ bool writeAll(int fd, const void* data, size_t n) {
   }
   rlimit core{};  // a crash here is expected and reported; no core file
   setrlimit(RLIMIT_CORE, &core);
-  signal(SIGINT, SIG_DFL);
-  signal(SIGTERM, SIG_DFL);
+  // The default action for every signal the parent may handle: SIGINT/SIGTERM must end the
+  // child, and a crash must end it as a crash (not in a handler of the parent's, such as a
+  // sanitizer's or libFuzzer's, which would report the importer's crash as the parent's).
+  for (const int sig : {SIGINT, SIGTERM, SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT}) signal(sig, SIG_DFL);
   std::string result, error;
   bool ok = false;
   try {

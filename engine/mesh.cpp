@@ -1,16 +1,21 @@
 #include "engine/mesh.h"
 
+#include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <stb_image.h>
 
 #include <algorithm>
 #include <assimp/Importer.hpp>
 #include <cctype>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <map>
 #include <numbers>
 
 #include "engine/isolated.h"
+#include "sim/head_fit.h"
 
 namespace ponyhop {
 
@@ -23,6 +28,48 @@ static std::string lowerExtension(const std::string& path) {
 }
 
 namespace {
+
+// The base-colour texture of a material: an image embedded in the file ("*N" or by name), or a
+// file beside the mesh. Empty image + a warning when it cannot be read.
+MeshTexture readTexture(const aiScene* scene, const aiString& ref, const std::string& mesh_path, std::string* warning) {
+  MeshTexture img;
+  const aiTexture* emb = scene->GetEmbeddedTexture(ref.C_Str());
+  int w = 0, h = 0, n = 0;
+  unsigned char* data = nullptr;
+  std::string what = ref.C_Str();
+  if (emb) {
+    what = mesh_path + " (embedded " + what + ")";
+    if (emb->mHeight == 0) {  // compressed (png, jpg...): mWidth bytes
+      data = stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(emb->pcData), int(emb->mWidth), &w, &h, &n, 4);
+    } else {  // raw texels, BGRA
+      img.width = int(emb->mWidth);
+      img.height = int(emb->mHeight);
+      img.rgba.resize(size_t(img.width) * size_t(img.height) * 4);
+      for (size_t i = 0; i < size_t(emb->mWidth) * emb->mHeight; ++i) {
+        const aiTexel& t = emb->pcData[i];
+        img.rgba[4 * i] = t.r, img.rgba[4 * i + 1] = t.g, img.rgba[4 * i + 2] = t.b, img.rgba[4 * i + 3] = t.a;
+      }
+      return img;
+    }
+  } else {
+    std::string rel = what;
+    for (char& c : rel)
+      if (c == '\\') c = '/';
+    const std::filesystem::path p = std::filesystem::path(mesh_path).parent_path() / rel;
+    what = p.string();
+    data = stbi_load(what.c_str(), &w, &h, &n, 4);
+  }
+  if (!data) {
+    *warning = "texture " + what + " cannot be read (" + (stbi_failure_reason() ? stbi_failure_reason() : "?") +
+               "): drawn without it";
+    return img;
+  }
+  img.width = w;
+  img.height = h;
+  img.rgba.assign(data, data + size_t(w) * size_t(h) * 4);
+  stbi_image_free(data);
+  return img;
+}
 
 // assimp itself, in whatever process calls it.
 bool importMesh(const std::string& path, MeshData& out, std::string* err) {
@@ -45,10 +92,40 @@ bool importMesh(const std::string& path, MeshData& out, std::string* err) {
     return false;
   }
   MeshData m;
+  std::map<std::string, int> texture_of;  // by reference, -1: unreadable
   for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
     const aiMesh* am = scene->mMeshes[mi];
     if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
     const uint32_t base = uint32_t(m.positions.size());
+    // Material: base colour (glTF) or diffuse colour, and a base-colour (or diffuse) texture.
+    Eigen::Vector4f factor(1, 1, 1, 1);
+    int texture = -1;
+    if (am->mMaterialIndex < scene->mNumMaterials) {
+      const aiMaterial* mat = scene->mMaterials[am->mMaterialIndex];
+      aiColor4D c;
+      if (mat->Get(AI_MATKEY_BASE_COLOR, c) == AI_SUCCESS || mat->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS) {
+        factor = Eigen::Vector4f(c.r, c.g, c.b, c.a);
+      }
+      aiString ref;
+      if ((mat->GetTexture(aiTextureType_BASE_COLOR, 0, &ref) == AI_SUCCESS ||
+           mat->GetTexture(aiTextureType_DIFFUSE, 0, &ref) == AI_SUCCESS) &&
+          am->mTextureCoords[0]) {
+        auto it = texture_of.find(ref.C_Str());
+        if (it == texture_of.end()) {
+          std::string warning;
+          MeshTexture img = readTexture(scene, ref, path, &warning);
+          int id = -1;
+          if (img.width > 0) {
+            id = int(m.textures.size());
+            m.textures.push_back(std::move(img));
+          } else {
+            m.warnings.push_back(warning);
+          }
+          it = texture_of.emplace(ref.C_Str(), id).first;
+        }
+        texture = it->second;
+      }
+    }
     for (unsigned v = 0; v < am->mNumVertices; ++v) {
       const aiVector3D& p = am->mVertices[v];
       m.positions.emplace_back(p.x, p.y, p.z);
@@ -60,11 +137,26 @@ bool importMesh(const std::string& path, MeshData& out, std::string* err) {
         n = (std::isfinite(len) && len > 1e-12f) ? Eigen::Vector3f(n / len) : Eigen::Vector3f(0, 0, 1);
       }
       m.normals.push_back(n);
+      Eigen::Vector4f color = factor;
+      if (am->mColors[0]) {
+        const aiColor4D& vc = am->mColors[0][v];
+        color = color.cwiseProduct(Eigen::Vector4f(vc.r, vc.g, vc.b, vc.a));
+      }
+      m.colors.push_back(color);
+      const aiVector3D uv = am->mTextureCoords[0] ? am->mTextureCoords[0][v] : aiVector3D(0, 0, 0);
+      m.uvs.emplace_back(uv.x, 1.0f - uv.y);  // assimp: v up from the bottom; images: top row first
     }
+    const uint32_t first = uint32_t(m.indices.size());
     for (unsigned f = 0; f < am->mNumFaces; ++f) {
       const aiFace& face = am->mFaces[f];
       if (face.mNumIndices != 3) continue;
       for (int k = 0; k < 3; ++k) m.indices.push_back(base + face.mIndices[k]);
+    }
+    const uint32_t count = uint32_t(m.indices.size()) - first;
+    if (!m.parts.empty() && m.parts.back().texture == texture && m.parts.back().first + m.parts.back().count == first) {
+      m.parts.back().count += count;
+    } else {
+      m.parts.push_back(MeshPart{first, count, texture});
     }
   }
   if (m.indices.empty()) {
@@ -95,6 +187,62 @@ bool getArray(const std::string& s, size_t& at, std::vector<T>& v) {
   return true;
 }
 
+// The materials after the geometry: colours, uvs, parts, texture sizes and texels, warnings.
+void putMaterials(std::string& s, const MeshData& m) {
+  putArray(s, m.colors);
+  putArray(s, m.uvs);
+  putArray(s, m.parts);
+  std::vector<int32_t> dims;
+  std::vector<uint8_t> texels;
+  for (const MeshTexture& t : m.textures) {
+    dims.insert(dims.end(), {t.width, t.height});
+    texels.insert(texels.end(), t.rgba.begin(), t.rgba.end());
+  }
+  putArray(s, dims);
+  putArray(s, texels);
+  std::vector<char> text;
+  for (const std::string& w : m.warnings) {
+    text.insert(text.end(), w.begin(), w.end());
+    text.push_back('\n');
+  }
+  putArray(s, text);
+}
+
+bool getMaterials(const std::string& s, size_t& at, MeshData& m) {
+  std::vector<int32_t> dims;
+  std::vector<uint8_t> texels;
+  std::vector<char> text;
+  if (!getArray(s, at, m.colors) || !getArray(s, at, m.uvs) || !getArray(s, at, m.parts) || !getArray(s, at, dims) ||
+      !getArray(s, at, texels) || !getArray(s, at, text) || dims.size() % 2 != 0) {
+    return false;
+  }
+  if ((!m.colors.empty() && m.colors.size() != m.positions.size()) || (!m.uvs.empty() && m.uvs.size() != m.positions.size())) {
+    return false;
+  }
+  size_t used = 0;
+  for (size_t i = 0; i < dims.size(); i += 2) {
+    if (dims[i] <= 0 || dims[i + 1] <= 0 || dims[i] > 16384 || dims[i + 1] > 16384) return false;
+    const size_t n = size_t(dims[i]) * size_t(dims[i + 1]) * 4;
+    if (texels.size() - used < n) return false;
+    m.textures.push_back(MeshTexture{dims[i], dims[i + 1], std::vector<uint8_t>(texels.begin() + long(used), texels.begin() + long(used + n))});
+    used += n;
+  }
+  if (used != texels.size()) return false;
+  for (const MeshPart& p : m.parts) {
+    if (p.texture >= int32_t(m.textures.size()) || uint64_t(p.first) + p.count > m.indices.size()) return false;
+  }
+  std::string w;
+  for (char c : text) {
+    if (c == '\n') {
+      m.warnings.push_back(w);
+      w.clear();
+    } else {
+      w += c;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 bool loadMesh(const std::string& path, MeshData& out, std::string* err) {
@@ -108,6 +256,7 @@ bool loadMesh(const std::string& path, MeshData& out, std::string* err) {
         putArray(result, m.positions);
         putArray(result, m.normals);
         putArray(result, m.indices);
+        putMaterials(result, m);
         return true;
       },
       importLimits(), &bytes, &e);
@@ -119,7 +268,8 @@ bool loadMesh(const std::string& path, MeshData& out, std::string* err) {
   MeshData m;
   size_t at = 0;
   if (!getArray(bytes, at, m.positions) || !getArray(bytes, at, m.normals) || !getArray(bytes, at, m.indices) ||
-      at != bytes.size() || m.normals.size() != m.positions.size() || m.indices.size() % 3 != 0) {
+      !getMaterials(bytes, at, m) || at != bytes.size() || m.normals.size() != m.positions.size() ||
+      m.indices.size() % 3 != 0) {
     if (err) *err = path + ": the import process returned inconsistent data";
     return false;
   }
@@ -142,26 +292,10 @@ bool loadMesh(const std::string& path, MeshData& out, std::string* err) {
 }
 
 Eigen::Affine3d meshToBody(const HeadParams& head, const Eigen::AlignedBox3f& bbox) {
-  Eigen::Matrix3d U = Eigen::Matrix3d::Identity();
-  int up = 2;
-  if (head.up_axis == UpAxis::Y) {
-    U = Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
-    up = 1;
-  }
-  double s = head.scale;
-  if (head.height > 0.0 && !bbox.isEmpty()) {
-    const double extent = double(bbox.max()[up] - bbox.min()[up]);
-    if (extent > 0.0) s = head.height / extent;
-  }
-  const double k = std::numbers::pi / 180.0;
-  const Eigen::Matrix3d R = (Eigen::AngleAxisd(head.rotation.z() * k, Eigen::Vector3d::UnitZ()) *
-                             Eigen::AngleAxisd(head.rotation.y() * k, Eigen::Vector3d::UnitY()) *
-                             Eigen::AngleAxisd(head.rotation.x() * k, Eigen::Vector3d::UnitX()))
-                                .toRotationMatrix();
-  Eigen::Affine3d T = Eigen::Affine3d::Identity();
-  T.linear() = R * (s * U);
-  T.translation() = head.offset;
-  return T;
+  HeadFit fit;
+  fit.up = head.up_axis == UpAxis::Z ? UpAxis::Z : UpAxis::Y;
+  fit.head_bounds = bbox;
+  return headMeshToBody(head, fit);
 }
 
 Eigen::Vector3d meshPointToBody(const HeadParams& head, const Eigen::AlignedBox3f& bbox, const Eigen::Vector3d& p) {
@@ -203,6 +337,23 @@ MeshData makeUvSphere(float radius, int slices, int stacks) {
       if (i != 0) m.indices.insert(m.indices.end(), {a, c, b});
       if (i != stacks - 1) m.indices.insert(m.indices.end(), {b, c, d});
     }
+  m.computeBounds();
+  return m;
+}
+
+MeshData makeCapsuleMesh(const Eigen::Vector3f& p0, float r0, const Eigen::Vector3f& p1, float r1, int slices,
+                         int stacks) {
+  MeshData m = makeUvSphere(1.0f, slices, stacks | 1);  // odd: no ring on the equator
+  const Eigen::Vector3f axis = p1 - p0;
+  const float len = axis.norm();
+  const Eigen::Quaternionf R =
+      len > 1e-9f ? Eigen::Quaternionf::FromTwoVectors(Eigen::Vector3f::UnitZ(), axis / len) : Eigen::Quaternionf::Identity();
+  for (size_t i = 0; i < m.positions.size(); ++i) {
+    const Eigen::Vector3f n = m.positions[i];  // unit sphere: position = normal
+    const bool top = n.z() > 0.0f;
+    m.positions[i] = (top ? p1 : p0) + R * (n * (top ? r1 : r0));
+    m.normals[i] = R * n;
+  }
   m.computeBounds();
   return m;
 }

@@ -29,6 +29,11 @@ RenderSession::~RenderSession() {
 
 bool RenderSession::simulateTo(double t) { return sim_.advanceTo(t); }
 
+void RenderSession::skipFrame(double t) {
+  sceneCamera(scene_, sim_, t, follow_, t - last_t_);
+  last_t_ = t;
+}
+
 void RenderSession::renderFrame(double t, std::vector<uint8_t>& rgba) {
   const Camera cam = sceneCamera(scene_, sim_, t, follow_, t - last_t_);
   last_t_ = t;

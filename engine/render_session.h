@@ -27,6 +27,9 @@ class RenderSession {
   bool simulateTo(double t);
   // Draws the current state as seen at time t (the camera moves with t) and reads it back.
   void renderFrame(double t, std::vector<uint8_t>& rgba);
+  // Advances what a rendered frame at time t would (the follow camera) without drawing: a chunk
+  // of a sequence (`render --range`) passes the frames before it so that its own match a full run.
+  void skipFrame(double t);
 
   const std::string& status() const { return sim_.status(); }
   int width() const { return scene_.render.width; }

@@ -35,6 +35,10 @@ struct GpuMesh {
   GLuint vao = 0, vbo = 0, ebo = 0;
   GLsizei index_count = 0;
   Eigen::AlignedBox3d bbox;
+  // With the file's materials (MeshData::colors): drawn by prog_mesh_mat, part by part.
+  bool materials = false;
+  std::vector<MeshPart> parts;
+  std::vector<GLuint> textures;
 };
 
 struct MeshDraw {
@@ -127,12 +131,21 @@ LightFrustum fitLightFrustum(const Eigen::Vector3d& dir, const Eigen::AlignedBox
   return lf;
 }
 
+void unpremultiplyAlpha(std::vector<uint8_t>& rgba) {
+  for (size_t i = 0; i + 3 < rgba.size(); i += 4) {
+    const int a = rgba[i + 3];
+    if (a == 0 || a == 255) continue;
+    for (int c = 0; c < 3; ++c) rgba[i + size_t(c)] = uint8_t(std::min(255, (rgba[i + size_t(c)] * 255 + a / 2) / a));
+  }
+}
+
 }  // namespace
 
 struct Renderer::Impl {
   // Programs.
   GLuint prog_mesh = 0, prog_hull = 0, prog_ground = 0, prog_bg = 0, prog_lines = 0;
   GLuint prog_mesh_depth = 0, prog_hull_depth = 0, prog_hair = 0, prog_hair_depth = 0;
+  GLuint prog_mesh_mat = 0;
   // Static geometry.
   GLuint hull_vao = 0, hull_vbo = 0, hull_ebo = 0, hull_instances = 0;
   GLsizei hull_index_count = 0;
@@ -172,6 +185,7 @@ struct Renderer::Impl {
                          float normal_offset, bool shadows_on);
   void drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj, bool depth_only);
   void drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only, const Eigen::Vector3d& light_dir);
+  void drawMaterialMeshes();
 };
 
 static GLint loc(GLuint prog, const char* name) { return glGetUniformLocation(prog, name); }
@@ -187,7 +201,7 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
 Renderer::~Renderer() {
   if (!glDeleteProgram) return;  // GL never loaded: nothing was created
   Impl& I = *impl_;
-  for (GLuint p : {I.prog_mesh, I.prog_hull, I.prog_ground, I.prog_bg, I.prog_lines, I.prog_mesh_depth,
+  for (GLuint p : {I.prog_mesh, I.prog_mesh_mat, I.prog_hull, I.prog_ground, I.prog_bg, I.prog_lines, I.prog_mesh_depth,
                    I.prog_hull_depth, I.prog_hair, I.prog_hair_depth})
     if (p) glDeleteProgram(p);
   for (int i = 0; i < int(I.meshes.size()); ++i) release(MeshHandle{i});
@@ -217,6 +231,7 @@ bool Renderer::init(std::string* err) {
     const char* fs;
   };
   const P progs[] = {{&I.prog_mesh, "mesh", kMeshVS, kLitFS},
+                     {&I.prog_mesh_mat, "mesh with materials", kMeshMatVS, kMeshMatFS},
                      {&I.prog_hull, "hull", kCapsuleVS, kLitFS},
                      {&I.prog_ground, "ground", kGroundVS, kGroundFS},
                      {&I.prog_bg, "background", kFullscreenVS, kBackgroundFS},
@@ -316,9 +331,62 @@ bool Renderer::init(std::string* err) {
   return true;
 }
 
+// A mesh with colours: position, normal, colour, uv (12 floats a vertex), and its textures.
+static void uploadWithMaterials(const MeshData& m, GpuMesh& g) {
+  std::vector<float> v;
+  v.reserve(m.positions.size() * 12);
+  for (size_t i = 0; i < m.positions.size(); ++i) {
+    const Eigen::Vector3f n = i < m.normals.size() ? m.normals[i] : Eigen::Vector3f(0, 0, 1);
+    const Eigen::Vector4f c = i < m.colors.size() ? m.colors[i] : Eigen::Vector4f(1, 1, 1, 1);
+    const Eigen::Vector2f t = i < m.uvs.size() ? m.uvs[i] : Eigen::Vector2f(0, 0);
+    v.insert(v.end(), {m.positions[i].x(), m.positions[i].y(), m.positions[i].z(), n.x(), n.y(), n.z(), c.x(), c.y(),
+                       c.z(), c.w(), t.x(), t.y()});
+  }
+  glGenVertexArrays(1, &g.vao);
+  glBindVertexArray(g.vao);
+  glGenBuffers(1, &g.vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, g.vbo);
+  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(v.size() * sizeof(float)), v.data(), GL_STATIC_DRAW);
+  const GLsizei stride = 12 * sizeof(float);
+  const int sizes[4] = {3, 3, 4, 2}, offsets[4] = {0, 3, 6, 10};
+  for (GLuint a = 0; a < 4; ++a) {
+    glEnableVertexAttribArray(a);
+    glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, stride,
+                          reinterpret_cast<const void*>(size_t(offsets[a]) * sizeof(float)));
+  }
+  g.materials = true;
+  g.parts = m.parts.empty() ? std::vector<MeshPart>{MeshPart{0, uint32_t(m.indices.size()), -1}} : m.parts;
+  for (const MeshTexture& img : m.textures) {
+    GLuint tex = 0;
+    glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8_ALPHA8, img.width, img.height, 0, GL_RGBA, GL_UNSIGNED_BYTE, img.rgba.data());
+    glGenerateMipmap(GL_TEXTURE_2D);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
+    g.textures.push_back(tex);
+  }
+  glBindTexture(GL_TEXTURE_2D, 0);
+}
+
 MeshHandle Renderer::upload(const MeshData& m) {
   Impl& I = *impl_;
   GpuMesh g;
+  if (!m.colors.empty()) {
+    uploadWithMaterials(m, g);
+    glGenBuffers(1, &g.ebo);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(m.indices.size() * sizeof(uint32_t)), m.indices.data(),
+                 GL_STATIC_DRAW);
+    glBindVertexArray(0);
+    g.index_count = GLsizei(m.indices.size());
+    for (const auto& p : m.positions) g.bbox.extend(p.cast<double>());
+    I.meshes.push_back(g);
+    return MeshHandle{int(I.meshes.size()) - 1};
+  }
   std::vector<float> v;
   v.reserve(m.positions.size() * 6);
   for (size_t i = 0; i < m.positions.size(); ++i) {
@@ -352,6 +420,7 @@ void Renderer::release(MeshHandle h) {
   glDeleteVertexArrays(1, &g.vao);
   glDeleteBuffers(1, &g.vbo);
   glDeleteBuffers(1, &g.ebo);
+  if (!g.textures.empty()) glDeleteTextures(GLsizei(g.textures.size()), g.textures.data());
   g = GpuMesh{};
 }
 
@@ -542,6 +611,36 @@ void Renderer::Impl::setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_
   glUniform2f(loc(prog, "u_viewport"), float(target_w), float(target_h));
 }
 
+// Meshes with their file's materials (main pass): one draw per part, its texture on unit 2.
+void Renderer::Impl::drawMaterialMeshes() {
+  const GLuint p = prog_mesh_mat;
+  bool used = false;
+  for (const MeshDraw& d : mesh_draws) {
+    const GpuMesh& g = meshes[size_t(d.mesh)];
+    if (!g.materials) continue;
+    if (!used) {
+      glUseProgram(p);
+      glUniform1i(loc(p, "u_baseTex"), 2);
+      used = true;
+    }
+    glUniformMatrix4fv(loc(p, "u_model"), 1, GL_FALSE, d.model.data());
+    glUniformMatrix3fv(loc(p, "u_normalMat"), 1, GL_FALSE, d.normal.data());
+    const Eigen::Vector3f c = srgbToLinear(d.material.color);
+    glUniform4f(loc(p, "u_colorSpec"), c.x(), c.y(), c.z(), d.material.specular);
+    glUniform2f(loc(p, "u_shinRim"), d.material.shininess, d.material.rim);
+    glBindVertexArray(g.vao);
+    for (const MeshPart& part : g.parts) {
+      const bool tex = part.texture >= 0 && size_t(part.texture) < g.textures.size();
+      glUniform1i(loc(p, "u_hasTex"), tex ? 1 : 0);
+      glActiveTexture(GL_TEXTURE2);
+      glBindTexture(GL_TEXTURE_2D, tex ? g.textures[size_t(part.texture)] : 0);
+      glDrawElements(GL_TRIANGLES, GLsizei(part.count), GL_UNSIGNED_INT,
+                     reinterpret_cast<const void*>(size_t(part.first) * sizeof(uint32_t)));
+    }
+    glActiveTexture(GL_TEXTURE0);
+  }
+}
+
 void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj,
                                   bool depth_only) {
   if (!mesh_draws.empty()) {
@@ -551,6 +650,7 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
                 l_cs = loc(mesh_prog, "u_colorSpec"), l_sr = loc(mesh_prog, "u_shinRim");
     for (const MeshDraw& d : mesh_draws) {
       const GpuMesh& g = meshes[size_t(d.mesh)];
+      if (g.materials && !depth_only) continue;  // below, with their own program
       glUniformMatrix4fv(l_model, 1, GL_FALSE, d.model.data());
       glUniformMatrix3fv(l_normal, 1, GL_FALSE, d.normal.data());
       const Eigen::Vector3f c = srgbToLinear(d.material.color);
@@ -560,6 +660,7 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
       glDrawElements(GL_TRIANGLES, g.index_count, GL_UNSIGNED_INT, nullptr);
     }
   }
+  if (!depth_only) drawMaterialMeshes();
   if (!hulls.empty()) {
     glUseProgram(hull_prog);
     if (depth_only) setMat4(hull_prog, "u_viewProj", view_proj);
@@ -680,7 +781,7 @@ void Renderer::endFrame() {
   glBindFramebuffer(GL_FRAMEBUFFER, I.msaa_fbo);
   glViewport(0, 0, w, h);
   glDepthMask(GL_TRUE);
-  glClearColor(0, 0, 0, 1);
+  glClearColor(0, 0, 0, I.params.transparent ? 0 : 1);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, I.shadow_tex);
@@ -689,12 +790,15 @@ void Renderer::endFrame() {
   glBindSampler(1, I.raw_depth_sampler);
   glActiveTexture(GL_TEXTURE0);
 
-  // Background: the gradient, no depth.
+  // Background: the gradient, no depth (none when transparent: alpha 0 where nothing is drawn).
   glDisable(GL_DEPTH_TEST);
-  I.setCommonUniforms(I.prog_bg, view_proj, light_vp, normal_offset, shadows_on);
-  glBindVertexArray(I.empty_vao);
-  glDrawArrays(GL_TRIANGLES, 0, 3);
-  stats_.draw_calls = 1;
+  stats_.draw_calls = 0;
+  if (!I.params.transparent) {
+    I.setCommonUniforms(I.prog_bg, view_proj, light_vp, normal_offset, shadows_on);
+    glBindVertexArray(I.empty_vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    stats_.draw_calls = 1;
+  }
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
 
@@ -713,6 +817,7 @@ void Renderer::endFrame() {
   }
 
   I.setCommonUniforms(I.prog_mesh, view_proj, light_vp, normal_offset, shadows_on);
+  I.setCommonUniforms(I.prog_mesh_mat, view_proj, light_vp, normal_offset, shadows_on);
   I.setCommonUniforms(I.prog_hull, view_proj, light_vp, normal_offset, shadows_on);
   I.drawGeometry(I.prog_mesh, I.prog_hull, view_proj, false);
   I.setCommonUniforms(I.prog_hair, view_proj, light_vp, normal_offset, shadows_on);
@@ -746,6 +851,9 @@ void Renderer::endFrame() {
 void Renderer::readPixels(std::vector<uint8_t>& rgba) {
   const auto t0 = Clock::now();
   readFramebufferRGBA(impl_->resolve_fbo, width_, height_, rgba);
+  // Transparent: edge pixels hold colour * coverage (the samples over a clear of 0); PNG wants
+  // straight alpha.
+  if (impl_->params.transparent) unpremultiplyAlpha(rgba);
   stats_.readback_ms = msSince(t0);
 }
 

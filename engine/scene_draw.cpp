@@ -73,7 +73,9 @@ void SceneDraw::draw(const Sim& sim, Renderer& renderer, const Scene& drawing) c
     Eigen::Affine3d pose = Eigen::Affine3d::Identity();
     pose.translate(b.x);
     pose.rotate(b.q);
-    renderer.drawMesh(head_, pose * sim.head()->mesh_to_body, material(scene.head->color, 0.18f, 24.0f));
+    // A head drawn with its file's colours (sim/mesh_data.h) is not tinted by head.color.
+    const Eigen::Vector3d tint = sim.head()->mesh.colors.empty() ? scene.head->color : Eigen::Vector3d::Ones();
+    renderer.drawMesh(head_, pose * sim.head()->mesh_to_body, material(tint, 0.18f, 24.0f));
   }
   if (const Chain* chain = sim.chain()) drawChain(sim, *chain, drawing.chain ? *drawing.chain : *scene.chain, renderer);
 }

@@ -136,6 +136,36 @@ void main() {
 }
 )GLSL";
 
+// A mesh with its file's materials: vertex colours (linear, base colour included) and texture
+// coordinates for its base-colour texture.
+const char* const kMeshMatVS = R"GLSL(
+layout(location = 0) in vec3 a_pos;
+layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec4 a_color;
+layout(location = 3) in vec2 a_uv;
+uniform mat4 u_viewProj;
+uniform mat4 u_model;
+uniform mat3 u_normalMat;
+uniform vec4 u_colorSpec;
+uniform vec2 u_shinRim;
+out vec3 v_pos;
+out vec3 v_normal;
+out vec4 v_color;
+out vec2 v_uv;
+flat out vec4 v_colorSpec;
+flat out vec2 v_shinRim;
+void main() {
+  vec4 w = u_model * vec4(a_pos, 1.0);
+  v_pos = w.xyz;
+  v_normal = u_normalMat * a_normal;
+  v_color = a_color;
+  v_uv = a_uv;
+  v_colorSpec = u_colorSpec;
+  v_shinRim = u_shinRim;
+  gl_Position = u_viewProj * w;
+}
+)GLSL";
+
 // The convex hull of two spheres (p0, r0) and (p1, r1) from one static mesh. Each vertex holds an
 // azimuth (cos, sin), a parameter t in 0..1 along its cap and the cap it belongs to. The hull's
 // side is a cone tangent to both spheres; its normal makes the angle alpha = asin((r0 - r1) / L)
@@ -186,6 +216,27 @@ void main() {
   vec3 N = normalize(v_normal);
   if (!gl_FrontFacing) N = -N;  // open or inside-out meshes still light correctly
   vec3 c = shade(v_pos, N, v_colorSpec.rgb, v_colorSpec.a, v_shinRim.x, v_shinRim.y);
+  o_color = vec4(linearToSrgb(toneMap(c)), 1.0);
+}
+)GLSL";
+
+// kLitFS with the albedo from the mesh's materials (u_baseTex: sRGB texture, read linear).
+const char* const kMeshMatFS = R"GLSL(
+in vec3 v_pos;
+in vec3 v_normal;
+in vec4 v_color;
+in vec2 v_uv;
+flat in vec4 v_colorSpec;
+flat in vec2 v_shinRim;
+uniform sampler2D u_baseTex;
+uniform int u_hasTex;
+out vec4 o_color;
+void main() {
+  vec3 N = normalize(v_normal);
+  if (!gl_FrontFacing) N = -N;
+  vec3 albedo = v_colorSpec.rgb * v_color.rgb;
+  if (u_hasTex != 0) albedo *= texture(u_baseTex, v_uv).rgb;
+  vec3 c = shade(v_pos, N, albedo, v_colorSpec.a, v_shinRim.x, v_shinRim.y);
   o_color = vec4(linearToSrgb(toneMap(c)), 1.0);
 }
 )GLSL";

@@ -7,6 +7,7 @@ namespace ponyhop::shaders {
 
 // Vertex shaders.
 extern const char* const kMeshVS;       // meshes and boxes: per-draw model matrix (uniforms)
+extern const char* const kMeshMatVS;    // meshes with their own colours/texture coordinates
 extern const char* const kCapsuleVS;    // spheres / capsules / tapered capsules: one instanced draw
 extern const char* const kGroundVS;     // the z = 0 plane
 extern const char* const kFullscreenVS; // background (gl_VertexID triangle)
@@ -14,6 +15,7 @@ extern const char* const kLinesVS;      // debug lines
 extern const char* const kHairVS;       // hair strands (camera- or light-facing ribbons) and core tube
 // Fragment shaders.
 extern const char* const kLitFS;        // Blinn-Phong + rim, shadowed key light, fill, hemi ambient
+extern const char* const kMeshMatFS;    // kLitFS with the albedo times vertex colour and base-colour texture
 extern const char* const kGroundFS;     // filtered checker, shadow, fade into the background
 extern const char* const kBackgroundFS; // vertical gradient
 extern const char* const kLinesFS;

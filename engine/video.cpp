@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -85,6 +86,17 @@ bool ffmpegAvailable(const std::string& ffmpeg) {
   return r.started && r.exit_code == 0;
 }
 
+std::string videoContainer(const std::string& path, std::string* err) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".mp4" || ext == ".mov" || ext == ".webm" || ext == ".gif") return ext.substr(1);
+  if (err) {
+    *err = path + ": cannot tell the video container from \"" + ext +
+           "\": name the file .mp4 or .mov (H.264), .webm (VP9) or .gif";
+  }
+  return "";
+}
+
 bool encodeVideo(const std::string& frame_dir, const std::string& out_mp4, const VideoOptions& opt, std::string* err) {
   namespace fs = std::filesystem;
   char first[64];
@@ -97,18 +109,30 @@ bool encodeVideo(const std::string& frame_dir, const std::string& out_mp4, const
     if (err) *err = "encodeVideo: fps must be > 0";
     return false;
   }
+  const std::string container = videoContainer(out_mp4, err);
+  if (container.empty()) return false;
   std::error_code ec;
   if (fs::path(out_mp4).has_parent_path()) fs::create_directories(fs::path(out_mp4).parent_path(), ec);
   const std::string tmp = out_mp4 + ".tmp";
   char fps[32];
   std::snprintf(fps, sizeof(fps), "%.6g", opt.fps);
-  const std::vector<std::string> args = {
+  std::vector<std::string> args = {
       opt.ffmpeg, "-hide_banner", "-loglevel", "error", "-y", "-framerate", fps, "-start_number",
-      std::to_string(opt.start_number), "-i", (fs::path(frame_dir) / opt.pattern).string(),
-      // yuv420p needs even sizes: pad odd ones by a pixel (of the edge colour would need a
-      // filter graph; black padding of one pixel is invisible in players).
-      "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf",
-      std::to_string(opt.crf), "-movflags", "+faststart", "-f", "mp4", tmp};
+      std::to_string(opt.start_number), "-i", (fs::path(frame_dir) / opt.pattern).string()};
+  // yuv420p needs even sizes: pad odd ones by a pixel (of the edge colour would need a filter
+  // graph; black padding of one pixel is invisible in players).
+  const std::string pad = "pad=ceil(iw/2)*2:ceil(ih/2)*2";
+  if (container == "mp4" || container == "mov") {
+    args.insert(args.end(), {"-vf", pad, "-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", std::to_string(opt.crf),
+                             "-movflags", "+faststart"});
+  } else if (container == "webm") {
+    // VP9 at constant quality; yuva420p keeps a transparent background's alpha.
+    args.insert(args.end(), {"-vf", pad, "-c:v", "libvpx-vp9", "-pix_fmt", "yuva420p", "-crf", "32", "-b:v", "0",
+                             "-deadline", "good", "-cpu-used", "4", "-row-mt", "1"});
+  } else {  // gif: one palette made for the whole video
+    args.insert(args.end(), {"-vf", "split[a][b];[a]palettegen=reserve_transparent=1[p];[b][p]paletteuse", "-loop", "0"});
+  }
+  args.insert(args.end(), {"-f", container, tmp});
   const RunResult r = run(args);
   if (!r.started) {
     if (err) *err = "encodeVideo: cannot run '" + opt.ffmpeg + "' (install the ffmpeg package)";

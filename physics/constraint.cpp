@@ -45,12 +45,17 @@ void ConstraintSystem::evaluate(const std::vector<RigidBody>& bodies, const Cons
 }
 
 Eigen::VectorXd ConstraintSystem::times(const std::vector<Vector6d>& per_body) const {
-  Eigen::VectorXd out = Eigen::VectorXd::Zero(rows_);
+  Eigen::VectorXd out;
+  timesInto(per_body, out);
+  return out;
+}
+
+void ConstraintSystem::timesInto(const std::vector<Vector6d>& per_body, Eigen::VectorXd& out) const {
+  out.setZero(rows_);
   for (const Block& b : blocks_) {
     if (b.body_a != kWorldBody) out.segment(b.row, b.rows) += b.ja * per_body[b.body_a];
     if (b.body_b != kWorldBody) out.segment(b.row, b.rows) += b.jb * per_body[b.body_b];
   }
-  return out;
 }
 
 void ConstraintSystem::addTransposeTimes(const Eigen::VectorXd& lambda, const std::vector<RigidBody>& bodies,

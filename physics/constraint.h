@@ -97,6 +97,8 @@ class ConstraintSystem {
 
   // J x for one 6-vector per body (x of kinematic bodies counts; the world's is zero).
   Eigen::VectorXd times(const std::vector<Vector6d>& per_body) const;
+  // out = J x (out resized to rows() when needed).
+  void timesInto(const std::vector<Vector6d>& per_body, Eigen::VectorXd& out) const;
   // out[body] += J^T lambda for dynamic bodies only (kinematic bodies take no constraint force).
   void addTransposeTimes(const Eigen::VectorXd& lambda, const std::vector<RigidBody>& bodies,
                          std::vector<Vector6d>& out) const;

@@ -6,8 +6,10 @@ std::string ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, c
                                                const BaumgarteGains& gains) {
   // Known accelerations: unconstrained M^-1 F_ext (with w x I w) for dynamic bodies, the
   // prescribed ones for kinematic bodies; and every body's velocity, for C' = J q'.
-  std::vector<Vector6d> acc(bodies.size());
-  std::vector<Vector6d> vel(bodies.size());
+  std::vector<Vector6d>& acc = acc_;
+  std::vector<Vector6d>& vel = vel_;
+  acc.resize(bodies.size());
+  vel.resize(bodies.size());
   for (size_t i = 0; i < bodies.size(); ++i) {
     const RigidBody& b = bodies[i];
     if (b.isDynamic()) {
@@ -21,16 +23,21 @@ std::string ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, c
   lambda_.setZero(system.rows());
   if (system.rows() > 0) {
     // b = -J'q' - J_d M^-1 F_ext - J_k acc_k - (2 alpha C' + beta^2 C)
-    Eigen::VectorXd rhs = -system.bias() - system.times(acc);
-    if (gains.alpha != 0.0) rhs -= 2.0 * gains.alpha * system.times(vel);
-    if (gains.beta != 0.0) rhs -= gains.beta * gains.beta * system.C();
+    system.timesInto(acc, jx_);
+    rhs_ = -system.bias() - jx_;
+    if (gains.alpha != 0.0) {
+      system.timesInto(vel, jx_);
+      rhs_ -= 2.0 * gains.alpha * jx_;
+    }
+    if (gains.beta != 0.0) rhs_ -= gains.beta * gains.beta * system.C();
     if (!factor(bodies, system)) return "the constraint matrix J M^-1 J^T is singular";
-    lambda_ = solve(rhs);
+    solveInto(rhs_, lambda_);
     if (!lambda_.allFinite()) return "non-finite multipliers lambda";
   }
 
   // F_c = J^T lambda; acceleration = M^-1 (F_ext + F_c) (the free part already has M^-1 F_ext).
-  std::vector<Vector6d> fc(bodies.size(), Vector6d::Zero());
+  std::vector<Vector6d>& fc = fc_;
+  fc.assign(bodies.size(), Vector6d::Zero());
   if (system.rows() > 0) system.addTransposeTimes(lambda_, bodies, fc);
   for (size_t i = 0; i < bodies.size(); ++i) {
     RigidBody& b = bodies[i];

@@ -37,6 +37,9 @@ class ConstraintSolver {
   virtual bool factor(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) = 0;
   // y with A y = rhs, after factor().
   virtual Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const = 0;
+  // The same into `out` (resized when needed): a solver that keeps its work space allocates
+  // nothing here (the tree solver); the default calls solve().
+  virtual void solveInto(const Eigen::VectorXd& rhs, Eigen::VectorXd& out) const { out = solve(rhs); }
 
   // The joint-force stage. Needs the bodies' accumulated forces (dynamic) and prescribed
   // accelerations (kinematic). Writes constraint_force/torque and the total accelerations a,
@@ -54,6 +57,9 @@ class ConstraintSolver {
 
  private:
   Eigen::VectorXd lambda_;
+  // Work space of solveJointForces (kept between calls: a steady step allocates nothing).
+  std::vector<Vector6d> acc_, vel_, fc_;
+  Eigen::VectorXd rhs_, jx_;
 };
 
 // M^-1 x for one body's 6-vector (1/m on the linear part, I_world^-1 on the angular part).

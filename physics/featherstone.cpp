@@ -1,9 +1,11 @@
 #include "physics/featherstone.h"
 
 #include <Eigen/Cholesky>
+#include <limits>
 
 #include "physics/integrator.h"
 #include "physics/prismatic_joint.h"
+#include "physics/small_matrix.h"
 #include "physics/spherical_joint.h"
 
 namespace ponyhop {
@@ -11,7 +13,6 @@ namespace ponyhop {
 namespace {
 
 using Matrix6 = ArticulatedSystem::Matrix6;
-using Motion = ArticulatedSystem::Motion;
 using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 6, 6>;
 using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, 6, 1>;
 
@@ -25,6 +26,25 @@ Matrix6 shift(const Eigen::Vector3d& d) {
   x.topRightCorner<3, 3>() = -skew(d);
   return x;
 }
+// X^T M X for a symmetric M = [A B; B^T E] (an articulated inertia carried from x_i to x_p) in
+// 3 x 3 blocks: X = [I -K; 0 I], K = skew(d), K^T = -K, so
+//   X^T M X = [ A, B - A K ; B^T + K A, E + K B - B^T K - K A K ].
+// The bottom-left block is the top-right's transpose (A symmetric): symmetry is kept exactly,
+// at a fraction of the two 6 x 6 products.
+Matrix6 shiftInertia(const Eigen::Vector3d& d, const Matrix6& m) {
+  const Eigen::Matrix3d k = skew(d);
+  const Eigen::Matrix3d a = m.topLeftCorner<3, 3>();
+  const Eigen::Matrix3d b = m.topRightCorner<3, 3>();
+  const Eigen::Matrix3d ak = a * k;
+  const Eigen::Matrix3d top_right = b - ak;
+  const Eigen::Matrix3d kb = k * b;
+  Matrix6 out;
+  out.topLeftCorner<3, 3>() = a;
+  out.topRightCorner<3, 3>() = top_right;
+  out.bottomLeftCorner<3, 3>() = top_right.transpose();
+  out.bottomRightCorner<3, 3>() = m.bottomRightCorner<3, 3>() + kb + kb.transpose() - k * ak;
+  return out;
+}
 Vector6d shiftMotion(const Eigen::Vector3d& d, const Vector6d& a) {
   Vector6d out = a;
   out.head<3>() += a.tail<3>().cross(d);
@@ -37,30 +57,46 @@ Vector6d shiftForce(const Eigen::Vector3d& d, const Vector6d& f) {
 }
 
 // Newton-Euler at the centre: F = M A + b, M = diag(m I, I_world), b = [-f; w x I w - t].
-Matrix6 spatialInertia(const RigidBody& b) {
+Matrix6 spatialInertia(const RigidBody& b, const Eigen::Matrix3d& inertia_world) {
   Matrix6 m = Matrix6::Zero();
   m.topLeftCorner<3, 3>().diagonal().setConstant(b.mass);
-  m.bottomRightCorner<3, 3>() = b.worldInertia();
+  m.bottomRightCorner<3, 3>() = inertia_world;
   return m;
 }
-Vector6d biasForce(const RigidBody& b) {
+Matrix6 spatialInertia(const RigidBody& b) { return spatialInertia(b, b.worldInertia()); }
+Vector6d biasForce(const RigidBody& b, const Eigen::Matrix3d& inertia_world) {
   Vector6d out;
   out.head<3>() = -b.force;
-  out.tail<3>() = b.w.cross(b.worldInertia() * b.w) - b.torque;
+  out.tail<3>() = b.w.cross(inertia_world * b.w) - b.torque;
   return out;
 }
+Vector6d biasForce(const RigidBody& b) { return biasForce(b, b.worldInertia()); }
 
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
 // The tree
 
+// The structure: body count, joint count, which bodies are dynamic, each joint's two bodies.
+// Compared in place every step (no allocation); rebuilt only when it changed.
+bool ArticulatedSystem::sameSignature(const std::vector<RigidBody>& bodies, const Constraints& joints) const {
+  size_t k = 0;
+  const auto next = [&](int v) { return k < signature_.size() && signature_[k++] == v; };
+  if (!next(static_cast<int>(bodies.size())) || !next(static_cast<int>(joints.size()))) return false;
+  for (const RigidBody& b : bodies) {
+    if (!next(b.isDynamic() ? 1 : 0)) return false;
+  }
+  for (const auto& j : joints) {
+    if (!next(j->bodyA()) || !next(j->bodyB())) return false;
+  }
+  return k == signature_.size();
+}
+
 std::string ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Constraints& joints) {
-  std::vector<int> sig{static_cast<int>(bodies.size()), static_cast<int>(joints.size())};
-  for (const RigidBody& b : bodies) sig.push_back(b.isDynamic() ? 1 : 0);
-  for (const auto& j : joints) sig.insert(sig.end(), {j->bodyA(), j->bodyB()});
-  if (sig == signature_) return error_;
-  signature_ = sig;
+  if (sameSignature(bodies, joints)) return error_;
+  signature_ = {static_cast<int>(bodies.size()), static_cast<int>(joints.size())};
+  for (const RigidBody& b : bodies) signature_.push_back(b.isDynamic() ? 1 : 0);
+  for (const auto& j : joints) signature_.insert(signature_.end(), {j->bodyA(), j->bodyB()});
   nodes_.clear();
   dofs_ = 0;
   have_state_ = false;
@@ -194,6 +230,10 @@ std::string ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const
   coords_.q.assign(nodes_.size(), Eigen::Quaterniond::Identity());
   coords_.s.assign(nodes_.size(), 0.0);
   u_.setZero(dofs_);
+  kin_.resize(nodes_.size());
+  pass_.resize(nodes_.size());
+  for (Coordinates* c : {&c0_, &y_, &r_[0], &r_[1], &r_[2], &r_[3]}) *c = coords_;
+  for (Eigen::VectorXd* v : {&u0_, &us_, &k_[0], &k_[1], &k_[2], &k_[3]}) v->setZero(dofs_);
   error_.clear();
   return error_;
 }
@@ -246,7 +286,7 @@ void ArticulatedSystem::writeState(std::vector<RigidBody>& bodies) const {
         b.w = u_.segment<3>(nd.dof + 3);
         break;
       case Type::Spherical: {
-        b.q = (p.q * coords_.q[i].normalized()).normalized();
+        b.q = (p.q * coords_.q[i]).normalized();  // one normalization: RK4 stages are not unit
         const Eigen::Vector3d r_p = p.q * nd.point_parent;
         const Eigen::Vector3d r_i = b.q * nd.point_child;
         b.x = p.x + r_p - r_i;
@@ -290,6 +330,7 @@ void ArticulatedSystem::jointKinematics(const std::vector<RigidBody>& bodies, st
     const RigidBody& p = bodyOf(bodies, nd.parent);
     const RigidBody& b = bodies[nd.body];
     Kinematics& k = out[i];
+    k.R = b.rotation();
     k.c.setZero();
     k.a_base.setZero();
     k.d = b.x - p.x;
@@ -299,13 +340,15 @@ void ArticulatedSystem::jointKinematics(const std::vector<RigidBody>& bodies, st
         k.S = Matrix6::Identity();
         break;
       case Type::Spherical: {
-        const Eigen::Matrix3d rp = p.rotation();
-        const Eigen::Vector3d r_p = p.q * nd.point_parent;
-        const Eigen::Vector3d r_i = b.q * nd.point_child;
+        // Parents come first: a dynamic parent's rotation is already in out.
+        k.Rp = nd.parent_node >= 0 ? out[nd.parent_node].R : p.rotation();
+        const Eigen::Matrix3d& rp = k.Rp;
+        const Eigen::Vector3d r_p = rp * nd.point_parent;
+        const Eigen::Vector3d r_i = k.R * nd.point_child;
+        k.r_i = r_i;
         const Eigen::Vector3d w_rel = rp * u_.segment<3>(nd.dof);
-        k.S.resize(6, 3);
-        k.S.topRows<3>() = skew(r_i) * rp;
-        k.S.bottomRows<3>() = rp;
+        k.S.topLeftCorner<3, 3>() = skew(r_i) * rp;
+        k.S.bottomLeftCorner<3, 3>() = rp;
         const Eigen::Vector3d c_ang = p.w.cross(w_rel);
         k.c.head<3>() = p.w.cross(p.w.cross(r_p)) - b.w.cross(b.w.cross(r_i)) - c_ang.cross(r_i);
         k.c.tail<3>() = c_ang;
@@ -313,7 +356,6 @@ void ArticulatedSystem::jointKinematics(const std::vector<RigidBody>& bodies, st
       }
       case Type::Prismatic: {
         const Eigen::Vector3d z = p.q * nd.axis;
-        k.S.resize(6, 1);
         k.S.col(0) << z, Eigen::Vector3d::Zero();
         k.c.head<3>() = p.w.cross(p.w.cross(k.d)) + 2.0 * u_(nd.dof) * p.w.cross(z);
         break;
@@ -339,56 +381,112 @@ void ArticulatedSystem::jointKinematics(const std::vector<RigidBody>& bodies, st
 // The joint force on i (from its parent, at i's centre) is F^J_i = I^A_i A_i + p^A_i; a body's
 // constraint force is F^J_i - sum_c X_c^T F^J_c.
 Eigen::VectorXd ArticulatedSystem::forwardDynamics(std::vector<RigidBody>& bodies, const Eigen::VectorXd& tau) {
-  const size_t n = nodes_.size();
-  std::vector<Kinematics> kin;
-  jointKinematics(bodies, kin);
-  std::vector<Matrix6> ia(n);
-  std::vector<Vector6d> pa(n), acc(n);
-  std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, 6>> U(n);
-  std::vector<Small> dinv(n);
-  std::vector<SmallVec> uu(n);
-  for (size_t i = 0; i < n; ++i) {
-    ia[i] = spatialInertia(bodies[nodes_[i].body]);
-    pa[i] = biasForce(bodies[nodes_[i].body]);
-  }
-  for (size_t r = n; r-- > 0;) {
-    const Node& nd = nodes_[r];
-    const Kinematics& k = kin[r];
-    U[r] = ia[r] * k.S;
-    const Small d = k.S.transpose() * U[r];
-    dinv[r] = d.llt().solve(Small::Identity(nd.dofs, nd.dofs));
-    uu[r] = -k.S.transpose() * pa[r];
-    if (tau.size() == dofs_) uu[r] += tau.segment(nd.dof, nd.dofs);
-    if (nd.parent_node < 0) continue;
-    const Matrix6 ia_a = ia[r] - U[r] * dinv[r] * U[r].transpose();
-    const Vector6d pa_a = pa[r] + ia_a * k.c + U[r] * (dinv[r] * uu[r]);
-    const Matrix6 x = shift(k.d);
-    ia[nd.parent_node] += x.transpose() * ia_a * x;
-    pa[nd.parent_node] += shiftForce(k.d, pa_a);
-  }
   Eigen::VectorXd udot(dofs_);
-  for (size_t i = 0; i < n; ++i) {
-    const Node& nd = nodes_[i];
-    const Kinematics& k = kin[i];
-    const Vector6d a_prime = (nd.parent_node >= 0 ? shiftMotion(k.d, acc[nd.parent_node]) : k.a_base) + k.c;
-    const SmallVec ud = dinv[i] * (uu[i] - U[i].transpose() * a_prime);
-    udot.segment(nd.dof, nd.dofs) = ud;
-    acc[i] = a_prime + k.S * ud;
-  }
-  // Accelerations and constraint forces of the bodies.
-  std::vector<Vector6d> fj(n), fc(n);
-  for (size_t i = 0; i < n; ++i) fc[i] = fj[i] = ia[i] * acc[i] + pa[i];
-  for (size_t i = 0; i < n; ++i) {
-    if (nodes_[i].parent_node >= 0) fc[nodes_[i].parent_node] -= shiftForce(kin[i].d, fj[i]);
-  }
-  for (size_t i = 0; i < n; ++i) {
-    RigidBody& b = bodies[nodes_[i].body];
-    b.a = acc[i].head<3>();
-    b.alpha = acc[i].tail<3>();
-    b.constraint_force = fc[i].head<3>();
-    b.constraint_torque = fc[i].tail<3>();
-  }
+  aba(bodies, tau.size() == dofs_ ? &tau : nullptr, udot);
   return udot;
+}
+
+// Pass 2 for one node with D dofs (fixed sizes: 3 x 3 pivots, 6 x 3 U for a spherical joint).
+template <int D>
+void ArticulatedSystem::abaInward(size_t r, const Eigen::VectorXd* tau) {
+  const Node& nd = nodes_[r];
+  const Kinematics& k = kin_[r];
+  Pass& p = pass_[r];
+  Eigen::Matrix<double, 6, D> U;
+  Eigen::Matrix<double, D, D> d;
+  Eigen::Matrix<double, D, 1> u;
+  if constexpr (D == 3) {
+    // Spherical: S = S_w R_p with S_w = [r_i~; I] (the joint's speed in world axes). R_p cancels
+    // from U D^-1 U^T and U D^-1 u, so the pass runs on S_w: U_w = I^A S_w = I^A_left r_i~ +
+    // I^A_right, D_w = S_w^T U_w = U_w,bottom - r_i~ U_w,top, u_w = R_p u = R_p tau - S_w^T p^A.
+    // Half the products of the 6 x 3 S, and R_p only where u' leaves (abaOutward).
+    const Eigen::Matrix3d K = skew(k.r_i);
+    U.noalias() = p.ia.template leftCols<3>() * K;
+    U += p.ia.template rightCols<3>();
+    d = U.template bottomRows<3>();
+    d.noalias() -= K * U.template topRows<3>();
+    u = K * p.pa.template head<3>() - p.pa.template tail<3>();
+    if (tau) u.noalias() += k.Rp * tau->segment<3>(nd.dof);
+  } else {
+    const auto S = k.S.leftCols<D>();
+    U.noalias() = p.ia * S;
+    d.noalias() = S.transpose() * U;
+    u = -S.transpose() * p.pa;
+    if (tau) u += tau->segment<D>(nd.dof);
+  }
+  Eigen::Matrix<double, D, D> dinv;
+  if constexpr (D == 3) {
+    if (!inverseSpd3(d, dinv)) dinv.setConstant(std::numeric_limits<double>::quiet_NaN());  // reported as non-finite u'
+  } else {
+    dinv = d.llt().solve(Eigen::Matrix<double, D, D>::Identity());
+  }
+  p.U.leftCols<D>() = U;
+  p.dinv.topLeftCorner<D, D>() = dinv;
+  p.u.head<D>() = u;
+  if (nd.parent_node < 0) return;
+  const Eigen::Matrix<double, 6, D> ud = U * dinv;
+  const Matrix6 ia_a = p.ia - ud * U.transpose();
+  const Vector6d pa_a = p.pa + ia_a * k.c + ud * u;
+  Pass& parent = pass_[nd.parent_node];
+  parent.ia += shiftInertia(k.d, ia_a);
+  parent.pa += shiftForce(k.d, pa_a);
+}
+
+// Pass 3 for one node with D dofs.
+template <int D>
+void ArticulatedSystem::abaOutward(size_t i, Eigen::VectorXd& udot) {
+  const Node& nd = nodes_[i];
+  const Kinematics& k = kin_[i];
+  Pass& p = pass_[i];
+  const Vector6d a_prime = (nd.parent_node >= 0 ? shiftMotion(k.d, pass_[nd.parent_node].acc) : k.a_base) + k.c;
+  const Eigen::Matrix<double, D, 1> ud =
+      p.dinv.topLeftCorner<D, D>() * (p.u.head<D>() - p.U.leftCols<D>().transpose() * a_prime);
+  if constexpr (D == 3) {  // spherical, world axes (abaInward): u' = R_p^T u'_w, A = A' + [r_i x u'_w; u'_w]
+    udot.segment<3>(nd.dof).noalias() = k.Rp.transpose() * ud;
+    p.acc.head<3>() = a_prime.head<3>() + k.r_i.cross(ud);
+    p.acc.tail<3>() = a_prime.tail<3>() + ud;
+  } else {
+    udot.segment<D>(nd.dof) = ud;
+    p.acc = a_prime + k.S.leftCols<D>() * ud;
+  }
+}
+
+void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorXd* tau, Eigen::VectorXd& udot) {
+  const size_t n = nodes_.size();
+  jointKinematics(bodies, kin_);
+  for (size_t i = 0; i < n; ++i) {
+    const RigidBody& b = bodies[nodes_[i].body];
+    const Eigen::Matrix3d& r = kin_[i].R;
+    const Eigen::Matrix3d inertia_world = r * b.inertia.asDiagonal() * r.transpose();
+    pass_[i].ia = spatialInertia(b, inertia_world);
+    pass_[i].pa = biasForce(b, inertia_world);
+  }
+  const auto dispatch = [](int dofs, auto&& f1, auto&& f3, auto&& f6) {
+    if (dofs == 3) f3();
+    else if (dofs == 1) f1();
+    else f6();
+  };
+  for (size_t r = n; r-- > 0;) {
+    dispatch(nodes_[r].dofs, [&] { abaInward<1>(r, tau); }, [&] { abaInward<3>(r, tau); },
+             [&] { abaInward<6>(r, tau); });
+  }
+  for (size_t i = 0; i < n; ++i) {
+    dispatch(nodes_[i].dofs, [&] { abaOutward<1>(i, udot); }, [&] { abaOutward<3>(i, udot); },
+             [&] { abaOutward<6>(i, udot); });
+  }
+  // Accelerations and constraint forces of the bodies: F^J_i = I^A A + p^A, and a body's
+  // constraint force F^J_i - sum_c X_c^T F^J_c (children come after parents: one pass back).
+  for (size_t i = 0; i < n; ++i) pass_[i].u = pass_[i].ia * pass_[i].acc + pass_[i].pa;  // u is free now: F^J
+  for (size_t i = n; i-- > 0;) {
+    const Pass& p = pass_[i];
+    RigidBody& b = bodies[nodes_[i].body];
+    Vector6d fc = p.u;
+    for (int c : nodes_[i].children) fc -= shiftForce(kin_[c].d, pass_[c].u);
+    b.a = p.acc.head<3>();
+    b.alpha = p.acc.tail<3>();
+    b.constraint_force = fc.head<3>();
+    b.constraint_torque = fc.tail<3>();
+  }
 }
 
 // RNEA (seed 001: "propagate velocities and accelerations outward, forces inward"):
@@ -403,13 +501,13 @@ Eigen::VectorXd ArticulatedSystem::inverseDynamics(const std::vector<RigidBody>&
     const Node& nd = nodes_[i];
     const Kinematics& k = kin[i];
     acc[i] = (nd.parent_node >= 0 ? shiftMotion(k.d, acc[nd.parent_node]) : k.a_base) + k.c +
-             k.S * udot.segment(nd.dof, nd.dofs);
+             k.S.leftCols(nd.dofs) * udot.segment(nd.dof, nd.dofs);
     f[i] = spatialInertia(bodies[nd.body]) * acc[i] + biasForce(bodies[nd.body]);
   }
   Eigen::VectorXd tau(dofs_);
   for (size_t r = n; r-- > 0;) {
     const Node& nd = nodes_[r];
-    tau.segment(nd.dof, nd.dofs) = kin[r].S.transpose() * f[r];
+    tau.segment(nd.dof, nd.dofs) = kin[r].S.leftCols(nd.dofs).transpose() * f[r];
     if (nd.parent_node >= 0) f[nd.parent_node] += shiftForce(kin[r].d, f[r]);
   }
   return tau;
@@ -433,13 +531,13 @@ Eigen::MatrixXd ArticulatedSystem::massMatrix(const std::vector<RigidBody>& bodi
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(dofs_, dofs_);
   for (size_t i = 0; i < n; ++i) {
     const Node& ni = nodes_[i];
-    Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, 6> f = ic[i] * kin[i].S;
-    h.block(ni.dof, ni.dof, ni.dofs, ni.dofs) = kin[i].S.transpose() * f;
+    Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, 6> f = ic[i] * kin[i].S.leftCols(ni.dofs);
+    h.block(ni.dof, ni.dof, ni.dofs, ni.dofs) = kin[i].S.leftCols(ni.dofs).transpose() * f;
     for (int j = static_cast<int>(i); nodes_[j].parent_node >= 0;) {
       f = shift(kin[j].d).transpose() * f;
       j = nodes_[j].parent_node;
       const Node& nj = nodes_[j];
-      h.block(nj.dof, ni.dof, nj.dofs, ni.dofs) = kin[j].S.transpose() * f;
+      h.block(nj.dof, ni.dof, nj.dofs, ni.dofs) = kin[j].S.leftCols(nj.dofs).transpose() * f;
       h.block(ni.dof, nj.dof, ni.dofs, nj.dofs) = h.block(nj.dof, ni.dof, nj.dofs, ni.dofs).transpose();
     }
   }
@@ -451,13 +549,16 @@ Eigen::MatrixXd ArticulatedSystem::massMatrix(const std::vector<RigidBody>& bodi
 
 std::string ArticulatedSystem::derivative(double t, const Coordinates& c, const Eigen::VectorXd& u,
                                           std::vector<RigidBody>& bodies, const ReducedHooks& hooks,
-                                          Eigen::VectorXd& udot) {
-  coords_ = c;
-  u_ = u;
-  hooks.kinematics(t);
-  writeState(bodies);
-  if (!hooks.forces()) return "";  // the world stopped itself with its own message
-  udot = forwardDynamics(bodies);
+                                          Eigen::VectorXd& udot, bool written) {
+  if (!written) {
+    coords_ = c;
+    u_ = u;
+    hooks.kinematics(t);
+    writeState(bodies);
+  }
+  stopped_ = !hooks.forces();
+  if (stopped_) return "";  // the world stopped itself with its own message
+  aba(bodies, nullptr, udot);
   if (!udot.allFinite()) return "non-finite joint accelerations";
   return "";
 }
@@ -483,11 +584,16 @@ void ArticulatedSystem::rates(const Coordinates& c, const Eigen::VectorXd& u, Co
   }
 }
 
+// The coordinates and speeds of the stages live in members sized by build(): equal-size copies
+// reuse their storage, so a step allocates nothing.
 std::string ArticulatedSystem::step(double t, double h, Integrator integrator, std::vector<RigidBody>& bodies,
                                     const ReducedHooks& hooks) {
-  if (!have_state_ || bodiesChanged(bodies)) readState(bodies);
-  const Coordinates c0 = coords_;
-  const Eigen::VectorXd u0 = u_;
+  // Unless someone changed the bodies, they hold what the last step wrote at this very t (its
+  // kinematics at t + h, which is this step's t): the first stage skips forward kinematics.
+  const bool written = have_state_ && t == written_time_ && !bodiesChanged(bodies);
+  if (!written) readState(bodies);
+  c0_ = coords_;
+  u0_ = u_;
   const auto axpy = [&](const Coordinates& base, double s, const Coordinates& rate, Coordinates& out) {
     out = base;
     for (size_t i = 0; i < nodes_.size(); ++i) {
@@ -496,22 +602,22 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
       out.s[i] += s * rate.s[i];
     }
   };
-  Eigen::VectorXd k1, k2, k3, k4;
+  Eigen::VectorXd* k = k_;
   switch (integrator) {
     case Integrator::SymplecticEuler: {
       // u += h u'(t, y); positions with the new speeds (exact exponential map for rotations).
-      if (std::string e = derivative(t, c0, u0, bodies, hooks, k1); !e.empty() || k1.size() != dofs_) return e;
-      u_ = u0 + h * k1;
-      coords_ = c0;
+      if (std::string e = derivative(t, c0_, u0_, bodies, hooks, k[0], written); !e.empty() || stopped_) return e;
+      u_ = u0_ + h * k[0];
+      coords_ = c0_;
       for (size_t i = 0; i < nodes_.size(); ++i) {
         const Node& nd = nodes_[i];
         switch (nd.type) {
           case Type::Free:
             coords_.x[i] += h * u_.segment<3>(nd.dof);
-            coords_.q[i] = (quaternionFromRotationVector(h * u_.segment<3>(nd.dof + 3)) * c0.q[i]).normalized();
+            coords_.q[i] = (quaternionFromRotationVector(h * u_.segment<3>(nd.dof + 3)) * c0_.q[i]).normalized();
             break;
           case Type::Spherical:
-            coords_.q[i] = (quaternionFromRotationVector(h * u_.segment<3>(nd.dof)) * c0.q[i]).normalized();
+            coords_.q[i] = (quaternionFromRotationVector(h * u_.segment<3>(nd.dof)) * c0_.q[i]).normalized();
             break;
           case Type::Prismatic:
             coords_.s[i] += h * u_(nd.dof);
@@ -523,32 +629,30 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
     case Integrator::RK4: {
       // Classical RK4 on (coordinates, u), as physics/rk4.cpp does for bodies: stage quaternions
       // used as they are (normalized when written to bodies), the result renormalized.
-      Coordinates r1, r2, r3, r4, y;
-      Eigen::VectorXd u2, u3, u4;
-      rates(c0, u0, r1);
-      if (std::string e = derivative(t, c0, u0, bodies, hooks, k1); !e.empty() || k1.size() != dofs_) return e;
-      axpy(c0, 0.5 * h, r1, y);
-      u2 = u0 + 0.5 * h * k1;
-      rates(y, u2, r2);
-      if (std::string e = derivative(t + 0.5 * h, y, u2, bodies, hooks, k2); !e.empty() || k2.size() != dofs_) return e;
-      axpy(c0, 0.5 * h, r2, y);
-      u3 = u0 + 0.5 * h * k2;
-      rates(y, u3, r3);
-      if (std::string e = derivative(t + 0.5 * h, y, u3, bodies, hooks, k3); !e.empty() || k3.size() != dofs_) return e;
-      axpy(c0, h, r3, y);
-      u4 = u0 + h * k3;
-      rates(y, u4, r4);
-      if (std::string e = derivative(t + h, y, u4, bodies, hooks, k4); !e.empty() || k4.size() != dofs_) return e;
-      Coordinates sum = c0;
+      Coordinates* r = r_;
+      rates(c0_, u0_, r[0]);
+      if (std::string e = derivative(t, c0_, u0_, bodies, hooks, k[0], written); !e.empty() || stopped_) return e;
+      axpy(c0_, 0.5 * h, r[0], y_);
+      us_ = u0_ + 0.5 * h * k[0];
+      rates(y_, us_, r[1]);
+      if (std::string e = derivative(t + 0.5 * h, y_, us_, bodies, hooks, k[1]); !e.empty() || stopped_) return e;
+      axpy(c0_, 0.5 * h, r[1], y_);
+      us_ = u0_ + 0.5 * h * k[1];
+      rates(y_, us_, r[2]);
+      if (std::string e = derivative(t + 0.5 * h, y_, us_, bodies, hooks, k[2]); !e.empty() || stopped_) return e;
+      axpy(c0_, h, r[2], y_);
+      us_ = u0_ + h * k[2];
+      rates(y_, us_, r[3]);
+      if (std::string e = derivative(t + h, y_, us_, bodies, hooks, k[3]); !e.empty() || stopped_) return e;
+      coords_ = c0_;
       for (size_t i = 0; i < nodes_.size(); ++i) {
-        sum.x[i] += h / 6.0 * (r1.x[i] + 2.0 * r2.x[i] + 2.0 * r3.x[i] + r4.x[i]);
-        sum.q[i].coeffs() +=
-            h / 6.0 * (r1.q[i].coeffs() + 2.0 * r2.q[i].coeffs() + 2.0 * r3.q[i].coeffs() + r4.q[i].coeffs());
-        sum.q[i].normalize();
-        sum.s[i] += h / 6.0 * (r1.s[i] + 2.0 * r2.s[i] + 2.0 * r3.s[i] + r4.s[i]);
+        coords_.x[i] += h / 6.0 * (r[0].x[i] + 2.0 * r[1].x[i] + 2.0 * r[2].x[i] + r[3].x[i]);
+        coords_.q[i].coeffs() += h / 6.0 * (r[0].q[i].coeffs() + 2.0 * r[1].q[i].coeffs() +
+                                            2.0 * r[2].q[i].coeffs() + r[3].q[i].coeffs());
+        coords_.q[i].normalize();
+        coords_.s[i] += h / 6.0 * (r[0].s[i] + 2.0 * r[1].s[i] + 2.0 * r[2].s[i] + r[3].s[i]);
       }
-      coords_ = sum;
-      u_ = u0 + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+      u_ = u0_ + h / 6.0 * (k[0] + 2.0 * k[1] + 2.0 * k[2] + k[3]);
       break;
     }
     default:
@@ -559,15 +663,15 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
   hooks.kinematics(t + h);
   writeState(bodies);
   remember(bodies);
+  written_time_ = t + h;
   return "";
 }
 
 std::string ArticulatedSystem::evaluate(double t, std::vector<RigidBody>& bodies, const ReducedHooks& hooks) {
   if (!have_state_ || bodiesChanged(bodies)) readState(bodies);
-  Eigen::VectorXd udot;
-  const Coordinates c = coords_;
-  const Eigen::VectorXd u = u_;
-  std::string e = derivative(t, c, u, bodies, hooks, udot);
+  c0_ = coords_;
+  u0_ = u_;
+  std::string e = derivative(t, c0_, u0_, bodies, hooks, k_[0]);
   remember(bodies);
   return e;
 }

@@ -41,6 +41,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -113,17 +114,39 @@ class ArticulatedSystem {
     std::vector<Eigen::Quaterniond> q;
     std::vector<double> s;
   };
-  // Per-node kinematics at the current state.
+  // Per-node kinematics at the current state. S is 6 x dofs in the first columns of a fixed
+  // 6 x 6 (no dynamic sizes in the passes: they are specialized on dofs = 1, 3, 6).
   struct Kinematics {
+    Eigen::Matrix3d R;  // the body's rotation (body to world)
+    Eigen::Matrix3d Rp;  // spherical: the parent's rotation (S = [r_i~; I] Rp)
+    Eigen::Vector3d r_i;  // spherical: the joint point from the child's centre (world)
     Eigen::Vector3d d;  // x_i - x_p
-    Motion S;
+    Matrix6 S;
     Vector6d c;
     Vector6d a_base;  // X A_p for a prescribed parent (zero otherwise)
   };
+  // What ABA keeps per node between its passes (sized by build(): a step allocates nothing).
+  struct Pass {
+    Matrix6 ia;    // I^A
+    Vector6d pa;   // p^A
+    Matrix6 U;     // I^A S (first dofs columns)
+    Matrix6 dinv;  // D^-1 (top-left dofs x dofs)
+    Vector6d u;    // tau - S^T p^A (first dofs)
+    Vector6d acc;  // A
+  };
 
+  bool sameSignature(const std::vector<RigidBody>& bodies, const Constraints& joints) const;
   void jointKinematics(const std::vector<RigidBody>& bodies, std::vector<Kinematics>& out) const;
+  // ABA into udot (sized dofs); tau may be null.
+  void aba(std::vector<RigidBody>& bodies, const Eigen::VectorXd* tau, Eigen::VectorXd& udot);
+  template <int D>
+  void abaInward(size_t r, const Eigen::VectorXd* tau);
+  template <int D>
+  void abaOutward(size_t i, Eigen::VectorXd& udot);
+  // u' at (t, c, u). written: the bodies already hold exactly (t, c, u) (the first stage of a
+  // step after the last one wrote them): forward kinematics is not repeated.
   std::string derivative(double t, const Coordinates& c, const Eigen::VectorXd& u, std::vector<RigidBody>& bodies,
-                         const ReducedHooks& hooks, Eigen::VectorXd& udot);
+                         const ReducedHooks& hooks, Eigen::VectorXd& udot, bool written = false);
   void rates(const Coordinates& c, const Eigen::VectorXd& u, Coordinates& out) const;
   bool bodiesChanged(const std::vector<RigidBody>& bodies) const;
   void remember(const std::vector<RigidBody>& bodies);
@@ -136,7 +159,13 @@ class ArticulatedSystem {
   Coordinates coords_;
   Eigen::VectorXd u_;
   std::vector<Eigen::Matrix<double, 13, 1>> written_;  // x, q, v, w of each node's body as last written
-  Eigen::VectorXd udot_;  // last u'
+  // Work space of a step (sized by build()).
+  std::vector<Kinematics> kin_;
+  std::vector<Pass> pass_;
+  Coordinates c0_, y_, r_[4];
+  Eigen::VectorXd u0_, us_, k_[4];
+  bool stopped_ = false;  // the last derivative's force hook stopped the world
+  double written_time_ = std::numeric_limits<double>::quiet_NaN();  // time of the bodies step() wrote last
 };
 
 }  // namespace ponyhop

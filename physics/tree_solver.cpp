@@ -1,6 +1,11 @@
 #include "physics/tree_solver.h"
 
+#include "physics/small_matrix.h"
+
+#include <algorithm>
 #include <numeric>
+#include <type_traits>
+#include <utility>
 
 namespace ponyhop {
 
@@ -125,9 +130,132 @@ bool TreeSolver::buildStructure(const std::vector<RigidBody>& bodies, const Cons
       }
     }
   }
-  for (Clique& cl : cliques_) cl.a.assign(cl.members.size() * cl.members.size(), Block());
+  // Every block at its size once (the factorization then writes them in place), and the
+  // fixed 3 x 3 path when every tree joint has 3 rows.
+  size_t widest = 0;
+  for (Clique& cl : cliques_) {
+    const size_t k = cl.members.size();
+    widest = std::max(widest, k);
+    cl.a.assign(k * k, Block());
+    for (size_t x = 0; x < k; ++x) {
+      for (size_t y = 0; y < k; ++y) cl.a[x * k + y].resize(nodes_[cl.members[x]].size, nodes_[cl.members[y]].size);
+    }
+  }
+  all_three_ = true;
+  for (Node& n : nodes_) {
+    all_three_ = all_three_ && n.size == 3;
+    n.d_inv.resize(n.size, n.size);
+    n.l.resize(n.near.size());
+    if (n.clique < 0) continue;
+    for (size_t i = 0; i < n.near.size(); ++i) n.l[i].resize(nodes_[cliques_[n.clique].members[n.near[i]]].size, n.size);
+  }
+  jm_.resize(widest);
   order_.assign(bfs.rbegin(), bfs.rend());
-  work_.assign(nodes_.size(), Vec());
+  return true;
+}
+
+namespace {
+
+// Block types of the elimination with R rows per joint (Eigen::Dynamic: any size up to 6).
+template <int R>
+struct Sizes {
+  static constexpr int kMax = R == Eigen::Dynamic ? 6 : R;
+  using M = Eigen::Matrix<double, R, R, Eigen::ColMajor, kMax, kMax>;
+  using J = Eigen::Matrix<double, R, 6, Eigen::ColMajor, kMax, 6>;
+};
+
+// A stored block seen as R x R (fixed-size arithmetic when R = 3; the storage is the same).
+template <int R, class B>
+auto view(B& b) {
+  using M = typename Sizes<R>::M;
+  using Target = std::conditional_t<std::is_const_v<B>, const M, M>;
+  return Eigen::Map<Target>(b.data(), b.rows(), b.cols());
+}
+template <int R, class B>
+auto viewJ(B& b) {
+  using J = typename Sizes<R>::J;
+  using Target = std::conditional_t<std::is_const_v<B>, const J, J>;
+  return Eigen::Map<Target>(b.data(), b.rows(), 6);
+}
+template <int R>
+auto segment(Eigen::VectorXd& y, int row, int size) {
+  if constexpr (R == Eigen::Dynamic) {
+    return y.segment(row, size);
+  } else {
+    (void)size;
+    return y.template segment<R>(row);
+  }
+}
+
+}  // namespace
+
+// Step 1, the bodies: each clique's blocks A_xy = J_xb M_b^-1 J_yb^T (M_b^-1 = diag(1/m, I^-1):
+// J M^-1 is the linear columns over m and the angular ones times I_world^-1). Step 2, the joints,
+// children first: D_j = A_jj (what is left of it), L_xj = A_xj D_j^-1, A_xy -= L_xj A_jy for the
+// joints x, y still to come in j's parent clique. Every block is written in place: no allocation.
+template <int R>
+bool TreeSolver::factorTree(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) {
+  using M = typename Sizes<R>::M;
+  const auto& blocks = system.blocks();
+  const auto jacobianOf = [&](int block, int body) -> const JacobianBlock& {
+    return blocks[block].body_a == body ? blocks[block].ja : blocks[block].jb;
+  };
+  for (Clique& cl : cliques_) {
+    const RigidBody& body = bodies[cl.body];
+    const Eigen::Matrix3d r = body.rotation();
+    const Eigen::Matrix3d inertia_inv = r * body.inertia.cwiseInverse().asDiagonal() * r.transpose();
+    const double mass_inv = 1.0 / body.mass;
+    const size_t k = cl.members.size();
+    for (size_t x = 0; x < k; ++x) {
+      const JacobianBlock& j = jacobianOf(nodes_[cl.members[x]].block, cl.body);
+      jm_[x].resize(j.rows(), 6);
+      auto jm = viewJ<R>(jm_[x]);
+      const auto jx = viewJ<R>(j);
+      jm.template leftCols<3>() = mass_inv * jx.template leftCols<3>();
+      jm.template rightCols<3>().noalias() = jx.template rightCols<3>() * inertia_inv;
+    }
+    for (size_t x = 0; x < k; ++x) {
+      const auto jm = viewJ<R>(std::as_const(jm_[x]));
+      for (size_t y = x; y < k; ++y) {
+        auto a = view<R>(cl.a[x * k + y]);
+        a.noalias() = jm * viewJ<R>(jacobianOf(nodes_[cl.members[y]].block, cl.body)).transpose();
+        if (y != x) view<R>(cl.a[y * k + x]) = a.transpose();
+      }
+    }
+  }
+  M d;
+  for (int j : order_) {
+    Node& n = nodes_[j];
+    d.setZero(n.size, n.size);
+    for (size_t i = 0; i < n.cliques.size(); i += 2) {
+      const Clique& cl = cliques_[n.cliques[i]];
+      const size_t s = n.cliques[i + 1];
+      d += view<R>(std::as_const(cl.a[s * cl.members.size() + s]));
+    }
+    auto d_inv = view<R>(n.d_inv);
+    if constexpr (R == 3) {
+      Eigen::Matrix3d inv;
+      if (!inverseSpd3(d, inv)) return false;  // redundant rows: A is singular
+      d_inv = inv;
+    } else {
+      Eigen::LLT<M> llt(d);
+      if (llt.info() != Eigen::Success) return false;  // redundant rows: A is singular
+      d_inv = llt.solve(M::Identity(n.size, n.size));
+      if (!d_inv.allFinite()) return false;
+    }
+    if (n.clique < 0) continue;
+    Clique& cl = cliques_[n.clique];
+    const size_t k = cl.members.size(), s = n.slot;
+    for (size_t i = 0; i < n.near.size(); ++i) {
+      view<R>(n.l[i]).noalias() = view<R>(std::as_const(cl.a[n.near[i] * k + s])) * d_inv;
+    }
+    for (size_t i = 0; i < n.near.size(); ++i) {
+      const auto l = view<R>(std::as_const(n.l[i]));
+      for (size_t m = 0; m < n.near.size(); ++m) {
+        view<R>(cl.a[n.near[i] * k + n.near[m]]).noalias() -= l * view<R>(std::as_const(cl.a[s * k + n.near[m]]));
+      }
+    }
+  }
   return true;
 }
 
@@ -136,9 +264,8 @@ bool TreeSolver::factor(const std::vector<RigidBody>& bodies, const ConstraintSy
     signature_.clear();
     return false;
   }
+  if (!(all_three_ ? factorTree<3>(bodies, system) : factorTree<Eigen::Dynamic>(bodies, system))) return false;
   const auto& blocks = system.blocks();
-
-  // Numbers of H: the off-diagonal block to the parent (a Jacobian block or its transpose).
   const auto jacobianOf = [&](int block, int body) -> const JacobianBlock& {
     return blocks[block].body_a == body ? blocks[block].ja : blocks[block].jb;
   };
@@ -148,45 +275,6 @@ bool TreeSolver::factor(const std::vector<RigidBody>& bodies, const ConstraintSy
     minv.bottomRightCorner<3, 3>() = bodies[body].worldInverseInertia();
     return minv;
   };
-
-  // Step 1, the bodies: each clique's blocks A_xy = J_xb M_b^-1 J_yb^T.
-  for (Clique& cl : cliques_) {
-    const Eigen::Matrix<double, 6, 6> minv = inverseMass(cl.body);
-    const size_t k = cl.members.size();
-    std::vector<Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::ColMajor, 6, 6>> jm(k);
-    for (size_t x = 0; x < k; ++x) jm[x] = jacobianOf(nodes_[cl.members[x]].block, cl.body) * minv;
-    for (size_t x = 0; x < k; ++x) {
-      for (size_t y = 0; y < k; ++y) {
-        cl.a[x * k + y].noalias() = jm[x] * jacobianOf(nodes_[cl.members[y]].block, cl.body).transpose();
-      }
-    }
-  }
-  // Step 2, the joints, children first: D_j = A_jj (what is left of it), L_xj = A_xj D_j^-1,
-  // A_xy -= L_xj A_jy for the joints x, y still to come in j's parent clique.
-  Block d;
-  for (int j : order_) {
-    Node& n = nodes_[j];
-    d.setZero(n.size, n.size);
-    for (size_t i = 0; i < n.cliques.size(); i += 2) {
-      const Clique& cl = cliques_[n.cliques[i]];
-      const size_t s = n.cliques[i + 1];
-      d += cl.a[s * cl.members.size() + s];
-    }
-    Eigen::LLT<Block> llt(d);
-    if (llt.info() != Eigen::Success) return false;  // redundant rows: A is singular
-    n.d_inv = llt.solve(Block::Identity(n.size, n.size));
-    if (!n.d_inv.allFinite()) return false;
-    n.l.resize(n.near.size());
-    if (n.clique < 0) continue;
-    Clique& cl = cliques_[n.clique];
-    const size_t k = cl.members.size(), s = n.slot;
-    for (size_t i = 0; i < n.near.size(); ++i) n.l[i] = cl.a[n.near[i] * k + s] * n.d_inv;
-    for (size_t i = 0; i < n.near.size(); ++i) {
-      for (size_t m = 0; m < n.near.size(); ++m) {
-        cl.a[n.near[i] * k + n.near[m]].noalias() -= n.l[i] * cl.a[s * k + n.near[m]];
-      }
-    }
-  }
 
   if (loop_rows_ == 0) return true;
 
@@ -226,49 +314,66 @@ bool TreeSolver::factor(const std::vector<RigidBody>& bodies, const ConstraintSy
   return schur_.info() == Eigen::Success && schur_.isPositive() && schur_.vectorD().minCoeff() > 0.0;
 }
 
-// A_tt y = r over the tree: forward y_x -= L_xj y_j (children first), z_j = D_j^-1 y_j,
-// backward z_j -= sum_x L_xj^T z_x (parents first).
-void TreeSolver::treeSolve(const Eigen::VectorXd& r_tree, Eigen::VectorXd& y_tree) const {
-  for (size_t j = 0; j < nodes_.size(); ++j) work_[j] = r_tree.segment(nodes_[j].row, nodes_[j].size);
+// A_tt y = r over the tree, in place (y holds r on entry): forward y_x -= L_xj y_j (children
+// first), z_j = D_j^-1 y_j, backward z_j -= sum_x L_xj^T z_x (parents first).
+template <int R>
+void TreeSolver::treeSolveInPlace(Eigen::VectorXd& y) const {
+  using V = Eigen::Matrix<double, R, 1, Eigen::ColMajor, Sizes<R>::kMax, 1>;
   for (int j : order_) {
     const Node& n = nodes_[j];
+    auto yj = segment<R>(y, n.row, n.size);
     if (n.clique >= 0) {
       const Clique& cl = cliques_[n.clique];
-      for (size_t i = 0; i < n.near.size(); ++i) work_[cl.members[n.near[i]]].noalias() -= n.l[i] * work_[j];
+      for (size_t i = 0; i < n.near.size(); ++i) {
+        const Node& x = nodes_[cl.members[n.near[i]]];
+        segment<R>(y, x.row, x.size).noalias() -= view<R>(n.l[i]) * yj;
+      }
     }
-    work_[j] = n.d_inv * work_[j];
+    const V z = view<R>(n.d_inv) * yj;
+    yj = z;
   }
-  y_tree.resize(tree_rows_);
   for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
     const Node& n = nodes_[*it];
-    if (n.clique >= 0) {
-      const Clique& cl = cliques_[n.clique];
-      for (size_t i = 0; i < n.near.size(); ++i) work_[*it].noalias() -= n.l[i].transpose() * work_[cl.members[n.near[i]]];
+    if (n.clique < 0) continue;
+    auto yj = segment<R>(y, n.row, n.size);
+    const Clique& cl = cliques_[n.clique];
+    for (size_t i = 0; i < n.near.size(); ++i) {
+      const Node& x = nodes_[cl.members[n.near[i]]];
+      yj.noalias() -= view<R>(n.l[i]).transpose() * segment<R>(y, x.row, x.size);
     }
-    y_tree.segment(n.row, n.size) = work_[*it];
   }
 }
 
+void TreeSolver::treeSolve(const Eigen::VectorXd& r_tree, Eigen::VectorXd& y_tree) const {
+  y_tree = r_tree;
+  if (all_three_) treeSolveInPlace<3>(y_tree);
+  else treeSolveInPlace<Eigen::Dynamic>(y_tree);
+}
+
 Eigen::VectorXd TreeSolver::solve(const Eigen::VectorXd& rhs) const {
-  Eigen::VectorXd r_tree(tree_rows_), r_loop(loop_rows_);
+  Eigen::VectorXd y;
+  solveInto(rhs, y);
+  return y;
+}
+
+void TreeSolver::solveInto(const Eigen::VectorXd& rhs, Eigen::VectorXd& y) const {
+  r_tree_.resize(tree_rows_);
+  r_loop_.resize(loop_rows_);
   for (int r = 0; r < rhs.size(); ++r) {
-    if (tree_row_of_[r] >= 0) r_tree(tree_row_of_[r]) = rhs(r);
-    if (loop_row_of_[r] >= 0) r_loop(loop_row_of_[r]) = rhs(r);
+    if (tree_row_of_[r] >= 0) r_tree_(tree_row_of_[r]) = rhs(r);
+    if (loop_row_of_[r] >= 0) r_loop_(loop_row_of_[r]) = rhs(r);
   }
-  Eigen::VectorXd y_tree;
-  treeSolve(r_tree, y_tree);
-  Eigen::VectorXd y_loop;
+  treeSolve(r_tree_, y_tree_);
   if (loop_rows_ > 0) {
     // y_l = S^-1 (b_l - A_lt A_tt^-1 b_t),  y_t = A_tt^-1 b_t - G y_l.
-    y_loop = schur_.solve(r_loop - a_tl_.transpose() * y_tree);
-    y_tree -= g_ * y_loop;
+    y_loop_ = schur_.solve(r_loop_ - a_tl_.transpose() * y_tree_);
+    y_tree_ -= g_ * y_loop_;
   }
-  Eigen::VectorXd y = Eigen::VectorXd::Zero(rhs.size());
+  y.setZero(rhs.size());
   for (int r = 0; r < rhs.size(); ++r) {
-    if (tree_row_of_[r] >= 0) y(r) = y_tree(tree_row_of_[r]);
-    if (loop_row_of_[r] >= 0) y(r) = y_loop(loop_row_of_[r]);
+    if (tree_row_of_[r] >= 0) y(r) = y_tree_(tree_row_of_[r]);
+    if (loop_row_of_[r] >= 0) y(r) = y_loop_(loop_row_of_[r]);
   }
-  return y;
 }
 
 }  // namespace ponyhop

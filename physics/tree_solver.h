@@ -40,6 +40,7 @@ class TreeSolver final : public ConstraintSolver {
  public:
   bool factor(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) override;
   Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const override;
+  void solveInto(const Eigen::VectorXd& rhs, Eigen::VectorXd& out) const override;
 
   // What the last factor() saw (tests, docs).
   // Nodes of H: the tree's joints plus the dynamic bodies they touch.
@@ -48,7 +49,6 @@ class TreeSolver final : public ConstraintSolver {
 
  private:
   using Block = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 6, 6>;
-  using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, 6, 1>;
 
   // A joint of the tree (a node of the elimination).
   struct Node {
@@ -71,6 +71,12 @@ class TreeSolver final : public ConstraintSolver {
 
   bool structureChanged(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) const;
   bool buildStructure(const std::vector<RigidBody>& bodies, const ConstraintSystem& system);
+  // The numbers of the elimination with every block R x R (R = 3: every joint has 3 rows, all
+  // blocks fixed 3 x 3; R = Eigen::Dynamic: any sizes up to 6). Same arithmetic either way.
+  template <int R>
+  bool factorTree(const std::vector<RigidBody>& bodies, const ConstraintSystem& system);
+  template <int R>
+  void treeSolveInPlace(Eigen::VectorXd& y) const;
   // A_tt^-1 r for a vector over the tree rows (tree_row numbering).
   void treeSolve(const Eigen::VectorXd& r_tree, Eigen::VectorXd& y_tree) const;
 
@@ -85,12 +91,14 @@ class TreeSolver final : public ConstraintSolver {
   std::vector<int> loop_row_of_;  // per system row: row in the loop vector or -1
   int tree_rows_ = 0;
   int loop_rows_ = 0;
+  bool all_three_ = false;  // every tree joint has 3 rows (chains of spherical joints): fixed 3 x 3 blocks
+  std::vector<JacobianBlock> jm_;  // step 1 work space: J_xb M_b^-1 per clique member
 
   // Numbers (refreshed by every factor()).
   Eigen::MatrixXd a_tl_;  // tree rows x loop rows: J_t M^-1 J_l^T
   Eigen::MatrixXd g_;     // A_tt^-1 A_tl
   Eigen::LDLT<Eigen::MatrixXd> schur_;
-  mutable std::vector<Vec> work_;  // per node: y_j, then z_j
+  mutable Eigen::VectorXd r_tree_, r_loop_, y_tree_, y_loop_;  // solve()'s work space
 };
 
 }  // namespace ponyhop

@@ -98,8 +98,11 @@ void World::step() {
     int n = std::max(params_.substeps, tolerance_substeps_);
     const double h = params_.dt / n;
     for (int i = 0; i < n && ok(); ++i) advanceToTolerance(h, 0);
+    // A local error of order p + 1 grows 2^(p+1) x when the substep doubles: coarser only when
+    // that (with a margin of 2) still meets the tolerance.
     const int coarse = std::max(1, last_substeps_ / 2);
-    tolerance_substeps_ = last_error_ < params_.tolerance / 16.0 ? std::max(1, coarse / 2) : coarse;
+    const double growth = 2.0 * std::ldexp(1.0, methodOrder() + 1);
+    tolerance_substeps_ = last_error_ < params_.tolerance / growth ? std::max(1, coarse / 2) : coarse;
     return;
   }
   // Enough substeps that the fastest body turns at most max_step_rotation per substep at the
@@ -115,7 +118,9 @@ void World::step() {
 // not converge, or a body turned more than 2 max_step_rotation) the substep is undone and taken
 // as two half steps instead, up to kMaxSplits times.
 void World::substep(double h, int depth) {
-  const Snapshot start = snapshot();
+  if (substep_starts_.empty()) substep_starts_.resize(kMaxSplits + 1);  // never resized again
+  Snapshot& start = substep_starts_[depth];
+  snapshotInto(start);
   if (!takeStep(h)) {
     if (!ok()) return;
     if (depth < kMaxSplits) {
@@ -168,8 +173,11 @@ void World::advanceToTolerance(double h, int depth) {
   restore(start);
   bool fine_ok = takeStep(0.5 * h);
   if (fine_ok) fine_ok = takeStep(0.5 * h);
-  const double err = coarse_ok && fine_ok ? positionDistance(coarse, gatherState())
-                                          : std::numeric_limits<double>::infinity();
+  // The kept pair's error (Richardson): a method of order p makes the single step's error 2^p
+  // times the pair's, so the difference is (2^p - 1) times the pair's error.
+  const double err = coarse_ok && fine_ok
+                         ? positionDistance(coarse, gatherState()) / (std::ldexp(1.0, methodOrder()) - 1.0)
+                         : std::numeric_limits<double>::infinity();
   if (err > params_.tolerance && depth < kMaxSplits) {
     restore(start);
     advanceToTolerance(0.5 * h, depth + 1);
@@ -183,6 +191,7 @@ void World::advanceToTolerance(double h, int depth) {
     }
     return;
   }
+  if (err > params_.tolerance) ++tolerance_misses_;  // the deepest split still misses: counted, not hidden
   last_error_ = std::max(last_error_, err);
   resolveContacts();
   last_substeps_ += 2;
@@ -229,6 +238,12 @@ void World::followTeleports(double h) {
   }
 }
 
+void World::snapshotInto(Snapshot& s) const {
+  gatherStateInto(s.state);
+  s.time = time_;
+  s.monitor = monitor_;
+}
+
 void World::restore(const Snapshot& s) {
   scatterState(s.state);
   time_ = s.time;
@@ -236,6 +251,17 @@ void World::restore(const Snapshot& s) {
   monitor_ = s.monitor;
   split_reason_.clear();
   status_.clear();  // only called on a world that was running when the snapshot was taken
+}
+
+int World::methodOrder() const {
+  switch (params_.integrator) {
+    case Integrator::RK4:
+      return 4;
+    case Integrator::Rattle:
+      return 2;
+    default:
+      return 1;  // symplectic and linearly implicit Euler
+  }
 }
 
 double World::positionDistance(const State& a, const State& b) const {
@@ -259,7 +285,9 @@ double World::maxAngularSpeed() const {
 void World::watchStability(double h) {
   if (!ok() || params_.integrator == Integrator::ImplicitEuler) return;
   const double limit = params_.integrator == Integrator::RK4 ? 2.83 : 2.0;
-  if (!monitor_.observe(h, gatherState(), gatherAccelerations(), limit)) return;
+  gatherStateInto(state_scratch_);
+  gatherAccelerationsInto(acc_scratch_);
+  if (!monitor_.observe(h, state_scratch_, acc_scratch_, limit)) return;
   char what[160];
   std::snprintf(what, sizeof what,
                 "the step is unstable: h rho = %.3g > %.3g (stiffness estimate rho = %.3g 1/s) and the state "
@@ -352,13 +380,15 @@ void World::integrate(double h) {
     checkBodies("integrate", false);
     return;
   }
-  State state = gatherState();
+  State& state = state_scratch_;
+  gatherStateInto(state);
+  gatherAccelerationsInto(acc_scratch_);
   switch (params_.integrator) {
     case Integrator::SymplecticEuler:
-      symplecticEulerStep(h, gatherAccelerations(), state);
+      symplecticEulerStep(h, acc_scratch_, state);
       break;
     case Integrator::RK4:
-      rk4Step(time_, h, gatherAccelerations(),
+      rk4Step(time_, h, acc_scratch_,
               [this](double t, const State& s, Accelerations& out) { accelerationsAt(t, s, out); }, state);
       break;
     default:
@@ -468,6 +498,7 @@ World::SavedState World::saveState() const {
   for (const auto& c : contacts_) s.contacts.push_back(c->saveState());
   s.monitor = monitor_;
   s.tolerance_substeps = tolerance_substeps_;
+  s.status = status_;
   return s;
 }
 
@@ -478,12 +509,19 @@ void World::restoreState(const SavedState& s) {
   for (size_t i = 0; i < contacts_.size() && i < s.contacts.size(); ++i) contacts_[i]->restoreState(s.contacts[i]);
   monitor_ = s.monitor;
   tolerance_substeps_ = s.tolerance_substeps;
+  status_ = s.status;
+  split_reason_.clear();
 }
 
 State World::gatherState() const {
-  State s(dynamic_.size());
-  for (size_t k = 0; k < dynamic_.size(); ++k) s[k] = bodies_[dynamic_[k]].state();
+  State s;
+  gatherStateInto(s);
   return s;
+}
+
+void World::gatherStateInto(State& s) const {
+  s.resize(dynamic_.size());
+  for (size_t k = 0; k < dynamic_.size(); ++k) s[k] = bodies_[dynamic_[k]].state();
 }
 
 void World::scatterState(const State& state) {
@@ -495,9 +533,14 @@ void World::scatterState(const State& state) {
 }
 
 Accelerations World::gatherAccelerations() const {
-  Accelerations a(dynamic_.size());
-  for (size_t k = 0; k < dynamic_.size(); ++k) a[k] = {bodies_[dynamic_[k]].a, bodies_[dynamic_[k]].alpha};
+  Accelerations a;
+  gatherAccelerationsInto(a);
   return a;
+}
+
+void World::gatherAccelerationsInto(Accelerations& a) const {
+  a.resize(dynamic_.size());
+  for (size_t k = 0; k < dynamic_.size(); ++k) a[k] = {bodies_[dynamic_[k]].a, bodies_[dynamic_[k]].alpha};
 }
 
 bool World::checkBodies(const char* stage, bool accelerations) {

@@ -49,6 +49,11 @@ class World {
   // estimated position error of one of them (m; tolerance mode only, else 0).
   int lastSubsteps() const { return last_substeps_; }
   double lastErrorEstimate() const { return last_error_; }
+  // Tolerance mode: substeps accepted since the start whose estimate was still above the
+  // tolerance at the deepest split (the promise not kept; 0 when it always was).
+  int toleranceMisses() const { return tolerance_misses_; }
+  // The order of the method in use (1 symplectic/implicit Euler, 2 RATTLE, 4 RK4).
+  int methodOrder() const;
 
   // The force stages at the current state and time, without stepping: fills every dynamic
   // body's a, alpha and constraint force/torque, and lambda(). For tests and drawing forces.
@@ -72,6 +77,7 @@ class World {
     std::vector<std::any> contacts;
     StabilityMonitor monitor;
     int tolerance_substeps = 0;
+    std::string status;  // "" while running; a restore of a running state revives a stopped world
   };
   SavedState saveState() const;
   void restoreState(const SavedState& s);
@@ -129,12 +135,17 @@ class World {
     StabilityMonitor monitor;
   };
   Snapshot snapshot() const { return {gatherState(), time_, monitor_}; }
+  // The same into `s`, reusing its storage (substep(): a steady step allocates nothing).
+  void snapshotInto(Snapshot& s) const;
   void restore(const Snapshot& s);
   double positionDistance(const State& a, const State& b) const;
   void accelerationsAt(double t, const State& state, Accelerations& out);
   State gatherState() const;
   void scatterState(const State& state);
   Accelerations gatherAccelerations() const;
+  // The same into existing storage (a steady step allocates nothing).
+  void gatherStateInto(State& out) const;
+  void gatherAccelerationsInto(Accelerations& out) const;
   bool checkBodies(const char* stage, bool accelerations);
   void stop(const char* stage, const std::string& what, const char* cause);
 
@@ -159,6 +170,10 @@ class World {
   int last_substeps_ = 0;
   double last_error_ = 0.0;
   int tolerance_substeps_ = 0;  // tolerance mode: substeps to start the next dt with
+  int tolerance_misses_ = 0;    // substeps accepted above the tolerance at the deepest split
+  std::vector<Snapshot> substep_starts_;  // substep()'s snapshot per split depth
+  State state_scratch_;                   // watchStability() and integrate()
+  Accelerations acc_scratch_;
 };
 
 }  // namespace ponyhop

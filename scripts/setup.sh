@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian packages ponyhop needs, and only those that are missing.
 # Idempotent: a machine that has everything runs no apt command at all.
+#   scripts/setup.sh           what `make demo` and `make test` need
+#   scripts/setup.sh --bench   also the peer engines `ponyhop bench` compares against (`make bench`)
 set -euo pipefail
 
 PACKAGES=(
@@ -15,7 +17,9 @@ PACKAGES=(
   nlohmann-json3-dev                   # scene files
   libcli11-dev                         # command line
   libgtest-dev                         # tests (speed is measured by `ponyhop bench`)
-  ffmpeg                               # --video: H.264 encoding
+  ffmpeg                               # --video: H.264, VP9 and GIF encoding
+  parallel                             # the render-farm test (GNU parallel; docs/RENDER_FARM.md)
+  assimp-testmodels                    # third-party heads for the head-placement tests
   gnuplot-nox                          # bench plots
   xvfb xauth                           # window tests without a display
 )
@@ -27,6 +31,12 @@ fi
 # `make format-check` only (scripts/setup.sh --format).
 if [ "${1:-}" = "--format" ]; then
   PACKAGES+=(clang-format)
+fi
+# `make bench` only (scripts/setup.sh --bench): the peer engines the bench compares against
+# (app/bench_peers.h), each optional at configure time: MuJoCo, Bullet (its -float64 libraries:
+# btMultiBody in double precision), ODE (double), DART.
+if [ "${1:-}" = "--bench" ]; then
+  PACKAGES+=(libmujoco-dev libbullet-dev libode-dev libdart-dev)
 fi
 
 missing=()

@@ -19,6 +19,7 @@ struct HeadAsset {
   MeshData mesh;                                                 // in the mesh file's coordinates
   Eigen::Affine3d mesh_to_body = Eigen::Affine3d::Identity();  // HeadParams placement
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();            // ponytail anchor, body frame (m)
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();            // centre of the head's bounds, body frame (m)
 };
 
 class AssetLoader {

@@ -6,9 +6,23 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace ponyhop {
+
+// Materials, when the file has them (all empty otherwise): colours are linear RGBA (a material's
+// base colour times the vertex colour, as glTF defines them), textures are sRGB base-colour maps.
+struct MeshPart {
+  uint32_t first = 0;  // first index
+  uint32_t count = 0;  // indices
+  int32_t texture = -1;  // into MeshData::textures
+};
+
+struct MeshTexture {
+  int width = 0, height = 0;
+  std::vector<uint8_t> rgba;  // top row first
+};
 
 // One indexed triangle list; all meshes/nodes of a file are merged with their node transforms
 // baked in. normals.size() == positions.size(), unit length.
@@ -17,8 +31,26 @@ struct MeshData {
   std::vector<Eigen::Vector3f> normals;
   std::vector<uint32_t> indices;  // 3 per triangle
   Eigen::AlignedBox3f bbox;       // of positions (empty when there are none)
+  std::vector<Eigen::Vector4f> colors;  // per vertex, or empty
+  std::vector<Eigen::Vector2f> uvs;     // per vertex (v = 0 at the image's top row), or empty
+  std::vector<MeshPart> parts;          // index ranges by texture, or empty
+  std::vector<MeshTexture> textures;
+  std::vector<std::string> warnings;    // e.g. a texture that cannot be read
 
   size_t triangleCount() const { return indices.size() / 3; }
+  // More than one plain colour: vertex colours, several base colours, or a texture.
+  bool hasOwnColors() const {
+    if (!textures.empty()) return true;
+    for (const auto& c : colors)
+      if (!c.isApprox(colors.front(), 1e-4f)) return true;
+    return false;
+  }
+  void dropMaterials() {  // colours, uvs, parts and textures
+    colors.clear();
+    uvs.clear();
+    parts.clear();
+    textures.clear();
+  }
   void computeBounds() {
     bbox.setEmpty();
     for (const auto& p : positions) bbox.extend(p);

@@ -81,6 +81,7 @@ struct RenderParams {
   double grid_spacing = 0.25;  // m, ground checker size (0: plain)
   bool ground = true;          // draw the ground plane
   double ground_height = 0.0;  // m, height of the drawn ground plane (z)
+  bool transparent = false;    // no background: PNGs with alpha (the ground is drawn when `ground`)
 
   template <class V>
   void reflect(V& v) {
@@ -94,38 +95,74 @@ struct RenderParams {
     v("grid_spacing", grid_spacing, {.unit = "m", .min = 0, .max = 100, .help = "Ground checker size (0: plain)"});
     v("ground", ground, {.help = "Draw the ground plane"});
     v("ground_height", ground_height, {.unit = "m", .min = -1e3, .max = 1e3, .help = "Height of the ground plane"});
+    v("transparent", transparent, {.help = "No background: PNG frames with alpha (set ground false for the object alone)"});
   }
 };
 
-enum class UpAxis { Y, Z };
+enum class UpAxis { Y, Z, Auto };
 template <>
 struct EnumNames<UpAxis> {
-  static constexpr std::array<std::string_view, 2> names{"y", "z"};
+  static constexpr std::array<std::string_view, 3> names{"y", "z", "auto"};
+};
+
+// Where the head body's origin (the pivot its keyframes turn about) sits in the mesh.
+enum class HeadPivot { Auto, Mesh, Bounds };
+template <>
+struct EnumNames<HeadPivot> {
+  static constexpr std::array<std::string_view, 3> names{"auto", "mesh", "bounds"};
+};
+
+// How head.anchor_in_bounds / head.anchor give the ponytail's anchor.
+enum class AnchorSpace { Bounds, Mesh };
+template <>
+struct EnumNames<AnchorSpace> {
+  static constexpr std::array<std::string_view, 2> names{"bounds", "mesh"};
+};
+
+// Colours of the head: the file's materials or head.color.
+enum class HeadMaterials { Auto, File, Color };
+template <>
+struct EnumNames<HeadMaterials> {
+  static constexpr std::array<std::string_view, 3> names{"auto", "file", "color"};
 };
 
 // The head: a mesh (any format assimp reads) on a kinematic body driven by keyframes.
-// Head coordinates are the mesh file's own, before scale/rotation/offset.
+// Head coordinates are the mesh file's own, before scale/rotation/offset. Placement comes from the
+// head itself (engine/head_fit.h): the up axis, the head's own part of a whole-body mesh, its
+// bounds, the pivot and the anchor.
 struct HeadParams {
   std::string mesh = "assets/head/head.gltf";  // path, relative to the repository or the scene file
-  UpAxis up_axis = UpAxis::Y;     // the mesh's up axis (glTF: y); the world is z up
-  double height = 0.25;           // m, rescale so the mesh is this tall (0: use `scale`)
+  UpAxis up_axis = UpAxis::Auto;  // the mesh's up axis (auto: from the format, else the shape)
+  double height = 0.25;           // m, rescale so the head (not a whole body) is this tall (0: use `scale`)
   double scale = 1.0;             // mesh units to m (when height is 0)
   Eigen::Vector3d offset{0.0, 0.0, 0.0};    // m, added after scale and rotation (body frame)
   Eigen::Vector3d rotation{0.0, 0.0, 0.0};  // deg, Euler x, y, z applied after the up-axis fix
-  // Ponytail anchor, head coordinates (mesh units): the default head's bun (assets/head/README.md).
+  HeadPivot pivot = HeadPivot::Auto;  // auto: the mesh origin when it lies near the head's centre, else the centre
+  AnchorSpace anchor_space = AnchorSpace::Bounds;
+  // Ponytail anchor, fractions of the head's bounds (x: right 0 .. left 1, y: face 0 .. back 1,
+  // z: bottom 0 .. top 1); the anchor is the head's surface point nearest to it.
+  Eigen::Vector3d anchor_in_bounds{0.5, 1.0, 0.75};
+  // Ponytail anchor, head coordinates (mesh units), used when anchor_space is "mesh": the default
+  // head's bun (assets/head/README.md).
   Eigen::Vector3d anchor{0.0, 0.0906, -0.1140};
+  HeadMaterials materials = HeadMaterials::Auto;
   Eigen::Vector3d color{0.93, 0.78, 0.67};  // rgb 0..1, skin
   AnimationParams animation;
 
   template <class V>
   void reflect(V& v) {
     v("mesh", mesh, {.help = "Mesh file (OBJ, glTF/GLB, FBX, PLY, STL, ...)"});
-    v("up_axis", up_axis, {.help = "The mesh's up axis"});
-    v("height", height, {.unit = "m", .min = 0, .max = 100, .help = "Rescale to this height (0: use scale)"});
+    v("up_axis", up_axis, {.help = "The mesh's up axis (auto: glTF/Collada/X y, Quake/3DS/Blender z, else the longer of y and z)"});
+    v("height", height, {.unit = "m", .min = 0, .max = 100, .help = "Rescale so the head (above the neck of a whole body) is this tall (0: use scale)"});
     v("scale", scale, {.min = 1e-6, .max = 1e6, .help = "Mesh units to metres", .log = true});
     v("offset", offset, {.unit = "m", .min = -1e3, .max = 1e3, .help = "Offset in the body frame"});
     v("rotation", rotation, {.unit = "deg", .min = -360, .max = 360, .help = "Mesh rotation, Euler x, y, z"});
-    v("anchor", anchor, {.min = -1e6, .max = 1e6, .help = "Ponytail anchor in the mesh's coordinates"});
+    v("pivot", pivot, {.help = "Head body origin: auto (the mesh origin if near the head's centre), mesh, bounds (centre)"});
+    v("anchor_space", anchor_space, {.help = "Ponytail anchor from anchor_in_bounds (bounds) or anchor (mesh)"});
+    v("anchor_in_bounds", anchor_in_bounds,
+      {.min = 0, .max = 1, .help = "Anchor as fractions of the head's bounds: x right..left, y face..back, z bottom..top"});
+    v("anchor", anchor, {.min = -1e6, .max = 1e6, .help = "Ponytail anchor in the mesh's coordinates (anchor_space mesh)"});
+    v("materials", materials, {.help = "auto: the file's textures/vertex colours/colours when it has more than one plain colour"});
     v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Skin colour"});
     v("animation", animation, {.help = "Keyframed motion of the head"});
   }

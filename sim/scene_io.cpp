@@ -9,6 +9,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "sim/data_dir.h"
 #include "sim/input_file.h"
 #include "physics/hopper.h"
 
@@ -49,7 +50,10 @@ std::string shortText(const std::string& s) {
   if (s.size() <= kMax) return s;
   return s.substr(0, kMax) + "... (" + std::to_string(s.size()) + " characters)";
 }
-std::string shortDump(const json& j) { return shortText(j.dump()); }
+std::string shortDump(const json& j) {
+  // replace: a string with invalid UTF-8 must not throw while an error is being reported
+  return shortText(j.dump(-1, ' ', false, json::error_handler_t::replace));
+}
 
 // JSON text read with limits: nesting depth (the DOM's copy, dump and destruction recurse, so an
 // unbounded depth is a stack overflow), no key twice in one object (nlohmann keeps the last one
@@ -322,6 +326,11 @@ void applyOverride(json& j, const Override& o) {
         const std::string m = e.what();
         if (m.find("nested deeper") != std::string::npos || m.find("appears twice") != std::string::npos) throw;
         v = o.value;
+        try {
+          (void)v.dump();  // JSON strings are UTF-8: refuse here what no writer could write
+        } catch (const json::type_error&) {
+          throw SceneError("--set " + o.key + ": the value is not valid UTF-8 text");
+        }
       }
       *node = v;
     }
@@ -375,7 +384,8 @@ std::string resolveScenePath(const std::string& path, const std::string& scene_p
     const fs::path q = fs::path(scene_path).parent_path() / p;
     if (fs::is_regular_file(q, ec)) return q.string();
   }
-  const fs::path r = fs::path(PONYHOP_SOURCE_DIR) / p;
+  if (dataDir().empty()) return "";
+  const fs::path r = fs::path(dataDir()) / p;
   if (fs::is_regular_file(r, ec)) return r.string();
   return "";
 }
@@ -513,9 +523,14 @@ void validateScene(const Scene& scene_in, const std::string& source) {
                        (have.empty() ? "" : ", " + have) + ")");
     }
   }
-  if (scene.hopper && errors.empty()) {
+  if (errors.empty()) {
     // Physical sense beyond the ranges (leg lengths in order, the foot above the ground, ...).
-    if (std::string e = validate(*scene.hopper); !e.empty()) errors.push_back(e);
+    if (scene.hopper) {
+      if (std::string e = validate(*scene.hopper); !e.empty()) errors.push_back(e);
+    }
+    for (size_t i = 0; i < scene.hoppers.size(); ++i) {
+      if (std::string e = validate(scene.hoppers[i], "hoppers." + std::to_string(i)); !e.empty()) errors.push_back(e);
+    }
   }
   if (scene.render.width % 2 || scene.render.height % 2) {
     // H.264 in yuv420p needs even sizes; keep every output consistent with the video.

@@ -56,7 +56,7 @@ void saveScene(const Scene& scene, const std::string& path);
 void validateScene(const Scene& scene, const std::string& source);
 
 // A path from a scene (mesh, clip) resolved: absolute as is; otherwise relative to the working
-// directory, then the scene file's folder, then the repository. "" when not found.
+// directory, then the scene file's folder, then ponyhop's data folder (sim/data_dir.h). "" when not found.
 std::string resolveScenePath(const std::string& path, const std::string& scene_path);
 
 // A clip file (assets/animations/*.json): {"mode": ..., "keys": [...]} with the fields of

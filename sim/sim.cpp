@@ -4,6 +4,7 @@
 
 #include "physics/anchor_motion.h"
 #include "physics/keyframes.h"
+#include "sim/head_fit.h"
 #include "sim/scene_io.h"
 
 namespace ponyhop {
@@ -46,6 +47,24 @@ void Sim::buildHead(const AssetLoader* assets) {
   head_body_ = world_.addKinematicBody(makeMotion(*track), "head");
 }
 
+// An anchor from the head's bounds, moved off the surface as far as the hanging ponytail needs to
+// clear the head (sim/head_fit.h).
+Eigen::Vector3d Sim::standOffAnchor(const ChainParams& c) const {
+  const RigidBody& head = world_.body(head_body_);
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(head_->mesh.positions.size());
+  for (const auto& p : head_->mesh.positions) points.push_back(head.pointToWorld(head_->mesh_to_body * p.cast<double>()));
+  std::vector<double> radii;
+  for (int i = 0; i < c.links; ++i) {
+    const double s = c.links > 1 ? double(i) / (c.links - 1) : 0.0;
+    radii.push_back(c.radius * (1.0 + (c.taper - 1.0) * s));
+  }
+  const Eigen::Vector3d out = (head_->anchor - head_->centre).normalized();
+  const double push =
+      anchorStandOff(points, head.pointToWorld(head_->anchor), head.q * out, c.direction, c.length, radii);
+  return head_->anchor + push * out;
+}
+
 void Sim::buildHoppers() {
   std::vector<const HopperParams*> all;
   if (scene_.hopper) all.push_back(&*scene_.hopper);
@@ -77,6 +96,7 @@ void Sim::buildChain() {
     case ChainAttach::Head:
       parent = head_body_;
       anchor_local = head_->anchor;
+      if (scene_.head->anchor_space == AnchorSpace::Bounds) anchor_local = standOffAnchor(c);
       break;
     case ChainAttach::Hopper: {
       const Hopper* h = hopper();

@@ -85,6 +85,7 @@ class Sim {
   void buildHead(const AssetLoader* assets);
   void buildChain();
   void buildHoppers();
+  Eigen::Vector3d standOffAnchor(const ChainParams& c) const;
 
   Scene scene_;
   World world_;

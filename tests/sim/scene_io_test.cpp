@@ -45,6 +45,18 @@ TEST(SceneIo, ReadsNestedSectionsAndEnums) {
   EXPECT_EQ(s.anchor->motion, AnchorMotion::Shake);
 }
 
+TEST(SceneIo, HoppersListIsReadAndEachEntryChecked) {
+  const Scene s = parseScene(json::parse(R"({"hopper": {}, "hoppers": [{"position": [1, 0, 1.05]}, {"position": [2, 0, 1.1]}]})"),
+                             "test.json", {});
+  ASSERT_EQ(s.hoppers.size(), 2u);
+  EXPECT_DOUBLE_EQ(s.hoppers[1].position.x(), 2.0);
+  const std::string e = errorOf(json::parse(R"({"hoppers": [{}, {"min_length": 0.85}]})"));
+  EXPECT_NE(e.find("hoppers.1"), std::string::npos) << e;
+  EXPECT_NE(e.find("min_length"), std::string::npos) << e;
+  const std::string range = errorOf(json::parse(R"({"hoppers": [{"friction": -1}]})"));
+  EXPECT_NE(range.find("hoppers.0.friction"), std::string::npos) << range;
+}
+
 TEST(SceneIo, UnknownKeyNamesKeyAndAllowed) {
   const std::string e = errorOf(json::parse(R"({"physics": {"dtt": 0.01}})"));
   EXPECT_NE(e.find("test.json"), std::string::npos) << e;
@@ -165,6 +177,14 @@ TEST(SceneIoHostile, DeepNestingIsRefusedWithTheLimit) {
   // --set values are held to the same limit.
   const std::string o = textError("{}", {parseOverride("name=" + std::string(100000, '['))});
   EXPECT_NE(o.find("nested deeper"), std::string::npos) << o.substr(0, 300);
+}
+
+TEST(SceneIoHostile, SetValueThatIsNotUtf8IsRefused) {
+  // Found by fuzz_scene (fuzz/regressions/scene/set_invalid_utf8.bin): the error message's dump
+  // of the value threw nlohmann's type_error 316 and std::terminate ended the process.
+  const std::string e = textError("{}", {parseOverride("physics.solver=tree\x9b\x91")});
+  EXPECT_NE(e.find("--set physics.solver: the value is not valid UTF-8 text"), std::string::npos) << e;
+  EXPECT_NE(textError("{}", {parseOverride("name=\xff")}).find("not valid UTF-8"), std::string::npos);
 }
 
 TEST(SceneIoHostile, NumberOverflowNamesFileAndField) {

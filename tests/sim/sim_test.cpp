@@ -3,6 +3,7 @@
 // that may move, and a library that links no GL and no importer.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -97,6 +98,13 @@ TEST(Sim, SnapshotRestoresBitForBitWithTheControllersState) {
   EXPECT_EQ(stateBits(sim.world()), first) << "the replay from the snapshot differs";
   EXPECT_EQ(sim.hopper()->hops(), hops);
   EXPECT_EQ(sim.hopper()->phase(), phase);
+  // A snapshot of a running world revives it after it stopped.
+  sim.world().body(sim.hopper()->model().body).x.x() = std::nan("");
+  EXPECT_FALSE(sim.step());
+  sim.restore(snap);
+  EXPECT_TRUE(sim.ok()) << sim.status();
+  ASSERT_TRUE(sim.advanceTo(1.4)) << sim.status();
+  EXPECT_EQ(stateBits(sim.world()), first);
 }
 
 TEST(Sim, CarryStateKeepsPosesAndShiftsPrescribedMotion) {

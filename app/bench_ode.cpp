@@ -1,0 +1,95 @@
+// Compiled only when CMake found ODE (libode-dev, built with dDOUBLE; app/CMakeLists.txt defines
+// PONYHOP_HAVE_ODE).
+//
+// ODE works in maximal coordinates with velocity-level multipliers, like ponyhop's dense and
+// tree solvers: one rigid body per link, a ball joint at each pivot, semi-implicit Euler. Two
+// steppers: dWorldStep (a direct LCP factorization, O(m^3)) and dWorldQuickStep (projected
+// Gauss-Seidel, 20 iterations by default). ODE's defaults are kept (ERP 0.2: joint drift pulled
+// back by 20 % per step; CFM 1e-10), gyroscopic mode on, no auto-disable, no collision.
+#include <ode/ode.h>
+
+#include "app/bench_peers.h"
+
+namespace ponyhop {
+namespace {
+
+struct OdeInit {
+  OdeInit() { dInitODE2(0); }
+  ~OdeInit() { dCloseODE(); }
+};
+
+class OdeSim final : public PeerSim {
+ public:
+  OdeSim(const PeerChain& chain, double dt, bool quick) : PeerSim(chain), dt_(dt), quick_(quick) {
+    static OdeInit init;
+    world_ = dWorldCreate();
+    dWorldSetGravity(world_, chain.gravity.x(), chain.gravity.y(), chain.gravity.z());
+    dWorldSetAutoDisableFlag(world_, 0);
+    Eigen::Vector3d pivot = chain.anchor;
+    dBodyID parent = nullptr;
+    for (size_t i = 0; i < chain.mass.size(); ++i) {
+      const Eigen::Quaterniond& q = chain.q[i];
+      const Eigen::Vector3d x = pivot - q * Eigen::Vector3d(0.0, 0.0, 0.5 * chain.length);
+      dBodyID b = dBodyCreate(world_);
+      dMass m;
+      dMassSetParameters(&m, chain.mass[i], 0, 0, 0, chain.inertia[i].x(), chain.inertia[i].y(),
+                         chain.inertia[i].z(), 0, 0, 0);
+      dBodySetMass(b, &m);
+      dBodySetPosition(b, x.x(), x.y(), x.z());
+      const dQuaternion oq = {q.w(), q.x(), q.y(), q.z()};
+      dBodySetQuaternion(b, oq);
+      dBodySetGyroscopicMode(b, 1);
+      dJointID j = dJointCreateBall(world_, nullptr);
+      dJointAttach(j, parent, b);  // parent 0: the static environment (the fixed anchor)
+      dJointSetBallAnchor(j, pivot.x(), pivot.y(), pivot.z());
+      bodies_.push_back(b);
+      parent = b;
+      pivot = x - q * Eigen::Vector3d(0.0, 0.0, 0.5 * chain.length);
+    }
+  }
+  ~OdeSim() override { dWorldDestroy(world_); }
+
+  void step() override {
+    if (quick_) dWorldQuickStep(world_, dt_);
+    else dWorldStep(world_, dt_);
+    time_ += dt_;
+  }
+  double time() const override { return time_; }
+  void links(std::vector<PeerLink>& out) override {
+    out.resize(bodies_.size());
+    for (size_t i = 0; i < bodies_.size(); ++i) {
+      const dReal* x = dBodyGetPosition(bodies_[i]);
+      const dReal* q = dBodyGetQuaternion(bodies_[i]);
+      const dReal* v = dBodyGetLinearVel(bodies_[i]);
+      const dReal* w = dBodyGetAngularVel(bodies_[i]);
+      out[i].x = {x[0], x[1], x[2]};
+      out[i].q = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
+      out[i].v = {v[0], v[1], v[2]};
+      out[i].w = {w[0], w[1], w[2]};
+    }
+  }
+
+ private:
+  dWorldID world_;
+  std::vector<dBodyID> bodies_;
+  double dt_;
+  bool quick_;
+  double time_ = 0.0;
+};
+
+Peer odePeer(bool quick) {
+  Peer p;
+  p.name = quick ? "ode/quickstep" : "ode/worldstep";
+  p.version = "ODE (libode-dev, double precision): maximal coordinates, ball joints, dWorldStep (direct) and "
+              "dWorldQuickStep (20 Gauss-Seidel iterations), its defaults ERP 0.2, CFM 1e-10, gyroscopic term on";
+  p.make = [quick](const PeerChain& chain, double dt, std::string&) -> std::unique_ptr<PeerSim> {
+    return std::make_unique<OdeSim>(chain, dt, quick);
+  };
+  return p;
+}
+
+}  // namespace
+
+std::vector<Peer> odePeers() { return {odePeer(false), odePeer(true)}; }
+
+}  // namespace ponyhop

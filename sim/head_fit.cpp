@@ -1,0 +1,203 @@
+#include "sim/head_fit.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <numbers>
+#include <set>
+#include <vector>
+
+namespace ponyhop {
+namespace {
+
+int upIndex(UpAxis a) { return a == UpAxis::Z ? 2 : 1; }
+
+Eigen::Matrix3d upFix(UpAxis a) {
+  if (a == UpAxis::Z) return Eigen::Matrix3d::Identity();
+  return Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
+}
+
+// Closest point of triangle abc to p (the Voronoi regions of its vertices, edges and face).
+Eigen::Vector3d closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                  const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+// The head of a whole-body mesh: walking down from the top, the head widens, narrows at the neck
+// and widens again at the shoulders; the neck is the narrowest slice between. Returns the neck's
+// height, or the top seventh of the mesh when no neck shows within its top 40 %.
+float findNeck(const MeshData& m, int up, float top, float height) {
+  constexpr int kBins = 64;
+  const int a1 = (up + 1) % 3, a2 = (up + 2) % 3;
+  std::vector<Eigen::Vector2f> lo(kBins, Eigen::Vector2f::Constant(std::numeric_limits<float>::max()));
+  std::vector<Eigen::Vector2f> hi(kBins, Eigen::Vector2f::Constant(std::numeric_limits<float>::lowest()));
+  for (const auto& p : m.positions) {
+    const int b = std::clamp(int((top - p[up]) / height * kBins), 0, kBins - 1);
+    const Eigen::Vector2f q(p[a1], p[a2]);
+    lo[size_t(b)] = lo[size_t(b)].cwiseMin(q);
+    hi[size_t(b)] = hi[size_t(b)].cwiseMax(q);
+  }
+  std::vector<float> w(kBins, 0.0f);
+  for (int b = 0; b < kBins; ++b) {
+    w[size_t(b)] = hi[size_t(b)].x() >= lo[size_t(b)].x() ? (hi[size_t(b)] - lo[size_t(b)]).maxCoeff()
+                                                          : (b > 0 ? w[size_t(b - 1)] : 0.0f);
+  }
+  const int limit = int(0.4 * kBins);
+  float head_w = 0.0f;
+  int narrowing = -1;
+  for (int b = 0; b < limit; ++b) {
+    head_w = std::max(head_w, w[size_t(b)]);
+    if (b >= 2 && w[size_t(b)] < 0.75f * head_w) {
+      narrowing = b;
+      break;
+    }
+  }
+  if (narrowing < 0) return top - height / 7.0f;
+  int neck = narrowing;
+  for (int b = narrowing; b < limit && w[size_t(b)] <= 1.15f * head_w; ++b) {
+    if (w[size_t(b)] < w[size_t(neck)]) neck = b;
+  }
+  return top - (float(neck) + 0.5f) / kBins * height;
+}
+
+}  // namespace
+
+UpAxis detectUpAxis(const std::string& path, const MeshData& mesh, std::string* reason) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  static const std::set<std::string> y_up{".gltf", ".glb", ".dae", ".zae", ".x", ".b3d", ".ms3d", ".ac", ".acc", ".irrmesh", ".fbx"};
+  static const std::set<std::string> z_up{".md2", ".md3", ".mdl", ".mdc", ".iqm", ".3ds", ".blend", ".smd", ".dxf"};
+  if (y_up.count(ext)) {
+    if (reason) *reason = ext + " files are y up";
+    return UpAxis::Y;
+  }
+  if (z_up.count(ext)) {
+    if (reason) *reason = ext + " files are z up";
+    return UpAxis::Z;
+  }
+  const Eigen::Vector3f size = mesh.bbox.isEmpty() ? Eigen::Vector3f::Zero() : Eigen::Vector3f(mesh.bbox.sizes());
+  const UpAxis a = size.z() > size.y() ? UpAxis::Z : UpAxis::Y;
+  if (reason) *reason = std::string("the mesh is longest along ") + (a == UpAxis::Z ? "z" : "y") + " (of y and z)";
+  return a;
+}
+
+HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData& mesh) {
+  HeadFit f;
+  f.up = head.up_axis;
+  f.up_reason = "head.up_axis";
+  if (f.up == UpAxis::Auto) f.up = detectUpAxis(path, mesh, &f.up_reason);
+  f.head_bounds = mesh.bbox;
+  if (mesh.bbox.isEmpty()) return f;
+  const int up = upIndex(f.up);
+  const Eigen::Vector3f size = mesh.bbox.sizes();
+  const float height = size[up];
+  const float across = std::max(size[(up + 1) % 3], size[(up + 2) % 3]);
+  if (height > 1.6f * across) {  // a whole body: keep the part above the neck
+    f.whole_body = true;
+    f.neck = findNeck(mesh, up, mesh.bbox.max()[up], height);
+    f.head_bounds.setEmpty();
+    for (const auto& p : mesh.positions)
+      if (p[up] >= f.neck) f.head_bounds.extend(p);
+  }
+  const Eigen::Vector3d c = f.head_bounds.center().cast<double>();
+  const Eigen::Vector3d half = 0.5 * f.head_bounds.sizes().cast<double>();
+  bool origin_central = true;
+  for (int k = 0; k < 3; ++k) origin_central = origin_central && std::abs(c[k]) <= 0.5 * half[k] + 1e-12;
+  const bool use_centre = head.pivot == HeadPivot::Bounds || (head.pivot == HeadPivot::Auto && !origin_central);
+  if (use_centre) f.pivot = c;
+  return f;
+}
+
+Eigen::Affine3d headMeshToBody(const HeadParams& head, const HeadFit& fit) {
+  const Eigen::Matrix3d U = upFix(fit.up);
+  const int up = upIndex(fit.up);
+  double s = head.scale;
+  if (head.height > 0.0 && !fit.head_bounds.isEmpty()) {
+    const double extent = double(fit.head_bounds.max()[up] - fit.head_bounds.min()[up]);
+    if (extent > 0.0) s = head.height / extent;
+  }
+  const double k = std::numbers::pi / 180.0;
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(head.rotation.z() * k, Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(head.rotation.y() * k, Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(head.rotation.x() * k, Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+  Eigen::Affine3d T = Eigen::Affine3d::Identity();
+  T.linear() = R * (s * U);
+  T.translation() = head.offset;
+  if (!fit.pivot.isZero(0.0)) T.translation() -= T.linear() * fit.pivot;
+  return T;
+}
+
+Eigen::Vector3d headAnchorInMesh(const HeadParams& head, const HeadFit& fit, const MeshData& mesh) {
+  if (head.anchor_space == AnchorSpace::Mesh || fit.head_bounds.isEmpty()) return head.anchor;
+  // The bounds point in upright coordinates (x, y toward the back, z up), back in mesh coordinates.
+  const Eigen::Matrix3d U = upFix(fit.up);
+  Eigen::AlignedBox3d upright;
+  for (int i = 0; i < 8; ++i) {
+    upright.extend(U * fit.head_bounds.corner(Eigen::AlignedBox3f::CornerType(i)).cast<double>());
+  }
+  const Eigen::Vector3d target_up = upright.min() + head.anchor_in_bounds.cwiseProduct(upright.sizes());
+  const Eigen::Vector3d target = U.transpose() * target_up;
+  // The nearest surface point of the head's triangles (all three corners within its bounds).
+  Eigen::Vector3d best = target;
+  double best_d2 = std::numeric_limits<double>::infinity();
+  Eigen::AlignedBox3f box = fit.head_bounds;
+  box.extend(box.max() + Eigen::Vector3f::Constant(1e-6f));
+  box.extend(box.min() - Eigen::Vector3f::Constant(1e-6f));
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    const Eigen::Vector3f& a = mesh.positions[mesh.indices[t]];
+    const Eigen::Vector3f& b = mesh.positions[mesh.indices[t + 1]];
+    const Eigen::Vector3f& c = mesh.positions[mesh.indices[t + 2]];
+    if (!box.contains(a) || !box.contains(b) || !box.contains(c)) continue;
+    const Eigen::Vector3d q = closestOnTriangle(target, a.cast<double>(), b.cast<double>(), c.cast<double>());
+    const double d2 = (q - target).squaredNorm();
+    if (d2 < best_d2) {
+      best_d2 = d2;
+      best = q;
+    }
+  }
+  return best;
+}
+
+double anchorStandOff(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& anchor, const Eigen::Vector3d& out,
+                      const Eigen::Vector3d& dir, double link_length, const std::vector<double>& radii) {
+  if (radii.size() < 2) return 0.0;
+  const Eigen::Vector3d d = dir.normalized();
+  const auto clear = [&](const Eigen::Vector3d& a) {
+    for (size_t i = 1; i < radii.size(); ++i) {
+      const Eigen::Vector3d p0 = a + double(i) * link_length * d;
+      const double r2 = radii[i] * radii[i];
+      for (const Eigen::Vector3d& p : points) {
+        const double s = std::clamp((p - p0).dot(d), 0.0, link_length);
+        if ((p - (p0 + s * d)).squaredNorm() < r2) return false;
+      }
+    }
+    return true;
+  };
+  const double r0 = radii.front();
+  for (int k = 0; k <= 4; ++k) {
+    const double push = 0.25 * k * r0;
+    if (clear(anchor + push * out)) return push;
+  }
+  return r0;
+}
+
+}  // namespace ponyhop

@@ -1,0 +1,154 @@
+// Heads nobody here made (Debian's assimp-testmodels, installed by scripts/setup.sh) land well:
+// the head (not a whole body) is head.height tall, the ponytail's anchor is on the back half of
+// the head, and at t = 0 the ponytail touches nothing but its anchor. Textures are drawn, and an
+// unreadable one is named in a warning.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "engine/frame_writer.h"
+#include "engine/mesh.h"
+#include "sim/head_fit.h"
+#include "sim/scene_io.h"
+#include "engine/asset_loader.h"
+#include "sim/sim.h"
+#include "common/run_util.h"
+
+namespace ponyhop {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::runPonyhop;
+using testing::scratch;
+
+const std::string kModels = "/usr/share/assimp/models/";
+
+struct HeadCase {
+  const char* name;
+  const char* path;  // under kModels
+};
+
+const HeadCase kHeads[] = {
+    {"mrfixit", "IQM/mrfixit.iqm"},          // a whole body, z up, two textures
+    {"suzanne", "BLEND/Suzanne_248.blend"},  // Blender's monkey, z up
+    {"wuson", "OBJ/WusonOBJ.obj"},           // up axis from the shape
+    {"duck", "Collada/duck.dae"},            // textured, y up after assimp's Collada import
+    {"sydney", "MD2/sydney.md2"},            // a whole body, Quake's z up, textured
+};
+
+std::vector<Override> headOverrides(const std::string& mesh) {
+  return {{"head.mesh", mesh}, {"head.anchor_space", "bounds"}, {"head.animation.clip", ""}};
+}
+
+class Heads : public ::testing::TestWithParam<HeadCase> {};
+
+TEST_P(Heads, LandWellWithThePonytailOnTheBackOfTheHead) {
+  const HeadCase& c = GetParam();
+  const std::string mesh = kModels + c.path;
+  ASSERT_TRUE(fs::exists(mesh)) << mesh << " is missing: scripts/setup.sh installs assimp-testmodels";
+  const Scene scene = loadScene("assets/scenes/ponytail.json", headOverrides(mesh));
+  Sim rt(scene, &assimpAssets());
+  const HeadFit fit = fitHead(*scene.head, mesh, rt.head()->mesh);
+  const RigidBody& head = rt.world().body(rt.headBody());
+
+  // The head's part, in the world at t = 0.
+  Eigen::AlignedBox3d box;
+  std::vector<Eigen::Vector3d> head_points, all_points;
+  for (const auto& p : rt.head()->mesh.positions) {
+    const Eigen::Vector3d w = head.pointToWorld(rt.head()->mesh_to_body * p.cast<double>());
+    all_points.push_back(w);
+    if (fit.head_bounds.contains(p)) {
+      head_points.push_back(w);
+      box.extend(head.q.conjugate() * (w - head.x));  // body frame
+    }
+  }
+  std::printf("%s: up %s (%s), %s, head %.3f m tall, pivot (%.3g %.3g %.3g)\n", c.name,
+              fit.up == UpAxis::Z ? "z" : "y", fit.up_reason.c_str(), fit.whole_body ? "whole body" : "a head",
+              box.sizes().z(), fit.pivot.x(), fit.pivot.y(), fit.pivot.z());
+  EXPECT_NEAR(box.sizes().z(), scene.head->height, 0.01 * scene.head->height) << "the head is head.height tall";
+  // Recentred: the head's bounds hold the body origin (the pivot of its keyframes).
+  EXPECT_TRUE(box.contains(Eigen::Vector3d::Zero())) << "the head's bounds hold its pivot";
+
+  // The anchor: on the back half (body +y is the back), high on the head, on or near its surface.
+  const Chain* chain = rt.chain();
+  ASSERT_NE(chain, nullptr);
+  const Eigen::Vector3d anchor = chain->anchor_local;
+  EXPECT_GT(anchor.y(), box.center().y()) << "the anchor is on the back half";
+  EXPECT_GT(anchor.z(), box.center().z()) << "the anchor is on the upper half";
+  double nearest = 1e9;
+  for (const auto& w : head_points) nearest = std::min(nearest, (head.q.conjugate() * (w - head.x) - anchor).norm());
+  EXPECT_LT(nearest, chain->radii.front() + 0.005) << "the first link holds on to the head";
+
+  // At t = 0 no link but the first touches the mesh (the whole mesh: a body's back too).
+  const auto segs = chain->segments(rt.world());
+  int touching = 0;
+  for (size_t i = 1; i < segs.size(); ++i) {
+    const Eigen::Vector3d a = segs[i].top, d = segs[i].bottom - segs[i].top;
+    for (const auto& p : all_points) {
+      const double s = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+      if ((p - (a + s * d)).norm() < std::max(segs[i].radius_top, segs[i].radius_bottom) - 1e-4) {
+        ++touching;
+        break;
+      }
+    }
+  }
+  EXPECT_EQ(touching, 0) << "links touching the head at t = 0";
+}
+
+INSTANTIATE_TEST_SUITE_P(ThirdParty, Heads, ::testing::ValuesIn(kHeads),
+                         [](const ::testing::TestParamInfo<HeadCase>& i) { return std::string(i.param.name); });
+
+// The default head stays where it was: its mesh origin (the skull's centre) is the pivot.
+TEST(HeadsDefault, DefaultHeadKeepsItsPlacement) {
+  const Scene scene = loadScene("assets/scenes/ponytail.json");
+  Sim rt(scene, &assimpAssets());
+  const HeadFit fit = fitHead(*scene.head, "assets/head/head.gltf", rt.head()->mesh);
+  EXPECT_EQ(fit.up, UpAxis::Y);
+  EXPECT_FALSE(fit.whole_body);
+  EXPECT_TRUE(fit.pivot.isZero(0.0));
+  EXPECT_TRUE(rt.head()->mesh_to_body.isApprox(meshToBody(*scene.head, rt.head()->mesh.bbox), 0.0));
+}
+
+// A textured cube: its faces show the texture (the render with the file's materials has colours
+// the plain one lacks), and a missing texture is named.
+TEST(HeadsTexture, TexturedCubeShowsItsTextureAndAMissingOneIsNamed) {
+  const std::string mesh = kModels + "glTF2/BoxTextured-glTF/BoxTextured.gltf";
+  ASSERT_TRUE(fs::exists(mesh)) << mesh << " is missing: scripts/setup.sh installs assimp-testmodels";
+  const std::string dir = scratch("heads_texture");
+  const std::string common = "render assets/scenes/head.json --frames 1 --size 128x96 --set head.mesh=" + mesh;
+  const auto tex = runPonyhop(common + " --out " + dir + "/tex", "heads_texture");
+  ASSERT_EQ(tex.code, 0) << tex.out;
+  const auto plain = runPonyhop(common + " --set head.materials=color --out " + dir + "/plain", "heads_plain");
+  ASSERT_EQ(plain.code, 0) << plain.out;
+  std::string err;
+  const auto a = readPng(FrameWriter::framePath(dir + "/tex", 0), &err);
+  const auto b = readPng(FrameWriter::framePath(dir + "/plain", 0), &err);
+  ASSERT_TRUE(a && b) << err;
+  // Saturated pixels: the texture's colours against the skin colour.
+  const auto saturated = [](const Image& img) {
+    int n = 0;
+    for (size_t i = 0; i + 3 < img.rgba.size(); i += 4) {
+      const int mx = std::max({img.rgba[i], img.rgba[i + 1], img.rgba[i + 2]});
+      const int mn = std::min({img.rgba[i], img.rgba[i + 1], img.rgba[i + 2]});
+      n += (mx - mn) > 60;
+    }
+    return n;
+  };
+  std::printf("saturated pixels: textured %d, plain %d\n", saturated(*a), saturated(*b));
+  EXPECT_GT(saturated(*a), saturated(*b) + 200);
+
+  // The same cube with its texture file missing: drawn, and the warning names the file.
+  const std::string copy = dir + "/missing";
+  fs::create_directories(copy);
+  fs::copy_file(mesh, copy + "/BoxTextured.gltf");
+  fs::copy_file(kModels + "glTF2/BoxTextured-glTF/BoxTextured0.bin", copy + "/BoxTextured0.bin");
+  const auto missing = runPonyhop("render assets/scenes/head.json --frames 1 --size 64x48 --set head.mesh=" + copy +
+                                      "/BoxTextured.gltf --out " + dir + "/m",
+                                  "heads_missing");
+  EXPECT_EQ(missing.code, 0) << missing.out;
+  EXPECT_NE(missing.out.find("warning"), std::string::npos) << missing.out;
+  EXPECT_NE(missing.out.find("CesiumLogoFlat.png"), std::string::npos) << missing.out;
+}
+
+}  // namespace
+}  // namespace ponyhop

@@ -1,0 +1,173 @@
+// A steady-state step allocates nothing: this executable counts every heap allocation (malloc,
+// calloc, realloc, aligned allocation, and operator new, which calls malloc; Eigen's dynamic
+// matrices call malloc directly) while 1,000 steps run after a few warm-up steps (which size the
+// work space). Under AddressSanitizer, whose allocator replaces malloc, the tests are skipped.
+#include <gtest/gtest.h>
+
+#include <cstddef>
+#include <cstdio>
+#include <cstdlib>
+
+#include "physics/chain.h"
+#include "physics/constraint.h"
+#include "physics/tree_solver.h"
+
+#if defined(__SANITIZE_ADDRESS__)
+#define PONYHOP_COUNT_ALLOCATIONS 0
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define PONYHOP_COUNT_ALLOCATIONS 0
+#endif
+#endif
+#ifndef PONYHOP_COUNT_ALLOCATIONS
+#define PONYHOP_COUNT_ALLOCATIONS 1
+#endif
+
+namespace {
+long g_allocations = 0;
+bool g_counting = false;
+}  // namespace
+
+#if PONYHOP_COUNT_ALLOCATIONS
+// glibc's own entry points; the program's definitions below replace the public ones.
+extern "C" {
+void* __libc_malloc(size_t);
+void* __libc_calloc(size_t, size_t);
+void* __libc_realloc(void*, size_t);
+void* __libc_memalign(size_t, size_t);
+
+void* malloc(size_t n) {
+  if (g_counting) ++g_allocations;
+  return __libc_malloc(n);
+}
+void* calloc(size_t n, size_t size) {
+  if (g_counting) ++g_allocations;
+  return __libc_calloc(n, size);
+}
+void* realloc(void* p, size_t n) {
+  if (g_counting) ++g_allocations;
+  return __libc_realloc(p, n);
+}
+void* memalign(size_t alignment, size_t n) {
+  if (g_counting) ++g_allocations;
+  return __libc_memalign(alignment, n);
+}
+void* aligned_alloc(size_t alignment, size_t n) {
+  if (g_counting) ++g_allocations;
+  return __libc_memalign(alignment, n);
+}
+int posix_memalign(void** out, size_t alignment, size_t n) {
+  if (g_counting) ++g_allocations;
+  *out = __libc_memalign(alignment, n);
+  return *out ? 0 : 12;  // ENOMEM
+}
+}
+#endif
+
+namespace ponyhop {
+namespace {
+
+// Allocations made by f().
+template <class F>
+long allocationsIn(F&& f) {
+  g_allocations = 0;
+  g_counting = true;
+  f();
+  g_counting = false;
+  return g_allocations;
+}
+
+ChainWorld chain(SolverKind solver, Integrator integrator, int links) {
+  PhysicsParams pp;
+  pp.dt = 1.0 / 960.0;
+  pp.solver = solver;
+  pp.integrator = integrator;
+  pp.stabilization = Stabilization::None;
+  pp.max_step_rotation = 0.0;  // fixed steps: the same work every step
+  ChainParams cp;
+  cp.links = links;
+  AnchorParams shake;
+  shake.motion = AnchorMotion::Shake;
+  ChainWorld cw = makeChainWorld(pp, cp, shake);
+  EXPECT_TRUE(cw.world.ok()) << cw.world.status();
+  return cw;
+}
+
+class AllocationTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!PONYHOP_COUNT_ALLOCATIONS) GTEST_SKIP() << "AddressSanitizer replaces malloc: allocations are not counted";
+  }
+};
+
+// The counter sees allocations at all (else every test below passes for nothing).
+TEST_F(AllocationTest, CounterCountsMallocNewAndEigen) {
+  EXPECT_GE(allocationsIn([] {
+              volatile void* p = std::malloc(16);
+              std::free(const_cast<void*>(p));
+            }),
+            1);
+  EXPECT_GE(allocationsIn([] {
+              int* volatile p = new int(3);  // volatile: the pair cannot be elided
+              delete p;
+            }),
+            1);
+  EXPECT_GE(allocationsIn([] {
+              Eigen::VectorXd v(100);
+              v.setZero();
+            }),
+            1);
+}
+
+// Featherstone: a reduced step (ABA, joint-space RK4 or symplectic Euler, forward kinematics,
+// World's force stages) allocates nothing once the work space is sized.
+TEST_F(AllocationTest, FeatherstoneStepAllocatesNothing) {
+  for (Integrator integrator : {Integrator::RK4, Integrator::SymplecticEuler}) {
+    ChainWorld cw = chain(SolverKind::Featherstone, integrator, 16);
+    for (int i = 0; i < 10; ++i) cw.world.step();
+    const long n = allocationsIn([&] {
+      for (int i = 0; i < 1000; ++i) cw.world.step();
+    });
+    EXPECT_TRUE(cw.world.ok()) << cw.world.status();
+    EXPECT_EQ(n, 0) << "featherstone + " << enumName(integrator) << ": allocations in 1,000 steps";
+  }
+}
+
+// The tree solver's factorization and the constraint rows: nothing allocated per factor (the
+// elimination structure is built once; blocks live in fixed-size storage).
+TEST_F(AllocationTest, TreeFactorAllocatesNothing) {
+  ChainWorld cw = chain(SolverKind::Tree, Integrator::SymplecticEuler, 16);
+  for (int i = 0; i < 10; ++i) cw.world.step();
+  ConstraintSystem system;
+  TreeSolver tree;
+  std::vector<RigidBody> bodies = cw.world.bodies();
+  system.evaluate(bodies, cw.world.joints());
+  ASSERT_TRUE(tree.factor(bodies, system));
+  Eigen::VectorXd rhs = Eigen::VectorXd::Ones(system.rows()), y(system.rows());
+  tree.solveInto(rhs, y);  // sizes the solve's work space
+  const long n = allocationsIn([&] {
+    for (int i = 0; i < 1000; ++i) {
+      bodies[cw.chain.links[3]].q = Eigen::Quaterniond(Eigen::AngleAxisd(1e-3 * i, Eigen::Vector3d::UnitX()));
+      system.evaluate(bodies, cw.world.joints());
+      tree.factor(bodies, system);
+      tree.solveInto(rhs, y);
+    }
+  });
+  EXPECT_TRUE(y.allFinite());
+  EXPECT_EQ(n, 0) << "allocations in 1,000 evaluate + factor + solve";
+}
+
+// The whole multiplier step (tree solver, symplectic Euler: joint forces and integration)
+// allocates nothing either.
+TEST_F(AllocationTest, TreeStepAllocatesNothing) {
+  ChainWorld cw = chain(SolverKind::Tree, Integrator::SymplecticEuler, 16);
+  for (int i = 0; i < 10; ++i) cw.world.step();
+  const long n = allocationsIn([&] {
+    for (int i = 0; i < 1000; ++i) cw.world.step();
+  });
+  EXPECT_TRUE(cw.world.ok()) << cw.world.status();
+  EXPECT_EQ(n, 0) << "tree + symplectic_euler: allocations in 1,000 steps";
+}
+
+}  // namespace
+}  // namespace ponyhop
