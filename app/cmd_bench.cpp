@@ -347,7 +347,7 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
 int runBench(BenchArgs& args) {
   const auto start = Clock::now();
   const std::string load_before = loadAverage();
-  // From any folder: the scenes as given, else ponyhop's own (engine/data_dir.h).
+  // From any folder: the scenes as given, else ponyhop's own (sim/data_dir.h).
   args.chain_scene = resolveSceneFile(args.chain_scene);
   args.hopper_scene = resolveSceneFile(args.hopper_scene);
   Config cfg = makeConfig(args.quick);

@@ -61,9 +61,9 @@ std::vector<BakeMesh> bodyMeshes(const Sim& rt, std::vector<int>& mesh_of_body) 
       }
     }
   }
-  for (const auto& hp : rt.hoppers()) {
-    const Hopper* h = hp.get();
-    const HopperParams& p = h->params();
+  for (size_t i = 0; i < rt.hoppers().size(); ++i) {
+    const Hopper* h = rt.hoppers()[i].get();
+    const HopperSection& p = hopperSection(rt.scene(), i);
     const HopperShape s = h->shape(w);
     const HopperModel& m = h->model();
     const Eigen::Vector3d half = 0.5 * p.body_size;

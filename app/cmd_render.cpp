@@ -203,6 +203,7 @@ int runRender(const RenderArgs& args) {
     const auto t0 = Clock::now();
     VideoOptions vo;
     vo.fps = scene.render.fps;
+    vo.container = videoContainer(args.video, nullptr);  // of the final name, not of video_tmp's
     const bool encoded = encodeVideo(staging, video_tmp, vo, &err);
     if (const int sig = InterruptGuard::signal()) {
       fs::remove(video_tmp, ec);

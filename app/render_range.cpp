@@ -9,7 +9,7 @@
 
 #include "engine/frame_writer.h"
 #include "engine/render_session.h"
-#include "engine/scene_io.h"
+#include "sim/scene_io.h"
 
 namespace ponyhop {
 

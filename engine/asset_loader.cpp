@@ -16,9 +16,7 @@ HeadAsset AssimpAssets::loadHead(const HeadParams& head, const std::string& mesh
   if (!loadMesh(mesh_path, a.mesh, &err)) throw SceneError(scene_path + ": head.mesh: " + err);
   // The file's own colours (textures, vertex colours, several materials) or head.color.
   for (const std::string& w : a.mesh.warnings) std::fprintf(stderr, "ponyhop: warning: head.mesh: %s\n", w.c_str());
-  if (head.materials == HeadMaterials::Color || (head.materials == HeadMaterials::Auto && !a.mesh.hasOwnColors())) {
-    a.mesh.dropMaterials();
-  }
+  if (head.materials == HeadMaterials::Color) a.mesh.dropMaterials();
   // Placement from the head itself (sim/head_fit.h).
   const HeadFit fit = fitHead(head, mesh_path, a.mesh);
   a.mesh_to_body = headMeshToBody(head, fit);

@@ -163,6 +163,8 @@ bool importMesh(const std::string& path, MeshData& out, std::string* err) {
     if (err) *err = path + ": no triangles in the file";
     return false;
   }
+  // One plain colour says nothing a scene's own colour does not: kept only when they vary.
+  if (!m.hasOwnColors()) m.dropMaterials();
   out = std::move(m);
   return true;
 }

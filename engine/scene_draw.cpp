@@ -64,9 +64,7 @@ void SceneDraw::draw(const Sim& sim, Renderer& renderer, const Scene& drawing) c
   const Scene& scene = sim.scene();
   const World& world = sim.world();
   for (size_t i = 0; i < sim.hoppers().size(); ++i) {
-    const bool listed = !(scene.hopper && i == 0);
-    const HopperSection& look = listed ? scene.hoppers[i - (scene.hopper ? 1 : 0)] : *scene.hopper;
-    if (sim.hoppers()[i]->built()) drawHopper(*sim.hoppers()[i], look, world, renderer);
+    if (sim.hoppers()[i]->built()) drawHopper(*sim.hoppers()[i], hopperSection(scene, i), world, renderer);
   }
   if (sim.headBody() >= 0 && head_.valid()) {
     const RigidBody& b = world.body(sim.headBody());
@@ -74,7 +72,7 @@ void SceneDraw::draw(const Sim& sim, Renderer& renderer, const Scene& drawing) c
     pose.translate(b.x);
     pose.rotate(b.q);
     // A head drawn with its file's colours (sim/mesh_data.h) is not tinted by head.color.
-    const Eigen::Vector3d tint = sim.head()->mesh.colors.empty() ? scene.head->color : Eigen::Vector3d::Ones();
+    const Eigen::Vector3d tint = sim.head()->mesh.colors.empty() ? scene.head->color : Eigen::Vector3d(1.0, 1.0, 1.0);
     renderer.drawMesh(head_, pose * sim.head()->mesh_to_body, material(tint, 0.18f, 24.0f));
   }
   if (const Chain* chain = sim.chain()) drawChain(sim, *chain, drawing.chain ? *drawing.chain : *scene.chain, renderer);

@@ -109,7 +109,8 @@ bool encodeVideo(const std::string& frame_dir, const std::string& out_mp4, const
     if (err) *err = "encodeVideo: fps must be > 0";
     return false;
   }
-  const std::string container = videoContainer(out_mp4, err);
+  // A caller writing under a temporary name gives the container of the final name.
+  const std::string container = opt.container.empty() ? videoContainer(out_mp4, err) : opt.container;
   if (container.empty()) return false;
   std::error_code ec;
   if (fs::path(out_mp4).has_parent_path()) fs::create_directories(fs::path(out_mp4).parent_path(), ec);

@@ -12,6 +12,7 @@ struct VideoOptions {
   std::string pattern = "frame_%05d.png";    // as written by FrameWriter
   int start_number = 0;
   std::string ffmpeg = "ffmpeg";             // program name or path
+  std::string container;                     // "" = from the output's extension (videoContainer)
 };
 
 // True when the ffmpeg program can be started.

@@ -117,42 +117,22 @@ ConstrainedStepResult rattleStep(double t, double h, const Eigen::VectorXd& lamb
     previous = err;
   }
 
-  // Second kick at (t + h, q_{n+1}) with the forces at the predicted velocity, then the velocity
-  // multipliers: J(q') v' = -J_k v_k, the mass-metric projection (the impulse h/2 J^T nu changes
-  // p and L by exactly that correction).
-  const auto secondKick = [&]() -> bool {
-    for (size_t i = 0; i < n; ++i) {
-      RigidBody& b = bodies[i];
-      if (!b.isDynamic()) continue;
-      const Eigen::Vector3d p = start[i].p + 0.5 * h * fc[i].head<3>() + 0.5 * h * b.force;
-      const Eigen::Vector3d l = start[i].l + 0.5 * h * fc[i].tail<3>() + 0.5 * h * b.torque;
-      b.v = p / b.mass;
-      b.w = b.worldInverseInertia() * l;
-    }
-    if (std::string e = projectVelocities(bodies, s.joints, s.system, s.solver); !e.empty()) {
-      result.failed = true;
-      result.problem = "RATTLE velocity solve: " + e;
-      return false;
-    }
-    return true;
-  };
+  // Second kick at (t + h, q_{n+1}) with the forces at the predicted velocity.
   if (!s.forces(t + h)) return result;
-  std::vector<Vector6d> predicted(n);
-  for (size_t i = 0; i < n; ++i) predicted[i] << bodies[i].force, bodies[i].torque;
-  if (!secondKick()) return result;
-  // Velocity-dependent forces (damping, drag, servos) taken at the predicted velocity make the
-  // kick first order in them. One more evaluation at the kicked velocity, a fixed-point step
-  // towards the trapezoidal kick p' = p+ + h/2 F(q', v'), brings the velocity error of that force
-  // to O(h^2) and the method back to second order (tests/physics/physics_integrator_test.cpp:
-  // RattleIsSecondOrderWithDamping). Forces that do not depend on the velocity come out
-  // identical, and the step is left as it was.
-  if (!s.forces(t + h)) return result;
-  bool same = true;
-  for (size_t i = 0; i < n && same; ++i) {
-    if (!bodies[i].isDynamic()) continue;
-    same = predicted[i].head<3>() == bodies[i].force && predicted[i].tail<3>() == bodies[i].torque;
+  for (size_t i = 0; i < n; ++i) {
+    RigidBody& b = bodies[i];
+    if (!b.isDynamic()) continue;
+    const Eigen::Vector3d p = start[i].p + 0.5 * h * fc[i].head<3>() + 0.5 * h * b.force;
+    const Eigen::Vector3d l = start[i].l + 0.5 * h * fc[i].tail<3>() + 0.5 * h * b.torque;
+    b.v = p / b.mass;
+    b.w = b.worldInverseInertia() * l;
   }
-  if (!same) secondKick();
+  // Velocity multipliers: J(q') v' = -J_k v_k, the mass-metric projection (the impulse
+  // h/2 J^T nu changes p and L by exactly that correction).
+  if (std::string e = projectVelocities(bodies, s.joints, s.system, s.solver); !e.empty()) {
+    result.failed = true;
+    result.problem = "RATTLE velocity solve: " + e;
+  }
   return result;
 }
 

@@ -30,10 +30,7 @@
 // velocity solve is exact (linear): the mass-metric velocity projection at the new positions.
 //
 // Velocity-dependent forces (damping, drag, servos) are taken at the predicted velocity in the
-// second kick (explicit), which alone is first order in them; the kick is then repeated once with
-// the forces at the kicked velocity (a fixed-point step towards the trapezoidal kick), which
-// restores second order. When no force depends on the velocity the repeat is skipped (the forces
-// come out identical), so conservative scenes step exactly as before. Stiff springs
+// second kick (explicit): the method stays second order and they only dissipate. Stiff springs
 // are explicit as in any Verlet method: stable for h omega < 2 (see implicit_euler.h otherwise).
 // Kinematic bodies: the position solve uses their pose at t + h and the velocity solve their
 // velocity at t + h; their acceleration is not needed.

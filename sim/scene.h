@@ -120,15 +120,15 @@ struct EnumNames<AnchorSpace> {
 };
 
 // Colours of the head: the file's materials or head.color.
-enum class HeadMaterials { Auto, File, Color };
+enum class HeadMaterials { Auto, Color };
 template <>
 struct EnumNames<HeadMaterials> {
-  static constexpr std::array<std::string_view, 3> names{"auto", "file", "color"};
+  static constexpr std::array<std::string_view, 2> names{"auto", "color"};
 };
 
 // The head: a mesh (any format assimp reads) on a kinematic body driven by keyframes.
 // Head coordinates are the mesh file's own, before scale/rotation/offset. Placement comes from the
-// head itself (engine/head_fit.h): the up axis, the head's own part of a whole-body mesh, its
+// head itself (sim/head_fit.h): the up axis, the head's own part of a whole-body mesh, its
 // bounds, the pivot and the anchor.
 struct HeadParams {
   std::string mesh = "assets/head/head.gltf";  // path, relative to the repository or the scene file
@@ -162,7 +162,7 @@ struct HeadParams {
     v("anchor_in_bounds", anchor_in_bounds,
       {.min = 0, .max = 1, .help = "Anchor as fractions of the head's bounds: x right..left, y face..back, z bottom..top"});
     v("anchor", anchor, {.min = -1e6, .max = 1e6, .help = "Ponytail anchor in the mesh's coordinates (anchor_space mesh)"});
-    v("materials", materials, {.help = "auto: the file's textures/vertex colours/colours when it has more than one plain colour"});
+    v("materials", materials, {.help = "auto: the file's textures, vertex colours, colours when it has more than one plain colour; color: head.color"});
     v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Skin colour"});
     v("animation", animation, {.help = "Keyframed motion of the head"});
   }
@@ -254,5 +254,11 @@ struct Scene {
     v("hoppers", hoppers, {.help = "More hoppers in the same world, each a hopper section"});
   }
 };
+
+// The section of the scene's i-th hopper, in the order Sim builds them: `hopper`, then `hoppers`.
+inline const HopperSection& hopperSection(const Scene& scene, size_t i) {
+  if (scene.hopper) return i == 0 ? *scene.hopper : scene.hoppers[i - 1];
+  return scene.hoppers[i];
+}
 
 }  // namespace ponyhop

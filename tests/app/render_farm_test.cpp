@@ -91,10 +91,18 @@ TEST(Video, ContainerFollowsTheExtensionOrIsRefused) {
     const auto v = runPonyhop("video " + dir + "/f --out " + out, std::string("video_") + ext);
     ASSERT_EQ(v.code, 0) << v.out;
     const std::string bytes = readFile(out);
-    if (std::string(ext) == "gif") EXPECT_TRUE(starts(bytes, 0, "GIF89a")) << ext;
-    if (std::string(ext) == "webm") EXPECT_TRUE(starts(bytes, 0, "\x1a\x45\xdf\xa3")) << ext;
-    if (std::string(ext) == "mp4") EXPECT_TRUE(starts(bytes, 4, "ftypisom")) << ext;
-    if (std::string(ext) == "mov") EXPECT_TRUE(starts(bytes, 4, "ftypqt")) << ext;
+    if (std::string(ext) == "gif") {
+      EXPECT_TRUE(starts(bytes, 0, "GIF89a")) << ext;
+    }
+    if (std::string(ext) == "webm") {
+      EXPECT_TRUE(starts(bytes, 0, "\x1a\x45\xdf\xa3")) << ext;
+    }
+    if (std::string(ext) == "mp4") {
+      EXPECT_TRUE(starts(bytes, 4, "ftypisom")) << ext;
+    }
+    if (std::string(ext) == "mov") {
+      EXPECT_TRUE(starts(bytes, 4, "ftypqt")) << ext;
+    }
   }
   const auto bad = runPonyhop("render assets/scenes/chain.json --frames 2 --size 64x48 --out " + dir + "/g --video " + dir +
                                   "/x.avi",
