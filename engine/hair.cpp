@@ -190,6 +190,32 @@ HairMesh buildHair(const HairCurve& curve, const HairParams& hair, const Eigen::
 
   // The strands: roots spread evenly over the tie's disc (Vogel's sunflower), each following the
   // curve at its own offset in the curve's frame, the clump widening toward the tip.
+  // Where the tail bends tighter than the clump is wide, the strands on the inside of the bend
+  // would fold back into a loop: the clump is squeezed there by a smooth factor of the curvature
+  // (itself smoothed along the curve, as the spline's curvature jumps at the joints).
+  std::vector<double> kappa(m, 0.0), squeeze(m, 1.0);
+  for (size_t i = 0; i < m; ++i) {
+    const size_t a = i == 0 ? 0 : i - 1, b = std::min(i + 1, m - 1);
+    const double ds = (curve.s[b] - curve.s[a]) * curve.length;
+    kappa[i] = ds > 0.0 ? (curve.tangents[b] - curve.tangents[a]).norm() / ds : 0.0;
+  }
+  // Box filter over half a link, three times (close to a Gaussian): continuous at the joints.
+  const size_t half = std::max<size_t>(
+      1, curve.joint_samples.size() > 1 ? size_t(curve.joint_samples[1] - curve.joint_samples[0]) / 2 : 1);
+  for (int pass = 0; pass < 3; ++pass) {
+    std::vector<double> k = kappa;
+    for (size_t i = 0; i < m; ++i) {
+      double sum = 0.0;
+      int n = 0;
+      for (size_t j = i >= half ? i - half : 0; j <= std::min(i + half, m - 1); ++j, ++n) sum += k[j];
+      kappa[i] = sum / double(n);
+    }
+  }
+  for (size_t i = 0; i < m; ++i) {
+    const double reach = kappa[i] * curve.radius[i] * (1.0 + hair.spread * curve.s[i] * curve.s[i]) *
+                         (1.0 + hair.noise * 1.5 * curve.s[i]) / 0.5;
+    squeeze[i] = 1.0 / std::sqrt(1.0 + reach * reach * reach * reach);
+  }
   const double golden = kPi * (3.0 - std::sqrt(5.0));
   const double var = std::clamp(hair.color_variation, 0.0, 1.0);
   std::vector<Eigen::Vector3d> pos(m);
@@ -206,7 +232,7 @@ HairMesh buildHair(const HairCurve& curve, const HairParams& hair, const Eigen::
     const size_t last = std::min(std::max(size_t(std::lround(end * double(m - 1))), size_t(2)), m - 1);
     for (size_t i = 0; i <= last; ++i) {
       const double s = curve.s[i];
-      const double R = curve.radius[i] * (1.0 + hair.spread * s * s);
+      const double R = curve.radius[i] * (1.0 + hair.spread * s * s) * squeeze[i];
       const double wob = amp * s;  // tied at the root, free at the tip
       const double x = rho * std::cos(theta) + wob * std::sin(2.0 * kPi * freq * s + ph1);
       const double y = rho * std::sin(theta) + wob * std::sin(2.0 * kPi * 1.3 * freq * s + ph2);

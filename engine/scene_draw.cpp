@@ -97,7 +97,8 @@ HairMesh SceneDraw::chainHair(const Sim& sim, const Chain& chain, const ChainSec
   }
   const Eigen::Vector3d reference =
       parent >= 0 ? Eigen::Vector3d(world.body(parent).q * Eigen::Vector3d::UnitX()) : Eigen::Vector3d::UnitX();
-  const HairCurve curve = hairCurve(points, radii, reference);
+  // 4 samples per link: smooth at the tail's size on screen, and half the strand triangles of 8.
+  const HairCurve curve = hairCurve(points, radii, reference, 4);
   return buildHair(curve, look.hair, look.color.cast<float>(), hairStrandCount(look.hair, draft_));
 }
 

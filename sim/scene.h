@@ -171,7 +171,7 @@ struct HeadParams {
 // How a chain is dressed as hair (engine/hair.h): a clump of thin strands around a smooth curve
 // through the joints, tied at the anchor. Drawing only; the physics never reads it.
 struct HairParams {
-  int strands = 160;              // count, final quality
+  int strands = 110;              // count, final quality
   int strands_draft = 48;         // count, draft quality (fast previews)
   double spread = 1.6;            // the clump's radius at the tip grows by 1 + spread (0: follows the links)
   double noise = 0.35;            // per-strand waviness, in units of the local clump radius
