@@ -681,7 +681,11 @@ void Panel::drawSections() {
     SectionVisitor v(*this, field, title, open, {}, std::move(skip));
     s.reflect(v);
   };
-  section("chain", "Ponytail", true);
+  section("chain", "Ponytail", true, {"hair"});
+  {
+    NestedSection v(*this, "chain", "hair", "Hair", false);  // how it is drawn: strands, highlight, tie
+    s.reflect(v);
+  }
   section("head", "Head", false);
   section("anchor", "Anchor", false);
   {

@@ -333,7 +333,7 @@ bool LiveSim::load(const std::string& path) {
 
 void LiveSim::draw(Renderer& renderer) {
   draw_.upload(*runtime_, renderer);
-  draw_.draw(*runtime_, renderer);
+  draw_.draw(*runtime_, renderer, applied_);  // the look from the applied scene: chain.color/hair are live
   const PerturbationTarget& p = *perturbation_;
   if (p.active() && p.body < runtime_->world().bodyCount()) {
     const Eigen::Vector3d a = p.grabbedPoint(runtime_->world().body(p.body));

@@ -4,7 +4,8 @@
 // (app/panel.h) edits it, the window and `render --ui` draw it.
 //
 // How an edit is applied (docs/TUNING.md has the table):
-//   live        camera, light, render, name, duration: nothing to rebuild; the next frame shows it.
+//   live        camera, light, render, name, duration, chain.color, chain.hair.*: nothing to
+//               rebuild; the next frame shows it (the chain's look is drawn from applied()).
 //   keep state  every other parameter (gravity, dt, solver, masses, damping, stiffness, drag,
 //               colours, hopper gains...): the runtime is rebuilt from the edited scene and the
 //               running state is carried over: simulated time, and the pose and velocity of every

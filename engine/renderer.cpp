@@ -57,6 +57,12 @@ struct HullInstance {
   float shin_rim[2];
 };
 
+// One hair draw: a range of the frame's hair indices and its shading constants.
+struct HairDraw {
+  size_t first = 0, count = 0;
+  HairShading shading;
+};
+
 struct LineVertex {
   float pos[3];
   float color[3];
@@ -142,6 +148,7 @@ struct Renderer::Impl {
   // Programs.
   GLuint prog_mesh = 0, prog_hull = 0, prog_backdrop = 0, prog_ground_shadow = 0, prog_lines = 0;
   GLuint prog_mesh_depth = 0, prog_hull_depth = 0, prog_post = 0, prog_bg = 0;
+  GLuint prog_hair = 0, prog_hair_depth = 0;
   GLuint prog_mesh_mat = 0;
   // Static geometry.
   GLuint hull_vao = 0, hull_vbo = 0, hull_ebo = 0, hull_instances = 0;
@@ -149,6 +156,7 @@ struct Renderer::Impl {
   size_t hull_triangles = 0;
   GLuint empty_vao = 0;
   GLuint lines_vao = 0, lines_vbo = 0;
+  GLuint hair_vao = 0, hair_vbo = 0, hair_ebo = 0;
   std::vector<GpuMesh> meshes;  // index = MeshHandle::id; vao == 0: released
   int box_mesh = -1;
   // Targets.
@@ -175,6 +183,9 @@ struct Renderer::Impl {
   std::vector<MeshDraw> mesh_draws;
   std::vector<HullInstance> hulls;
   std::vector<LineVertex> lines;
+  std::vector<HairVertex> hair_vertices;
+  std::vector<uint32_t> hair_indices;
+  std::vector<HairDraw> hair_draws;
   bool in_frame = false;
   bool draft = false;  // this frame is RenderQuality::Draft
   // Per-pass timing (RenderStats): software rasterizers are timed with glFinish + the wall clock,
@@ -196,6 +207,7 @@ struct Renderer::Impl {
   void setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_proj, const Eigen::Matrix4f& light_vp,
                          float normal_offset, bool shadows_on);
   void drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj, bool depth_only);
+  void drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only, const Eigen::Vector3d& light_dir);
   void drawMaterialMeshes();
 };
 
@@ -254,13 +266,13 @@ Renderer::~Renderer() {
   if (!glDeleteProgram) return;  // GL never loaded: nothing was created
   Impl& I = *impl_;
   for (GLuint p : {I.prog_mesh, I.prog_mesh_mat, I.prog_hull, I.prog_backdrop, I.prog_ground_shadow, I.prog_lines,
-                   I.prog_mesh_depth, I.prog_hull_depth, I.prog_post, I.prog_bg})
+                   I.prog_mesh_depth, I.prog_hull_depth, I.prog_post, I.prog_bg, I.prog_hair, I.prog_hair_depth})
     if (p) glDeleteProgram(p);
   for (int i = 0; i < int(I.meshes.size()); ++i) release(MeshHandle{i});
-  GLuint vaos[] = {I.hull_vao, I.empty_vao, I.lines_vao};
-  glDeleteVertexArrays(3, vaos);
-  GLuint bufs[] = {I.hull_vbo, I.hull_ebo, I.hull_instances, I.lines_vbo};
-  glDeleteBuffers(4, bufs);
+  GLuint vaos[] = {I.hull_vao, I.empty_vao, I.lines_vao, I.hair_vao};
+  glDeleteVertexArrays(4, vaos);
+  GLuint bufs[] = {I.hull_vbo, I.hull_ebo, I.hull_instances, I.lines_vbo, I.hair_vbo, I.hair_ebo};
+  glDeleteBuffers(6, bufs);
   GLuint fbos[] = {I.msaa_fbo, I.resolve_fbo, I.shadow_fbo, I.ground_shadow_fbo};
   glDeleteFramebuffers(4, fbos);
   GLuint rbs[] = {I.msaa_color, I.msaa_depth, I.resolve_color};
@@ -294,7 +306,9 @@ bool Renderer::init(std::string* err) {
                      {&I.prog_mesh_depth, "mesh depth", kMeshVS, kDepthFS},
                      {&I.prog_hull_depth, "hull depth", kCapsuleVS, kDepthFS},
                      {&I.prog_post, "post AA", kFullscreenVS, kPostAaFS},
-                     {&I.prog_bg, "background", kFullscreenVS, kBackgroundFS}};
+                     {&I.prog_bg, "background", kFullscreenVS, kBackgroundFS},
+                     {&I.prog_hair, "hair", kHairVS, kHairFS},
+                     {&I.prog_hair_depth, "hair depth", kHairVS, kDepthFS}};
   for (const P& p : progs)
     if (!(*p.out = buildProgram(p.name, p.vs, p.fs, err))) return false;
 
@@ -350,6 +364,21 @@ bool Renderer::init(std::string* err) {
   glEnableVertexAttribArray(1);
   glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(LineVertex),
                         reinterpret_cast<const void*>(offsetof(LineVertex, color)));
+
+  // Hair: positions, tangents, normals, colours and (half width, occlusion) per vertex, streamed.
+  glGenVertexArrays(1, &I.hair_vao);
+  glBindVertexArray(I.hair_vao);
+  glGenBuffers(1, &I.hair_vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, I.hair_vbo);
+  glGenBuffers(1, &I.hair_ebo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, I.hair_ebo);
+  const size_t hair_attr[] = {offsetof(HairVertex, pos), offsetof(HairVertex, tangent), offsetof(HairVertex, normal),
+                              offsetof(HairVertex, color), offsetof(HairVertex, half_width)};
+  for (GLuint a = 0; a < 5; ++a) {
+    glEnableVertexAttribArray(a);
+    glVertexAttribPointer(a, a == 4 ? 2 : 3, GL_FLOAT, GL_FALSE, sizeof(HairVertex),
+                          reinterpret_cast<const void*>(hair_attr[a]));
+  }
   glBindVertexArray(0);
 
   I.box_mesh = upload(makeBoxMesh(Eigen::Vector3f(1, 1, 1))).id;
@@ -471,6 +500,9 @@ void Renderer::beginFrame(const Camera& camera, const LightParams& light, const 
   I.mesh_draws.clear();
   I.hulls.clear();
   I.lines.clear();
+  I.hair_vertices.clear();
+  I.hair_indices.clear();
+  I.hair_draws.clear();
   I.in_frame = true;
 }
 
@@ -515,6 +547,24 @@ void Renderer::drawSphere(const Eigen::Vector3d& center, double r, const Materia
 
 void Renderer::drawCapsule(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, double r, const Material& m) {
   drawTaperedCapsule(p0, p1, r, r, m);
+}
+
+void Renderer::drawHair(const HairMesh& hair) {
+  Impl& I = *impl_;
+  if (hair.indices.empty()) return;
+  const uint32_t base = uint32_t(I.hair_vertices.size());
+  HairDraw d;
+  d.first = I.hair_indices.size();
+  d.count = hair.indices.size();
+  d.shading = hair.shading;
+  for (const HairVertex& v : hair.vertices) {
+    I.hair_vertices.push_back(v);
+    const float r = std::abs(v.half_width);
+    I.draw_bounds.extend(Eigen::Vector3d(v.pos[0] - r, v.pos[1] - r, v.pos[2] - r));
+    I.draw_bounds.extend(Eigen::Vector3d(v.pos[0] + r, v.pos[1] + r, v.pos[2] + r));
+  }
+  for (uint32_t i : hair.indices) I.hair_indices.push_back(base + i);
+  I.hair_draws.push_back(d);
 }
 
 void Renderer::drawLine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3f& color) {
@@ -721,6 +771,33 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
   glBindVertexArray(0);
 }
 
+// Hair ribbons face the camera in the main pass and the light in the shadow pass; a strand is
+// drawn at least about one pixel (or one shadow texel) wide so that it neither breaks up nor
+// flickers.
+void Renderer::Impl::drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only, const Eigen::Vector3d& light_dir) {
+  if (hair_draws.empty()) return;
+  const GLuint p = depth_only ? prog_hair_depth : prog_hair;
+  glUseProgram(p);
+  setMat4(p, "u_viewProj", view_proj);
+  if (depth_only) {
+    glUniform1i(loc(p, "u_faceLight"), 1);
+    setVec3(p, "u_faceDir", light_dir.cast<float>());
+    glUniform2f(loc(p, "u_minHalfWidth"), float(0.5 * frustum.texel_world), 0.0f);
+  } else {
+    glUniform1i(loc(p, "u_faceLight"), 0);
+    const double per_metre = std::tan(0.5 * camera.fov * 3.14159265358979 / 180.0) / double(std::max(target_h, 1));
+    glUniform2f(loc(p, "u_minHalfWidth"), 0.0f, float(per_metre));
+  }
+  glBindVertexArray(hair_vao);
+  const GLint l_shading = loc(p, "u_hairShading");
+  for (const HairDraw& d : hair_draws) {
+    glUniform2f(l_shading, d.shading.highlight, d.shading.shift);
+    glDrawElements(GL_TRIANGLES, GLsizei(d.count), GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(d.first * sizeof(uint32_t)));
+  }
+  glBindVertexArray(0);
+}
+
 void Renderer::endFrame() {
   Impl& I = *impl_;
   const auto t0 = Clock::now();
@@ -745,6 +822,15 @@ void Renderer::endFrame() {
   if (!I.hulls.empty()) {
     glBindBuffer(GL_ARRAY_BUFFER, I.hull_instances);
     glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(I.hulls.size() * sizeof(HullInstance)), I.hulls.data(), GL_STREAM_DRAW);
+  }
+  if (!I.hair_draws.empty()) {
+    glBindVertexArray(I.hair_vao);
+    glBindBuffer(GL_ARRAY_BUFFER, I.hair_vbo);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(I.hair_vertices.size() * sizeof(HairVertex)), I.hair_vertices.data(),
+                 GL_STREAM_DRAW);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(I.hair_indices.size() * sizeof(uint32_t)), I.hair_indices.data(),
+                 GL_STREAM_DRAW);
+    glBindVertexArray(0);
   }
 
   // --- Shadow pass: depth of the casters seen from the key light. ---
@@ -773,6 +859,7 @@ void Renderer::endFrame() {
     glEnable(GL_POLYGON_OFFSET_FILL);
     glPolygonOffset(1.5f, 2.0f);
     I.drawGeometry(I.prog_mesh_depth, I.prog_hull_depth, lf.view_proj.cast<float>(), true);
+    I.drawHairs(lf.view_proj.cast<float>(), true, ld);
     glDisable(GL_POLYGON_OFFSET_FILL);
     if (I.params.ground) {
       // The ground's shadow once per frame into a texture over the shadow map's square, instead of
@@ -866,6 +953,10 @@ void Renderer::endFrame() {
   I.setCommonUniforms(I.prog_mesh_mat, view_proj, light_vp, normal_offset, shadows_on);
   I.setCommonUniforms(I.prog_hull, view_proj, light_vp, normal_offset, shadows_on);
   I.drawGeometry(I.prog_mesh, I.prog_hull, view_proj, false);
+  I.setCommonUniforms(I.prog_hair, view_proj, light_vp, normal_offset, shadows_on);
+  I.drawHairs(view_proj, false, ld);
+  stats_.draw_calls += int(I.hair_draws.size());
+  stats_.triangles += I.hair_indices.size() / 3;
   stats_.draw_calls += int(I.mesh_draws.size()) + (I.hulls.empty() ? 0 : 1);
   for (const MeshDraw& d : I.mesh_draws) stats_.triangles += size_t(I.meshes[size_t(d.mesh)].index_count / 3);
   stats_.triangles += I.hulls.size() * I.hull_triangles;

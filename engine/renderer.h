@@ -6,7 +6,7 @@
 //   Renderer r;  r.init(&err);
 //   MeshHandle head = r.upload(mesh_data);
 //   r.beginFrame(camera, light, render_params);
-//   r.drawMesh(head, pose, skin);  r.drawTaperedCapsule(a, b, ra, rb, hair);  ...
+//   r.drawMesh(head, pose, skin);  r.drawTaperedCapsule(a, b, ra, rb, paint);  r.drawHair(tail);  ...
 //   r.endFrame();                          // shadow pass + main pass + MSAA resolve
 //   r.readPixels(rgba);                    // RGBA8, top row first
 //
@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "engine/camera.h"
+#include "engine/hair.h"
 #include "engine/mesh.h"
 #include "sim/scene.h"
 
@@ -90,6 +91,9 @@ class Renderer {
   // share an end point and radius join without a gap or a crease.
   void drawTaperedCapsule(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, double r0, double r1,
                           const Material& m);
+  // Strands (ribbons widened in the vertex shader) and a core tube, shaded as hair (Kajiya-Kay
+  // highlights along the tangent); they cast and receive shadows. See engine/hair.h.
+  void drawHair(const HairMesh& hair);
   void drawLines(const std::vector<DebugLine>& lines);
   void drawLine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3f& color);
   // Shadow pass, main pass (background, ground, objects, lines), MSAA resolve.

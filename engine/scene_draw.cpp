@@ -61,7 +61,9 @@ void SceneDraw::release() {
   renderer_ = nullptr;
 }
 
-void SceneDraw::draw(const Sim& sim, Renderer& renderer) const {
+void SceneDraw::draw(const Sim& sim, Renderer& renderer) const { draw(sim, renderer, sim.scene()); }
+
+void SceneDraw::draw(const Sim& sim, Renderer& renderer, const Scene& drawing) const {
   const Scene& scene = sim.scene();
   const World& world = sim.world();
   for (size_t i = 0; i < sim.hoppers().size(); ++i) {
@@ -76,16 +78,48 @@ void SceneDraw::draw(const Sim& sim, Renderer& renderer) const {
     const Eigen::Vector3d tint = sim.head()->mesh.colors.empty() ? scene.head->color : Eigen::Vector3d(1.0, 1.0, 1.0);
     renderer.drawMesh(head_, pose * sim.head()->mesh_to_body, material(tint, 0.18f, 24.0f));
   }
-  if (const Chain* chain = sim.chain()) {
-    const Material hair = material(scene.chain->color, 0.35f, 60.0f);
-    for (const CapsuleSegment& s : chain->segments(world)) {
-      renderer.drawTaperedCapsule(s.top, s.bottom, s.radius_top, s.radius_bottom, hair);
-    }
-    if (sim.anchorBody() >= 0) {
-      renderer.drawSphere(chain->anchor(world), 0.8 * chain->radii.front() + 0.004,
-                          material(Eigen::Vector3f(0.25f, 0.27f, 0.30f), 0.6f, 80.0f));
-    }
+  if (const Chain* chain = sim.chain()) drawChain(sim, *chain, drawing.chain ? *drawing.chain : *scene.chain, renderer);
+}
+
+HairMesh SceneDraw::chainHair(const Sim& sim, const Chain& chain, const ChainSection& look) const {
+  const World& world = sim.world();
+  // The curve through the anchor and every link's lower end; the radius at a joint is the mean
+  // of the two links', the tip a little finer than the last link.
+  std::vector<Eigen::Vector3d> points{chain.anchor(world)};
+  std::vector<double> radii{chain.radii.front()};
+  for (size_t i = 0; i < chain.links.size(); ++i) {
+    points.push_back(chain.bottom(world, int(i)));
+    radii.push_back(i + 1 < chain.radii.size() ? 0.5 * (chain.radii[i] + chain.radii[i + 1]) : 0.7 * chain.radii[i]);
   }
+  // The strands' frame starts from the parent body's x axis: it turns with the head.
+  int parent = -1;
+  switch (look.attach) {
+    case ChainAttach::Anchor:
+      parent = sim.anchorBody();
+      break;
+    case ChainAttach::Head:
+      parent = sim.headBody();
+      break;
+    case ChainAttach::Hopper:
+      parent = sim.hoppers().empty() ? -1 : sim.hoppers()[0]->model().body;
+      break;
+  }
+  const Eigen::Vector3d reference =
+      parent >= 0 ? Eigen::Vector3d(world.body(parent).q * Eigen::Vector3d::UnitX()) : Eigen::Vector3d::UnitX();
+  // 4 samples per link: smooth at the tail's size on screen, and half the strand triangles of 8.
+  const HairCurve curve = hairCurve(points, radii, reference, 4);
+  return buildHair(curve, look.hair, look.color.cast<float>(), hairStrandCount(look.hair, draft_));
+}
+
+void SceneDraw::drawChain(const Sim& sim, const Chain& chain, const ChainSection& look, Renderer& renderer) const {
+  const World& world = sim.world();
+  renderer.drawHair(chainHair(sim, chain, look));
+  // The hair tie: a short band around the root, along the first link.
+  const Eigen::Vector3d root = chain.anchor(world);
+  const Eigen::Vector3d axis = (chain.bottom(world, 0) - root).normalized();
+  const double r = chain.radii.front();
+  renderer.drawTaperedCapsule(root - 0.15 * r * axis, root + 0.45 * r * axis, 1.12 * r, 1.06 * r,
+                              material(look.hair.tie_color, 0.5f, 60.0f));
 }
 
 }  // namespace ponyhop

@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "engine/hair.h"
 #include "engine/renderer.h"
 #include "sim/sim.h"
 
@@ -18,8 +19,17 @@ class SceneDraw {
   bool uploaded() const { return renderer_ != nullptr; }
   // Draws the sim's current state with its scene's look (needs upload() first for the head).
   void draw(const Sim& sim, Renderer& renderer) const;
+  // The same with the drawing fields of the chain taken from `look` (the panel's applied scene:
+  // hair knobs change live, without rebuilding the sim).
+  void draw(const Sim& sim, Renderer& renderer, const Scene& look) const;
+  // Draft quality draws fewer hair strands (HairParams::strands_draft).
+  void setDraft(bool draft) { draft_ = draft; }
+  // The chain dressed as hair, as draw() hands it to the renderer.
+  HairMesh chainHair(const Sim& sim, const Chain& chain, const ChainSection& look) const;
 
  private:
+  void drawChain(const Sim& sim, const Chain& chain, const ChainSection& look, Renderer& renderer) const;
+  bool draft_ = false;
   Renderer* renderer_ = nullptr;
   MeshHandle head_;
 };

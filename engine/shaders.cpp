@@ -250,6 +250,86 @@ void main() {
 )GLSL";
 
 // ---------------------------------------------------------------------------------------------
+// Hair (engine/hair.h): strand vertices sit on the strand's centre line and are pushed sideways by
+// their signed half width, across the strand and the view (a ribbon that always faces the camera,
+// or the light in the shadow pass); tube vertices (half width 0) stay where they are.
+const char* const kHairVS = R"GLSL(
+layout(location = 0) in vec3 a_pos;
+layout(location = 1) in vec3 a_tangent;
+layout(location = 2) in vec3 a_normal;
+layout(location = 3) in vec3 a_color;
+layout(location = 4) in vec2 a_widthOcclusion;  // signed half width (m), occlusion
+uniform mat4 u_viewProj;
+uniform vec3 u_eye;
+uniform int u_faceLight;      // 1: shadow pass, face along u_faceDir
+uniform vec3 u_faceDir;
+uniform vec2 u_minHalfWidth;  // m, + m per metre of distance to the eye
+out vec3 v_pos;
+out vec3 v_tangent;
+out vec3 v_normal;
+out vec3 v_color;
+out float v_occlusion;
+void main() {
+  vec3 P = a_pos;
+  vec3 T = normalize(a_tangent);
+  float w = a_widthOcclusion.x;
+  if (w != 0.0) {
+    vec3 V = u_faceLight == 1 ? -u_faceDir : u_eye - P;
+    float dist = u_faceLight == 1 ? 0.0 : length(V);
+    vec3 S = cross(T, V);
+    S = length(S) > 1e-9 ? normalize(S) : normalize(cross(T, a_normal));
+    float hw = max(abs(w), u_minHalfWidth.x + u_minHalfWidth.y * dist);
+    P += S * sign(w) * hw;
+  }
+  v_pos = P;
+  v_tangent = T;
+  v_normal = a_normal;
+  v_color = a_color;
+  v_occlusion = a_widthOcclusion.y;
+  gl_Position = u_viewProj * vec4(P, 1.0);
+}
+)GLSL";
+
+// Kajiya-Kay hair with two shifted lobes (Scheuermann's practical take on Marschner's R and TRT):
+// diffuse follows sin(T, L), softened by how much the clump faces the light (wrapped N.L, so the
+// far side of the tail is darker); the primary highlight is white with its tangent shifted one way,
+// the secondary is tinted by the hair colour, broader, shifted the other way.
+const char* const kHairFS = R"GLSL(
+in vec3 v_pos;
+in vec3 v_tangent;
+in vec3 v_normal;
+in vec3 v_color;
+in float v_occlusion;
+uniform vec2 u_hairShading;  // highlight strength, shift
+out vec4 o_color;
+float strandSpec(vec3 T, vec3 H, float e) {
+  float th = dot(T, H);
+  return pow(sqrt(max(1.0 - th * th, 0.0)), e);
+}
+void main() {
+  vec3 T = normalize(v_tangent);
+  vec3 N = normalize(v_normal);
+  vec3 V = normalize(u_eye - v_pos);
+  vec3 L = -u_lightDir;
+  float tl = dot(T, L);
+  float kk = sqrt(max(1.0 - tl * tl, 0.0));
+  float wrap = clamp((dot(N, L) + 0.6) / 1.6, 0.0, 1.0);
+  float sh = wrap > 0.0 ? shadowFactor(v_pos, N) : 0.0;
+  vec3 H = normalize(L + V);
+  float shift = u_hairShading.y;
+  vec3 T1 = normalize(T + shift * N);
+  vec3 T2 = normalize(T - 1.5 * shift * N);
+  float spec = u_hairShading.x * (strandSpec(T1, H, 90.0) * 1.4);
+  vec3 spec2 = u_hairShading.x * 0.8 * v_color * 4.0 * strandSpec(T2, H, 24.0);
+  float lit = sh * wrap * v_occlusion;
+  vec3 key = u_lightColor * lit * (v_color * kk * 0.85 + vec3(spec) + spec2);
+  float fdl = clamp((dot(N, -u_fillDir) + 0.5) / 1.5, 0.0, 1.0);
+  vec3 fill = u_fillColor * v_color * fdl * v_occlusion;
+  vec3 amb = v_color * mix(u_groundAmbient, u_skyAmbient, 0.5 + 0.5 * N.z) * v_occlusion;
+  o_color = vec4(linearToSrgb(toneMap(key + fill + amb)), 1.0);
+}
+)GLSL";
+
 // ---------------------------------------------------------------------------------------------
 // Background and ground in one full-screen pass (no overdraw: each pixel is shaded once). The
 // vertex shader carries the pixel's points on the near and far planes as homogeneous world

@@ -12,6 +12,7 @@ extern const char* const kCapsuleVS;     // spheres / capsules / tapered capsule
 extern const char* const kFullscreenVS;  // full-screen triangle from gl_VertexID (ground shadow pass)
 extern const char* const kBackdropVS;    // full-screen triangle carrying each pixel's eye ray
 extern const char* const kLinesVS;       // debug lines
+extern const char* const kHairVS;        // hair strands (camera- or light-facing ribbons) and core tube
 // Fragment shaders.
 extern const char* const kLitFS;           // Blinn-Phong + rim, shadowed key light, fill, hemi ambient
 extern const char* const kMeshMatFS;       // kLitFS with the albedo times vertex colour and base-colour texture
@@ -20,6 +21,7 @@ extern const char* const kBackgroundFS;    // the gradient alone (no ground)
 extern const char* const kGroundShadowFS;  // the ground's soft shadow into a small texture
 extern const char* const kPostAaFS;        // post-process anti-aliasing of the finished frame
 extern const char* const kLinesFS;
+extern const char* const kHairFS;   // Kajiya-Kay two-lobe hair, shadowed key light, fill, ambient
 extern const char* const kDepthFS;  // shadow pass (depth only)
 
 // Compiles and links "#version 330 core" + the given sources. Returns 0 and fills `err` (with the

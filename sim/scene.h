@@ -214,16 +214,46 @@ struct HeadParams {
   }
 };
 
+// How a chain is dressed as hair (engine/hair.h): a clump of thin strands around a smooth curve
+// through the joints, tied at the anchor. Drawing only; the physics never reads it.
+struct HairParams {
+  int strands = 110;              // count, final quality
+  int strands_draft = 48;         // count, draft quality (fast previews)
+  double spread = 1.6;            // the clump's radius at the tip grows by 1 + spread (0: follows the links)
+  double noise = 0.35;            // per-strand waviness, in units of the local clump radius
+  double width = 0.0005;          // m, a strand's width at its root (at least ~1 px is drawn)
+  double highlight = 0.35;        // strength of the anisotropic highlight (0: matte)
+  double highlight_shift = 0.12;  // shift of the highlight along the strand (cuticle tilt)
+  double color_variation = 0.18;  // 0..1, per-strand brightness and hue spread
+  Eigen::Vector3d tie_color{0.55, 0.12, 0.16};  // rgb 0..1, the hair tie at the anchor
+
+  template <class V>
+  void reflect(V& v) {
+    v("strands", strands, {.min = 0, .max = 2000, .help = "Number of strands drawn (final quality)"});
+    v("strands_draft", strands_draft, {.min = 0, .max = 2000, .help = "Number of strands in draft quality"});
+    v("spread", spread, {.min = 0, .max = 10, .help = "How much the clump widens toward the tip"});
+    v("noise", noise, {.min = 0, .max = 2, .help = "Per-strand waviness (local clump radii)"});
+    v("width", width, {.unit = "m", .min = 1e-5, .max = 0.01, .help = "Strand width at its root", .log = true});
+    v("highlight", highlight, {.min = 0, .max = 4, .help = "Anisotropic highlight strength"});
+    v("highlight_shift", highlight_shift, {.min = -1, .max = 1, .help = "Highlight shift along the strand"});
+    v("color_variation", color_variation, {.min = 0, .max = 1, .help = "Colour spread between strands"});
+    v("tie_color", tie_color, {.unit = "rgb", .min = 0, .max = 1, .help = "Colour of the hair tie"});
+  }
+};
+
 // The scene file's chain and hopper sections: the physics parameters (physics/) plus how they
 // are drawn, under the same keys (`chain.color` sits beside `chain.links`). Physics reads only
 // the base; engine/scene_draw.h reads the rest.
 struct ChainSection : ChainParams {
   Eigen::Vector3d color{0.36, 0.22, 0.12};  // rgb 0..1, hair brown
+  HairParams hair;
 
   template <class V>
   void reflect(V& v) {
     ChainParams::reflect(v);
-    v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Hair colour"});
+    // Drawn from the panel's applied scene (SceneDraw::draw with a look): no rebuild.
+    v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Hair colour", .apply = Apply::Live});
+    v("hair", hair, {.help = "How the chain is drawn as hair (strands, highlight, tie)", .apply = Apply::Live});
   }
 };
 

@@ -128,6 +128,19 @@ TEST(PanelTest, DraggingTheGravitySliderChangesTheMotionWithoutRestarting) {
   EXPECT_TRUE(h.sim.ok()) << h.sim.stopMessage();
 }
 
+TEST(PanelTest, HairKnobsApplyLiveWithoutRebuildingTheSim) {
+  Harness h("assets/scenes/ponytail.json");
+  h.frames(10);
+  const Sim* before = &h.sim.runtime();
+  const double t_before = h.sim.simTime();
+  h.sim.edited().chain->hair.strands = 20;
+  h.sim.edited().chain->hair.tie_color = Eigen::Vector3d(0.1, 0.2, 0.9);
+  EXPECT_EQ(h.sim.applyEdits(), ApplyKind::Live) << "drawing fields need no rebuild";
+  EXPECT_EQ(&h.sim.runtime(), before) << "the same world goes on";
+  EXPECT_GE(h.sim.simTime(), t_before);
+  EXPECT_EQ(h.sim.applied().chain->hair.strands, 20);
+}
+
 TEST(PanelTest, ResetButtonAndBackspaceRestoreTheInitialState) {
   Harness h("assets/scenes/chain.json");
   const Sim fresh(loadScene("assets/scenes/chain.json"), &assimpAssets());  // the state at t = 0
