@@ -112,7 +112,8 @@ format-check:
 
 # Re-render every golden image and physics fingerprint on purpose (never done by tests or CI).
 update-snapshots: build
-	@PONYHOP_UPDATE_SNAPSHOTS=1 $(BUILD)/tests/snapshot_test
+	@$(PONYHOP) snapshot tests/snapshots/shots.txt --update
+	@PONYHOP_UPDATE_SNAPSHOTS=1 $(BUILD)/tests/snapshot_test --gtest_filter='Scenes/Fingerprint.*'
 	@echo "goldens rewritten in tests/snapshots/: review them with git diff before committing"
 
 # The report in docs/bench/ (about 20 min on 2 cores), with the peer engines installed first

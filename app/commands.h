@@ -7,6 +7,7 @@ namespace ponyhop {
 
 // Each adds its subcommand to `app`; the subcommand's callback runs it and sets `exit_code`.
 void addDiffCommand(CLI::App& app, int& exit_code);
+void addSnapshotCommand(CLI::App& app, int& exit_code);  // app/cmd_snapshot.cpp: shot lists against goldens
 void addSceneDocCommand(CLI::App& app, int& exit_code);
 void addRenderCommand(CLI::App& app, int& exit_code);
 void addSimCommand(CLI::App& app, int& exit_code);

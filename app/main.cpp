@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   int exit_code = 0;
   ponyhop::addDiffCommand(app, exit_code);
+  ponyhop::addSnapshotCommand(app, exit_code);
   ponyhop::addSceneDocCommand(app, exit_code);
   ponyhop::addRenderCommand(app, exit_code);
   ponyhop::addSimCommand(app, exit_code);

@@ -34,11 +34,11 @@ void RenderSession::skipFrame(double t) {
   last_t_ = t;
 }
 
-void RenderSession::renderFrame(double t, std::vector<uint8_t>& rgba) {
+void RenderSession::renderFrame(double t, std::vector<uint8_t>& rgba, unsigned hide) {
   const Camera cam = sceneCamera(scene_, sim_, t, follow_, t - last_t_);
   last_t_ = t;
   renderer_->beginFrame(cam, scene_.light, scene_.render);
-  draw_.draw(sim_, *renderer_);
+  draw_.draw(sim_, *renderer_, scene_, hide);
   renderer_->endFrame();
   renderer_->readPixels(rgba);
 }

@@ -25,8 +25,9 @@ class RenderSession {
 
   // Steps the physics up to time t (s). False when the simulation stopped (status()).
   bool simulateTo(double t);
-  // Draws the current state as seen at time t (the camera moves with t) and reads it back.
-  void renderFrame(double t, std::vector<uint8_t>& rgba);
+  // Draws the current state as seen at time t (the camera moves with t) and reads it back;
+  // `hide`: SceneDraw::Part bits left out.
+  void renderFrame(double t, std::vector<uint8_t>& rgba, unsigned hide = 0);
   // Advances what a rendered frame at time t would (the follow camera) without drawing: a chunk
   // of a sequence (`render --range`) passes the frames before it so that its own match a full run.
   void skipFrame(double t);

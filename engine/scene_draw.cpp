@@ -63,13 +63,17 @@ void SceneDraw::release() {
 
 void SceneDraw::draw(const Sim& sim, Renderer& renderer) const { draw(sim, renderer, sim.scene()); }
 
-void SceneDraw::draw(const Sim& sim, Renderer& renderer, const Scene& drawing) const {
+unsigned SceneDraw::parts(const Sim& sim) {
+  return (sim.headBody() >= 0 ? kHead : 0u) | (sim.chain() ? kChain : 0u) | (sim.hoppers().empty() ? 0u : kHopper);
+}
+
+void SceneDraw::draw(const Sim& sim, Renderer& renderer, const Scene& drawing, unsigned hide) const {
   const Scene& scene = sim.scene();
   const World& world = sim.world();
-  for (size_t i = 0; i < sim.hoppers().size(); ++i) {
+  for (size_t i = 0; i < sim.hoppers().size() && !(hide & kHopper); ++i) {
     if (sim.hoppers()[i]->built()) drawHopper(*sim.hoppers()[i], hopperSection(scene, i), world, renderer);
   }
-  if (sim.headBody() >= 0 && head_.valid()) {
+  if (sim.headBody() >= 0 && head_.valid() && !(hide & kHead)) {
     const RigidBody& b = world.body(sim.headBody());
     Eigen::Affine3d pose = Eigen::Affine3d::Identity();
     pose.translate(b.x);
@@ -78,7 +82,8 @@ void SceneDraw::draw(const Sim& sim, Renderer& renderer, const Scene& drawing) c
     const Eigen::Vector3d tint = sim.head()->mesh.colors.empty() ? scene.head->color : Eigen::Vector3d(1.0, 1.0, 1.0);
     renderer.drawMesh(head_, pose * sim.head()->mesh_to_body, material(tint, 0.18f, 24.0f));
   }
-  if (const Chain* chain = sim.chain()) drawChain(sim, *chain, drawing.chain ? *drawing.chain : *scene.chain, renderer);
+  if (const Chain* chain = sim.chain(); chain && !(hide & kChain))
+    drawChain(sim, *chain, drawing.chain ? *drawing.chain : *scene.chain, renderer);
 }
 
 HairMesh SceneDraw::chainHair(const Sim& sim, const Chain& chain, const ChainSection& look) const {

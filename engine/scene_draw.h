@@ -21,7 +21,12 @@ class SceneDraw {
   void draw(const Sim& sim, Renderer& renderer) const;
   // The same with the drawing fields of the chain taken from `look` (the panel's applied scene:
   // hair knobs change live, without rebuilding the sim).
-  void draw(const Sim& sim, Renderer& renderer, const Scene& look) const;
+  void draw(const Sim& sim, Renderer& renderer, const Scene& look, unsigned hide = 0) const;
+  // Parts of a scene that draw() can leave out (bits; `ponyhop snapshot` measures how much of the
+  // picture a shot's subject covers by drawing it once with and once without).
+  enum Part : unsigned { kHead = 1, kChain = 2, kHopper = 4 };
+  // The parts `sim` has.
+  static unsigned parts(const Sim& sim);
   // Draft quality draws fewer hair strands (HairParams::strands_draft).
   void setDraft(bool draft) { draft_ = draft; }
   // The chain dressed as hair, as draw() hands it to the renderer.

@@ -1,13 +1,12 @@
 // The ponytail dressed as hair (engine/hair.h): the drawn surface follows a smooth curve through
 // the joints however sharply the chain bends, and the strands spread toward the tip.
+#include "engine/hair.h"
+
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstring>
-
-#include <Eigen/Geometry>
-
-#include "engine/hair.h"
 
 using namespace ponyhop;
 
@@ -125,8 +124,7 @@ double clumpRadius(const HairMesh& m, const HairCurve& c, size_t sample) {
   for (const HairVertex& v : m.vertices) {
     if (v.half_width == 0.0f) continue;
     const Eigen::Vector3d p(v.pos[0], v.pos[1], v.pos[2]);
-    if ((p - c.points[sample]).dot(c.tangents[sample]) > 1e-4 ||
-        (p - c.points[sample]).dot(c.tangents[sample]) < -1e-4)
+    if ((p - c.points[sample]).dot(c.tangents[sample]) > 1e-4 || (p - c.points[sample]).dot(c.tangents[sample]) < -1e-4)
       continue;
     r = std::max(r, (p - c.points[sample]).norm());
   }
