@@ -156,13 +156,51 @@ std::string plotErrorVsCost(const std::string& dir, const std::vector<BenchRow>&
     << ": RMS error over the converged horizon against cost (one point per dt)\"\n"
     << "set logscale xy\nset format x '10^{%L}'\nset format y '10^{%L}'\n"
     << "set xlabel 'cost: wall seconds per simulated second'\nset ylabel 'RMS error of the tracked point (m)'\n"
-    << "set key outside right top font ',8'\nset grid\n"
+    << "set key outside right top font ',9' spacing 1.2\nset grid\n"
     << "plot ";
+  // Few distinguishable series: the colour says the integrator, the marker the solver, the dash
+  // the stabilization; the legend lists those families once each instead of every combination.
+  const auto integratorColour = [](const std::string& i) -> const char* {
+    if (i == "symplectic_euler" || i == "Euler") return "#1f77b4";
+    if (i == "rk4" || i == "RK4") return "#d62728";
+    if (i == "rattle") return "#2ca02c";
+    if (i == "implicit_euler") return "#9467bd";
+    return "#7f7f7f";
+  };
+  const auto solverPoint = [](const std::string& s) {
+    if (s == "dense") return 7;
+    if (s == "tree") return 5;
+    if (s == "featherstone") return 9;
+    if (s == "bullet") return 11;
+    if (s == "ode") return 3;
+    if (s == "dart") return 15;
+    return 13;  // mujoco
+  };
+  const auto stabDash = [](const std::string& st) { return st == "baumgarte" ? 2 : st == "projection" ? 4 : 1; };
+  std::vector<std::string> integrators, solvers, stabs;
+  const auto note = [](std::vector<std::string>& v, const std::string& x) {
+    if (!x.empty() && std::find(v.begin(), v.end(), x) == v.end()) v.push_back(x);
+  };
   for (size_t i = 0; i < order.size(); ++i) {
-    const bool mj = std::count(order[i].begin(), order[i].end(), '/') == 1;  // a peer engine: engine/integrator
-    g << "'" << data << "' index " << i << " using 1:2 with linespoints lw " << (mj ? 2.5 : 1) << " pt "
-      << (mj ? 7 : static_cast<int>(i % 13) + 1) << " title \"" << gnuplotQuote(order[i]) << "\", ";
+    const BenchRow& r = *by_method[order[i]].front();
+    note(integrators, r.integrator);
+    note(solvers, r.solver);
+    if (r.stabilization != "-") note(stabs, r.stabilization);
+    const bool auto_step = r.step != "fixed";
+    const bool peer = std::count(order[i].begin(), order[i].end(), '/') == 1;  // a peer engine: engine/integrator
+    g << "'" << data << "' index " << i << " using 1:2 with linespoints lw " << (auto_step || peer ? 2.5 : 1.2)
+      << " dt " << stabDash(r.stabilization) << " pt " << solverPoint(r.solver) << " ps " << (auto_step ? 1.6 : 1.0)
+      << " lc rgb '" << integratorColour(r.integrator) << "' notitle, ";
   }
+  for (const auto& i : integrators)
+    g << "NaN with lines lw 4 lc rgb '" << integratorColour(i) << "' title \"integrator " << gnuplotQuote(i) << "\", ";
+  for (const auto& s2 : solvers)
+    g << "NaN with points pt " << solverPoint(s2) << " ps 1.5 lc rgb 'black' title \"solver " << gnuplotQuote(s2)
+      << "\", ";
+  for (const auto& st : stabs)
+    g << "NaN with lines lw 1.5 dt " << stabDash(st) << " lc rgb 'black' title \"stabilization " << gnuplotQuote(st)
+      << "\", ";
+  g << "NaN with linespoints lw 2.5 pt 6 ps 1.6 lc rgb 'gray30' title \"thick, large: step control (+auto, +tol)\", ";
   g << "'" << data << "' index " << order.size()
     << " using 1:2 with steps lw 3 lc rgb 'black' dt 2 title 'Pareto front', '" << data << "' index " << order.size()
     << " using 1:2 with points pt 6 ps 2.2 lw 2 lc rgb 'black' notitle\n";

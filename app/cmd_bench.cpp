@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <thread>
@@ -198,6 +199,64 @@ std::string loadAverage() {
   return a.empty() ? "unknown" : a + " " + b + " " + c;
 }
 
+// The bench's row for ponyhop's default: RATTLE on the dense solver with the 2 deg step rule.
+constexpr const char* kDefaultMethod = "dense/rattle/none+auto";
+
+// The report's first section: per case, which method to pick for what; then the methods that
+// cannot run, once (they are left out of every table below).
+void writeSummary(std::ofstream& f, const std::vector<std::unique_ptr<BenchCase>>& cases,
+                  const std::vector<BenchRow>& rows) {
+  f << "## Summary: which method for what\n\n"
+    << "Over every dt of each case. *Fastest bounded*: the cheapest run that completed, stayed finite and "
+       "passed the long run's bounds. *Best accuracy per cost*: the smallest RMS error x cost product (error in m "
+       "times wall seconds per simulated second; a run ten times dearer must be more than ten times more "
+       "accurate). *Default*: what a scene gets without settings ("
+    << kDefaultMethod
+    << " at dt = 1/240 s, "
+       "ponyhop's 2 deg step control); its rank is by cost among the bounded runs.\n\n"
+    << "| case | fastest bounded | best accuracy per cost | the default | default's cost rank |\n"
+    << "|---|---|---|---|---|\n";
+  const auto describe = [](const BenchRow& r) {
+    return "`" + r.method + "` dt " + dtName(r.dt) + ": " + fmt(r.r.us_per_sim_second * 1e-3) + " ms/s, err " +
+           fmt(r.r.err_rms) + " m";
+  };
+  for (const auto& c : cases) {
+    const BenchRow* fastest = nullptr;
+    const BenchRow* best = nullptr;
+    const BenchRow* def = nullptr;
+    std::vector<double> costs;
+    for (const auto& row : rows) {
+      if (row.bench_case != c.get() || row.r.status != "ok") continue;
+      const bool bounded = row.r.long_status == "ok";
+      if (bounded) costs.push_back(row.r.us_per_sim_second);
+      if (bounded && (!fastest || row.r.us_per_sim_second < fastest->r.us_per_sim_second)) fastest = &row;
+      const double score = row.r.err_rms * row.r.us_per_sim_second;
+      if (!best || score < best->r.err_rms * best->r.us_per_sim_second) best = &row;
+      if (row.method == kDefaultMethod && std::abs(row.dt - 1.0 / 240.0) < 1e-12) def = &row;
+    }
+    std::string rank = "-";
+    if (def && def->r.long_status == "ok") {
+      const long below =
+          std::count_if(costs.begin(), costs.end(), [&](double x) { return x < def->r.us_per_sim_second; });
+      rank = std::to_string(below + 1) + " of " + std::to_string(costs.size());
+    } else if (def) {
+      rank = "not bounded: " + def->r.long_status;
+    }
+    f << "| " << c->title << " | " << (fastest ? describe(*fastest) : "none bounded") << " | "
+      << (best ? describe(*best) : "none completed") << " | " << (def ? describe(*def) : "not run") << " | " << rank
+      << " |\n";
+  }
+  std::map<std::string, std::string> cannot;  // method -> why, once
+  for (const auto& row : rows) {
+    if (row.r.status == "cannot_run") cannot.emplace(row.method, row.r.reason);
+  }
+  if (!cannot.empty()) {
+    f << "\n**Cannot run** (by construction; left out of the tables below):\n\n";
+    for (const auto& [method, why] : cannot) f << "- `" << method << "`: " << why << '\n';
+  }
+  f << '\n';
+}
+
 // Markdown: one table of methods at a dt, the Pareto front, per-stage costs.
 void writeMarkdown(const std::string& path, const BenchArgs& args, const Config& cfg,
                    const std::vector<std::unique_ptr<BenchCase>>& cases, const std::vector<BenchRow>& rows,
@@ -229,6 +288,8 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
   for (const auto& n : notes) f << "- " << n << '\n';
   if (!notes.empty()) f << '\n';
 
+  writeSummary(f, cases, rows);
+
   f << "## Reference and its horizon\n\n"
     << "| case | reference | h | h/2 | max tip difference over the check span | check span (s) | horizon within "
        "1e-7 m (s) |\n|---|---|---|---|---|---|---|\n";
@@ -258,7 +319,7 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
          "| long run ("
       << fmt(c.long_duration) << " s) |\n|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& row : rows) {
-      if (row.bench_case != &c || std::abs(row.dt - pick) > 1e-12) continue;
+      if (row.bench_case != &c || std::abs(row.dt - pick) > 1e-12 || row.r.status == "cannot_run") continue;
       const RunResult& r = row.r;
       const bool ok = r.status == "ok";
       std::string why = r.reason;
