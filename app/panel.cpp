@@ -1,6 +1,7 @@
 #include "app/panel.h"
 
 #include <imgui.h>
+#include <imgui_internal.h>  // TempInputIsActive: a slider's text shows while a value is typed
 
 #include <algorithm>
 #include <chrono>
@@ -10,6 +11,8 @@
 #include <nlohmann/json.hpp>
 #include <type_traits>
 
+#include "app/chain_look.h"
+#include "app/presets.h"
 #include "sim/data_dir.h"
 #include "sim/scene_io.h"
 
@@ -98,11 +101,35 @@ std::string withUnit(const char* fmt, const char* unit) {
   return u.empty() ? std::string(fmt) : std::string(fmt) + " " + u;
 }
 
-// The slider's range: the field's soft range where it has one (values beyond stay reachable with
-// Ctrl+click, up to the allowed range), else its allowed range.
+// The slider's range: the field's soft range when it has one (values beyond stay reachable by
+// typing, Ctrl+click, up to the allowed range).
 void rangeFor(const FieldMeta& meta, double& lo, double& hi) {
   lo = std::isnan(meta.soft_min) ? meta.min : std::max(meta.min, meta.soft_min);
   hi = std::isnan(meta.soft_max) ? meta.max : std::min(meta.max, meta.soft_max);
+}
+
+// A slider whose value is printed beside it, never under the knob: the slider's own text is drawn
+// transparent except while a value is typed into it (Ctrl+click). `rect`: the slider's place.
+struct SideSlider {
+  bool changed = false;
+  ImVec2 min, max;
+};
+SideSlider sideSlider(const char* id, ImGuiDataType type, void* v, const void* lo, const void* hi, const char* fmt,
+                      ImGuiSliderFlags flags, float width, const std::string& shown) {
+  const float value_w = ImGui::GetFontSize() * 7.5f;
+  const float slider_w = std::max(width - value_w - ImGui::GetStyle().ItemSpacing.x, ImGui::GetFontSize() * 3.0f);
+  const bool typing = ImGui::TempInputIsActive(ImGui::GetID(id));
+  if (!typing) ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(0, 0, 0, 0));
+  ImGui::SetNextItemWidth(slider_w);
+  SideSlider r;
+  r.changed = ImGui::SliderScalar(id, type, v, lo, hi, fmt, flags);
+  if (!typing) ImGui::PopStyleColor();
+  r.min = ImGui::GetItemRectMin();
+  r.max = ImGui::GetItemRectMax();
+  ImGui::SameLine();
+  ImGui::AlignTextToFramePadding();
+  ImGui::TextUnformatted(shown.c_str());
+  return r;
 }
 
 void tooltip(const std::string& key, const FieldMeta& meta, const std::string& default_text) {
@@ -257,10 +284,15 @@ class FieldWidgets {
     const std::string def_text = def ? (def->is_string() ? def->get<std::string>() : def->dump()) : "";
     label(name, key, meta, def_text);
     const float reset_w = ImGui::GetFrameHeight();
-    ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x - reset_w - ImGui::GetStyle().ItemSpacing.x);
-    widget(key, field, meta);
-    panel_.remember(key);
+    const float width = ImGui::GetContentRegionAvail().x - reset_w - ImGui::GetStyle().ItemSpacing.x;
+    ImGui::SetNextItemWidth(width);
+    if (auto slider = widget(key, field, meta, width)) {
+      panel_.rects_[key] = WidgetRect{slider->min.x, slider->min.y, slider->max.x, slider->max.y};
+    } else {
+      panel_.remember(key);
+    }
     tooltip(key, meta, def_text);
+    ImGui::SameLine(ImGui::GetWindowContentRegionMax().x - reset_w);
     ImGui::SameLine();
     ImGui::BeginDisabled(at_default);
     if (ImGui::Button("R##reset", ImVec2(reset_w, reset_w)) && def) fromJson(*def, field);
@@ -269,33 +301,41 @@ class FieldWidgets {
     ImGui::EndDisabled();
   }
 
-  void widget(const std::string&, double& v, const FieldMeta& meta) {
+  // Sliders return their rectangle (the value is printed beside them); other widgets nothing.
+  std::optional<SideSlider> widget(const std::string&, double& v, const FieldMeta& meta, float width) {
     double lo, hi;
     rangeFor(meta, lo, hi);
     if (!std::isfinite(lo) || !std::isfinite(hi)) {
       ImGui::DragScalar("##v", ImGuiDataType_Double, &v, float(std::max(std::abs(v) * 0.01, 1e-3)), nullptr, nullptr,
                         withUnit("%.4g", meta.unit).c_str());
-      return;
+      return std::nullopt;
     }
     const bool log = meta.log || (lo >= 0.0 && hi >= 1e3 * std::max(lo, 1e-300) && hi >= 1e3);
     ImGuiSliderFlags flags = log ? ImGuiSliderFlags_Logarithmic : 0;
     // A logarithmic slider that starts at 0 treats values below 10^-precision as 0: give it digits.
     const char* fmt = (log && lo <= 0.0) ? "%.6g" : "%.4g";
     if (log) flags |= ImGuiSliderFlags_NoRoundToFormat;
-    ImGui::SliderScalar("##v", ImGuiDataType_Double, &v, &lo, &hi, withUnit(fmt, meta.unit).c_str(), flags);
+    char shown[64];
+    std::snprintf(shown, sizeof shown, withUnit(fmt, meta.unit).c_str(), v);
+    return sideSlider("##v", ImGuiDataType_Double, &v, &lo, &hi, fmt, flags, width, shown);
   }
 
-  void widget(const std::string&, int& v, const FieldMeta& meta) {
+  std::optional<SideSlider> widget(const std::string&, int& v, const FieldMeta& meta, float width) {
     double lo_d, hi_d;
     rangeFor(meta, lo_d, hi_d);
     const int lo = std::isfinite(lo_d) ? int(lo_d) : -1000000, hi = std::isfinite(hi_d) ? int(hi_d) : 1000000;
-    ImGui::SliderScalar("##v", ImGuiDataType_S32, &v, &lo, &hi, withUnit("%d", meta.unit).c_str(),
-                        meta.log ? ImGuiSliderFlags_Logarithmic : 0);
+    char shown[64];
+    std::snprintf(shown, sizeof shown, withUnit("%d", meta.unit).c_str(), v);
+    return sideSlider("##v", ImGuiDataType_S32, &v, &lo, &hi, "%d", meta.log ? ImGuiSliderFlags_Logarithmic : 0, width,
+                      shown);
   }
 
-  void widget(const std::string&, bool& v, const FieldMeta&) { ImGui::Checkbox("##v", &v); }
+  std::optional<SideSlider> widget(const std::string&, bool& v, const FieldMeta&, float) {
+    ImGui::Checkbox("##v", &v);
+    return std::nullopt;
+  }
 
-  void widget(const std::string& key, std::string& v, const FieldMeta&) {
+  std::optional<SideSlider> widget(const std::string& key, std::string& v, const FieldMeta&, float) {
     const bool is_clip = key.size() >= 5 && key.compare(key.size() - 5, 5, ".clip") == 0;
     if (is_clip || key == "camera.follow") {
       std::vector<std::string> choices;
@@ -315,7 +355,7 @@ class FieldWidgets {
         }
         ImGui::EndCombo();
       }
-      return;
+      return std::nullopt;
     }
     // Text is applied when the field is left or Enter is pressed, not at every keystroke (a
     // half-typed file name would not load).
@@ -325,21 +365,22 @@ class FieldWidgets {
         ImGui::IsItemDeactivatedAfterEdit()) {
       v = buf;
     }
+    return std::nullopt;
   }
 
-  void widget(const std::string&, Eigen::Vector3d& v, const FieldMeta& meta) {
+  std::optional<SideSlider> widget(const std::string&, Eigen::Vector3d& v, const FieldMeta& meta, float) {
     if (std::string_view(meta.unit) == "rgb") {
       float c[3] = {float(v.x()), float(v.y()), float(v.z())};
       if (ImGui::ColorEdit3("##v", c, ImGuiColorEditFlags_Float)) v = Eigen::Vector3d(c[0], c[1], c[2]);
-      return;
+      return std::nullopt;
     }
     const float speed = float(std::max(v.cwiseAbs().maxCoeff() * 0.005, 1e-3));
     ImGui::DragScalarN("##v", ImGuiDataType_Double, v.data(), 3, speed, &meta.min, &meta.max, "%.4g");
+    return std::nullopt;
   }
 
   template <class E>
-  requires std::is_enum_v<E>
-  void widget(const std::string&, E& v, const FieldMeta&) {
+  requires std::is_enum_v<E> std::optional<SideSlider> widget(const std::string&, E& v, const FieldMeta&, float) {
     const auto& names = EnumNames<E>::names;
     const std::string current(enumName(v));
     if (ImGui::BeginCombo("##v", current.c_str())) {
@@ -349,6 +390,7 @@ class FieldWidgets {
       }
       ImGui::EndCombo();
     }
+    return std::nullopt;
   }
 
   Panel& panel_;
@@ -470,6 +512,9 @@ PanelContext::PanelContext(float font_px) {
   std::error_code ec;
   if (std::filesystem::exists(font, ec)) {
     io.Fonts->AddFontFromFileTTF(font, font_px, nullptr, ranges);
+    // The title's font: the same face, larger (Fonts[1]).
+    const char* bold = "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf";
+    io.Fonts->AddFontFromFileTTF(std::filesystem::exists(bold, ec) ? bold : font, font_px * 1.3f, nullptr, ranges);
   } else {
     io.Fonts->AddFontDefault();
   }
@@ -537,13 +582,20 @@ void Panel::build(const PanelLayout& layout, bool advance) {
                                  ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoSavedSettings |
                                  ImGuiWindowFlags_NoBringToFrontOnFocus;
   if (ImGui::Begin("ponyhop##panel", nullptr, flags)) {
-    ImGui::TextUnformatted("ponyhop");
-    ImGui::SameLine();
-    ImGui::TextDisabled("%s", sim_.applied().name.empty() ? sim_.applied().path.c_str() : sim_.applied().name.c_str());
+    // The title: the scene's name, large and wrapped (never cut off), its file below.
+    const Scene& applied = sim_.applied();
+    const bool big = io.Fonts->Fonts.Size > 1;
+    if (big) ImGui::PushFont(io.Fonts->Fonts[1]);
+    ImGui::PushTextWrapPos(0.0f);
+    ImGui::TextUnformatted(applied.name.empty() ? "ponyhop" : applied.name.c_str());
+    ImGui::PopTextWrapPos();
+    if (big) ImGui::PopFont();
+    ImGui::TextDisabled("ponyhop  %s", applied.path.c_str());
     ImGui::Separator();
     drawPlayback();
-    drawReadouts();
+    drawLook();
     drawPresets();
+    drawReadouts();
     drawSections();
   }
   ImGui::End();
@@ -617,8 +669,99 @@ void Panel::drawPlayback() {
   }
 }
 
+void Panel::drawLook() {
+  Scene& s = sim_.edited();
+  if (!s.chain) return;
+  if (!sectionHeader("Look", true)) return;
+  ChainSection& c = *s.chain;
+  const double g = s.physics.gravity.norm();
+  const ChainLook look = chainLook(c, g);
+  const float label_w = ImGui::GetFontSize() * 7.0f;
+  ImGui::PushID("look");
+  // One artist scale: label, slider with its value beside it, the physical value below it.
+  const auto scale = [&](const char* id, const char* label, double value, double lo, double hi, const char* fmt,
+                         bool log, const char* help, const std::string& physical, auto&& set) {
+    ImGui::AlignTextToFramePadding();
+    ImGui::TextUnformatted(label);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", help);
+    ImGui::SameLine(label_w);
+    char shown[48];
+    std::snprintf(shown, sizeof shown, fmt, value);
+    double v = value;
+    ImGui::PushID(id);
+    const SideSlider r = sideSlider("##s", ImGuiDataType_Double, &v, &lo, &hi, fmt,
+                                    log ? ImGuiSliderFlags_Logarithmic | ImGuiSliderFlags_NoRoundToFormat : 0,
+                                    ImGui::GetContentRegionAvail().x, shown);
+    ImGui::PopID();
+    rects_[std::string("look:") + id] = WidgetRect{r.min.x, r.min.y, r.max.x, r.max.y};
+    if (r.changed && v != value) set(v);
+    ImGui::SetCursorPosX(label_w);
+    ImGui::TextDisabled("%s", physical.c_str());
+  };
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "= %d links x %.3g cm (a change restarts)", c.links, 100.0 * c.length);
+  scale("length", "Length", look.length_cm, 1.0, 150.0, "%.1f cm", true, "The whole ponytail, root to tip", buf,
+        [&](double v) { setLength(c, v); });
+  std::snprintf(buf, sizeof buf, "= radius %.3g mm at the root", 1000.0 * c.radius);
+  scale("thickness", "Thickness", look.thickness_mm, 1.0, 80.0, "%.1f mm", true, "Diameter at the root", buf,
+        [&](double v) { setThickness(c, v); });
+  std::snprintf(buf, sizeof buf, "= tip %.3g mm", 2000.0 * c.radius * c.taper);
+  scale("taper", "Taper", c.taper, 0.05, 1.0, "%.2f", false, "Tip thickness over root thickness (1: even)", buf,
+        [&](double v) { c.taper = v; });
+  std::snprintf(buf, sizeof buf, "= %.3g g the first link (chain.mass)", 1000.0 * c.mass);
+  scale("weight", "Weight", look.weight_g, 0.5, 500.0, "%.1f g", true, "Mass of the whole ponytail", buf,
+        [&](double v) { setWeight(c, v); });
+  std::snprintf(buf, sizeof buf, "= %.3g N m/rad at the root; swings in %.2f s", c.stiffness, swingPeriod(c, g));
+  scale("stiffness", "Stiffness", look.stiffness, 0.0, 1.5, "%.3f", false,
+        "0: limp. 1: the root spring holds the ponytail straight out against its weight (stiffness^3 x M g d)", buf,
+        [&](double v) { setStiffness(c, std::max(v, 0.0), g); });
+  std::snprintf(buf, sizeof buf, "= tip %.3g N m/rad (x%.3g of the root)", jointStiffness(c, c.links - 1),
+                c.stiffness_tip);
+  scale("stiffness_tip", "  toward tip", c.stiffness_tip, 0.01, 10.0, "x%.3g", true,
+        "The tip joint's stiffness over the root's; the joints between follow a smooth curve", buf,
+        [&](double v) { c.stiffness_tip = v; });
+  std::snprintf(buf, sizeof buf, "= damping %.3g N m s/rad (damping ratio %.3g)", c.damping, 1.0 - look.bounce);
+  scale("bounce", "Bounce", look.bounce, 0.0, 1.0, "%.3f", false,
+        "1: swings on and on. 0: settles without swinging (critically damped root swing)", buf,
+        [&](double v) { setBounce(c, std::min(v, 1.0), g); });
+  std::snprintf(buf, sizeof buf, "= tip %.3g N m s/rad (x%.3g of the root)", jointDamping(c, c.links - 1),
+                c.damping_tip);
+  scale("damping_tip", "  toward tip", c.damping_tip, 0.01, 10.0, "x%.3g", true,
+        "The tip joint's damping over the root's; the joints between follow a smooth curve", buf,
+        [&](double v) { c.damping_tip = v; });
+  std::snprintf(buf, sizeof buf, "= drag %.3g N s/m^2", c.drag);
+  scale("air", "Air", look.air, 0.0, 0.99, "%.2f", false,
+        "Share of its speed the ponytail loses to the air in one second", buf,
+        [&](double v) { setAir(c, std::clamp(v, 0.0, 0.99)); });
+  ImGui::AlignTextToFramePadding();
+  ImGui::TextUnformatted("Colour");
+  ImGui::SameLine(label_w);
+  float col[3] = {float(c.color.x()), float(c.color.y()), float(c.color.z())};
+  ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x);
+  if (ImGui::ColorEdit3("##colour", col, ImGuiColorEditFlags_Float)) c.color = Eigen::Vector3d(col[0], col[1], col[2]);
+  remember("look:colour");
+  // Root-to-tip curves of the joints' stiffness and damping, each over its root value.
+  if (c.links > 1) {
+    std::vector<float> ks, ds;
+    for (int i = 0; i < c.links; ++i) {
+      ks.push_back(c.stiffness > 0.0 ? float(jointStiffness(c, i) / c.stiffness) : 0.0f);
+      ds.push_back(c.damping > 0.0 ? float(jointDamping(c, i) / c.damping) : 0.0f);
+    }
+    const float top =
+        std::max({1.0f, *std::max_element(ks.begin(), ks.end()), *std::max_element(ds.begin(), ds.end())});
+    const float w = 0.5f * (ImGui::GetContentRegionAvail().x - ImGui::GetStyle().ItemSpacing.x);
+    ImGui::PlotLines("##kcurve", ks.data(), int(ks.size()), 0, "stiffness, root to tip", 0.0f, top * 1.05f,
+                     ImVec2(w, 40));
+    ImGui::SameLine();
+    ImGui::PlotLines("##dcurve", ds.data(), int(ds.size()), 0, "damping, root to tip", 0.0f, top * 1.05f,
+                     ImVec2(w, 40));
+  }
+  ImGui::PopID();
+  ImGui::Spacing();
+}
+
 void Panel::drawReadouts() {
-  if (!sectionHeader("Readouts", true)) return;
+  if (!sectionHeader("Readouts", false)) return;
   const Readouts& r = sim_.readouts();
   const float plot_w = ImGui::GetContentRegionAvail().x;
   const auto plot = [&](const char* id, const History& h, const char* fmt, double scale) {
@@ -647,7 +790,28 @@ void Panel::drawReadouts() {
 }
 
 void Panel::drawPresets() {
-  if (!sectionHeader("Presets", false)) return;
+  if (!sectionHeader("Presets", true)) return;
+  // The shipped presets (assets/presets/NAME.json): one click lays one over the edited scene.
+  if (sim_.edited().chain) {
+    const float w = ImGui::GetFontSize() * 4.4f, gap = ImGui::GetStyle().ItemSpacing.x;
+    const int per_row = std::max(1, int((ImGui::GetContentRegionAvail().x + gap) / (w + gap)));
+    int i = 0;
+    for (const std::string& name : presetNames()) {
+      if (i++ % per_row != 0) ImGui::SameLine();
+      if (ImGui::Button(name.c_str(), ImVec2(w, 0))) {
+        try {
+          sim_.edited() = applyPreset(sim_.edited(), name);
+          preset_error_ = false;
+          preset_message_ = "Preset " + name + " applied (Save keeps it)";
+        } catch (const SceneError& e) {
+          preset_error_ = true;
+          preset_message_ = e.what();
+        }
+      }
+      remember("preset:" + name);
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", presetSummary(name).c_str());
+    }
+  }
   char buf[512];
   std::snprintf(buf, sizeof buf, "%s", preset_path_.c_str());
   ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x);
@@ -681,7 +845,7 @@ void Panel::drawSections() {
     SectionVisitor v(*this, field, title, open, {}, std::move(skip));
     s.reflect(v);
   };
-  section("chain", "Ponytail", true, {"hair"});
+  section("chain", "Ponytail: every field", false, {"hair"});
   {
     NestedSection v(*this, "chain", "hair", "Hair", false);  // how it is drawn: strands, highlight, tie
     s.reflect(v);
@@ -694,7 +858,7 @@ void Panel::drawSections() {
   }
   section("hopper", "Hopper", false, {"command"});
   section("collision", "Collisions", false);
-  section("physics", "Physics", true);
+  section("physics", "Physics", false);
   if (sectionHeader("Camera", false)) {
     drawCameraTools();
     FieldWidgets w(*this, "camera.");

@@ -66,7 +66,7 @@ struct WidgetRect {
 
 class Panel {
  public:
-  static constexpr int kDefaultWidth = 400;
+  static constexpr int kDefaultWidth = 440;
 
   explicit Panel(LiveSim& sim);
 
@@ -86,7 +86,9 @@ class Panel {
   // "physics.gravity"), its reset button as "reset:KEY", other controls by name ("run", "step",
   // "reset", "save", "load", "speed", "path"). nullopt when it was not drawn (section closed).
   std::optional<WidgetRect> widgetRect(const std::string& id) const;
-  // Opens or closes a section ("Ponytail", "Physics", "Camera", ...) from the next frame on.
+  // Opens or closes a section ("Look", "Presets", "Ponytail: every field", "Physics", "Camera", ...)
+  // from the next frame on. Artist scales are "look:length", "look:stiffness", ...; the shipped
+  // presets' buttons "preset:NAME".
   void setSectionOpen(const std::string& title, bool open);
 
   // The path the Save/Load buttons use (defaults to the scene's file).
@@ -102,6 +104,7 @@ class Panel {
   friend class FieldWidgets;
   friend class SectionVisitor;
   void drawPlayback();
+  void drawLook();
   void drawReadouts();
   void drawPresets();
   void drawSections();

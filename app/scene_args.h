@@ -39,15 +39,20 @@ inline CLI::Validator finiteIn(double lo, double hi) {
 
 struct SceneArgs {
   std::string path;
+  std::string preset;
   std::vector<std::string> sets;
 
   void add(CLI::App* cmd) {
     cmd->add_option("scene", path, "Scene file (JSON), e.g. assets/scenes/ponytail.json")->required();
     cmd->add_option("--set", sets, "Override a scene field: --set physics.dt=0.002 (repeatable)")
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    cmd->add_option("--preset", preset,
+                    "Lay a preset over the scene before --set: a name in assets/presets/ (silky, thick, wet, "
+                    "stiff, bouncy) or a .json fragment");
   }
 
-  // Loads and validates; throws SceneError (message names the file, the key, what is allowed).
+  // Loads the file, lays the preset over it, applies --set and validates; throws SceneError
+  // (the message names the file, the key, what is allowed).
   Scene load() const;
 };
 

@@ -1,6 +1,7 @@
 #include "physics/chain.h"
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "physics/anchor_motion.h"
@@ -59,10 +60,15 @@ Chain addChain(World& world, const ChainParams& params, int parent, const Eigen:
     // Joint: link i's top end on the anchor (i = 0) or on the previous link's bottom end.
     const Eigen::Vector3d parent_point = i == 0 ? anchor_local : Eigen::Vector3d(-half);
     chain.joints.push_back(world.addJoint(std::make_unique<SphericalJoint>(previous, parent_point, id, half)));
-    if (params.damping > 0.0) world.addForceElement(std::make_unique<JointDamper>(previous, id, params.damping));
-    if (params.stiffness > 0.0) {
+    // Root-to-tip curves (ratio 1: exactly the root's value at every joint).
+    const double damping =
+        params.damping_tip == 1.0 ? params.damping : params.damping * std::pow(params.damping_tip, s);
+    const double stiffness =
+        params.stiffness_tip == 1.0 ? params.stiffness : params.stiffness * std::pow(params.stiffness_tip, s);
+    if (damping > 0.0) world.addForceElement(std::make_unique<JointDamper>(previous, id, damping));
+    if (stiffness > 0.0) {
       const Eigen::Quaterniond rest = bodyOf(world, previous).q.conjugate() * q0;
-      world.addForceElement(std::make_unique<BendingSpring>(previous, id, params.stiffness, rest));
+      world.addForceElement(std::make_unique<BendingSpring>(previous, id, stiffness, rest));
     }
     if (params.drag > 0.0) world.addForceElement(std::make_unique<LinearDrag>(id, params.drag * len));
 

@@ -17,13 +17,17 @@ struct EnumNames<ChainAttach> {
 
 // Defaults are the canonical chain: identical solid cylinders, no damping, no stiffness, no drag.
 struct ChainParams {
-  int links = 8;                             // count
-  double length = 0.05;                      // m, each link
-  double mass = 0.02;                        // kg, the first link; tapered links scale with their volume
-  double radius = 0.01;                      // m, the first link's radius
-  double taper = 1.0;                        // tip radius / root radius (1: cylinders)
-  double damping = 0.0;                      // N m s/rad, per joint, on the relative angular velocity
-  double stiffness = 0.0;                    // N m/rad, per joint, bending toward the rest pose
+  int links = 8;           // count
+  double length = 0.05;    // m, each link
+  double mass = 0.02;      // kg, the first link; tapered links scale with their volume
+  double radius = 0.01;    // m, the first link's radius
+  double taper = 1.0;      // tip radius / root radius (1: cylinders)
+  double damping = 0.0;    // N m s/rad, at the root joint, on the relative angular velocity
+  double stiffness = 0.0;  // N m/rad, at the root joint, bending toward the rest pose
+  // Root-to-tip curves: the last joint's value over the first's; the joints between follow a
+  // geometric curve (joint i of n: ratio^(i/(n-1))). 1: the same at every joint.
+  double stiffness_tip = 1.0;
+  double damping_tip = 1.0;
   double drag = 0.0;                         // N s/m per metre of link, linear air drag on each link
   Eigen::Vector3d direction{1.0, 0.0, 0.0};  // initial direction from the anchor (unit)
   ChainAttach attach = ChainAttach::Anchor;
@@ -45,9 +49,27 @@ struct ChainParams {
     v("radius", radius, {.unit = "m", .min = 1e-5, .max = 1, .help = "Radius of the first link", .log = true});
     v("taper", taper, {.min = 0.05, .max = 1.0, .help = "Tip radius over root radius"});
     v("damping", damping,
-      {.unit = "N m s/rad", .min = 0, .max = 10, .help = "Joint damping on relative angular velocity", .log = true});
+      {.unit = "N m s/rad",
+       .min = 0,
+       .max = 10,
+       .help = "Joint damping on relative angular velocity (root joint)",
+       .log = true});
     v("stiffness", stiffness,
-      {.unit = "N m/rad", .min = 0, .max = 100, .help = "Bending stiffness toward the rest pose", .log = true});
+      {.unit = "N m/rad",
+       .min = 0,
+       .max = 100,
+       .help = "Bending stiffness toward the rest pose (root joint)",
+       .log = true});
+    v("stiffness_tip", stiffness_tip,
+      {.min = 1e-3,
+       .max = 1e3,
+       .help = "Tip joint's stiffness over the root's (1: uniform; geometric in between)",
+       .log = true});
+    v("damping_tip", damping_tip,
+      {.min = 1e-3,
+       .max = 1e3,
+       .help = "Tip joint's damping over the root's (1: uniform; geometric in between)",
+       .log = true});
     v("drag", drag, {.unit = "N s/m^2", .min = 0, .max = 100, .help = "Air drag per metre of link", .log = true});
     v("direction", direction,
       {.min = -1, .max = 1, .help = "Initial direction from the anchor", .apply = Apply::Restart});

@@ -24,6 +24,11 @@ namespace {
 struct Harness {
   explicit Harness(const std::string& scene_path) : sim(loadScene(scene_path)), panel(sim) {
     sim.setStepBudgetMs(0.0);
+    // The raw fields these tests drag (the artist's Look section is tested on its own).
+    panel.setSectionOpen("Look", false);
+    panel.setSectionOpen("Presets", false);
+    panel.setSectionOpen("Ponytail: every field", true);
+    panel.setSectionOpen("Physics", true);
     frame();  // first frame: lay out the widgets
   }
 

@@ -117,7 +117,7 @@ Image renderPanel(const Scene& scene) {
 TEST(SnapshotSensitivityPanel, PanelWithADifferentValueFails) {
   const Scene a = baseScene();
   Scene b = a;
-  b.chain->mass *= 1.5;  // a value the panel shows (its digits and its slider), and the motion it changes
+  b.chain->stiffness *= 1.5;  // shown near the top of the panel's Look section
   const Image pa = renderPanel(a);
   EXPECT_TRUE(compare(pa, renderPanel(a)).pass) << "the panel frame is not repeatable";
   const DiffResult r = compare(pa, renderPanel(b));
