@@ -142,6 +142,10 @@ void computeHopperForces(const HopperModel& m, const HopperSetpoints& s, double 
   torque_body -= s.attitude_weight * absolute(zb, Eigen::Vector3d::UnitX(), p.attitude_stiffness, p.attitude_damping);
   torque_body -= s.attitude_weight * absolute(zb, Eigen::Vector3d::UnitY(), p.attitude_stiffness, p.attitude_damping);
   torque_body -= s.attitude_weight * absolute(xb, h_perp, p.yaw_stiffness, p.yaw_damping);
+  // The leg takes the reaction; only the toe's torsional friction holds it about its own axis, so
+  // that component is held within yaw_torque_limit (the rest goes through the hip and the toe).
+  const double axial = torque_body.dot(za);
+  if (std::abs(axial) > s.yaw_torque_limit) torque_body -= (axial - std::copysign(s.yaw_torque_limit, axial)) * za;
 
   upper.torque += torque_leg - torque_body;
   body.torque += torque_body - torque_leg;
@@ -425,6 +429,12 @@ void Hopper::updateSetpoints(const World& world, const HopperCommand& cmd, doubl
       s.attitude_weight = 0.0;
       break;
   }
+  // The heading servo asks no more than the toe can hold (90 % of the torsional friction at the
+  // last normal force; none once the torsion row has slipped this stance).
+  const ContactState& cs = contact_->state();
+  s.yaw_torque_limit = !contact_->inContact() ? std::numeric_limits<double>::infinity()
+                       : cs.twist             ? 0.9 * p.friction * std::max(cs.normal_force, 0.0) * p.twist_radius
+                                              : 0.0;
 }
 
 Eigen::Vector3d Hopper::attitude(const World& world) const {

@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -36,6 +37,10 @@ struct HopperSetpoints {
   double heading = 0.0;        // rad, body yaw held in stance
   double place_weight = 1.0;   // 0..1: leg placement + leg twist servos on (flight)
   double attitude_weight = 0;  // 0..1: body attitude + heading servos on (stance)
+  // N m, the most torque the stance servos may put between the body and the leg about the leg's
+  // axis: what the toe's torsional friction holds (mu N twist_radius). More slips the toe, and the
+  // reaction then spins the leg freely about its axis (it reached 3000 rad/s in the course).
+  double yaw_torque_limit = std::numeric_limits<double>::infinity();
 };
 
 // Indices and geometry the force law needs.
