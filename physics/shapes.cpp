@@ -97,8 +97,22 @@ double boxDistance(const Eigen::Vector3d& h, const Eigen::Vector3d& x, Eigen::Ve
 
 // Distance from x to the core, minus the radius there (the round cone's signed distance).
 double roundedDistance(const Core& c, const Eigen::Vector3d& x, Eigen::Vector3d* grad) {
+  // The nearest sphere of the swept family, s in [0, 1], in closed form. With y the distance along
+  // the axis from a, q the distance from the axis, L the length and dr = ra - rb, the convex
+  // f(s) = |(y - sL, q)| - (ra - s dr) is stationary where (y - sL) L = dr |(y - sL, q)|, i.e.
+  // y - sL = dr q / sqrt(L^2 - dr^2); clamped to [0, 1] it is the minimum. When L <= |dr| one end
+  // sphere holds the other and f is monotone: the larger end.
   double s = 0.0;
-  if (!c.point()) s = minimizeConvex([&](double t) { return (x - c.at(t)).norm() - c.radius(t); }, 0.0, 1.0);
+  if (!c.point()) {
+    const Eigen::Vector3d ab = c.b - c.a;
+    const double L = ab.norm();
+    const Eigen::Vector3d u = ab / L;
+    const double y = (x - c.a).dot(u);
+    const double q = (x - c.a - y * u).norm();
+    const double dr = c.ra - c.rb;
+    const double k = L * L - dr * dr;
+    s = k > 0.0 ? std::clamp((y - dr * q / std::sqrt(k)) / L, 0.0, 1.0) : (c.ra >= c.rb ? 0.0 : 1.0);
+  }
   const Eigen::Vector3d d = x - c.at(s);
   const double n = d.norm();
   if (grad) {
@@ -189,8 +203,26 @@ ContactPoint roundedAgainst(const Core& c, const PlacedShape& b, double* at = nu
 
 }  // namespace
 
+// The radius of a sphere about the shape's origin that holds it (infinite for a plane or a grid).
+double boundingRadius(const Shape& s) {
+  switch (s.type) {
+    case ShapeType::Sphere:
+      return s.radius;
+    case ShapeType::Capsule:
+      return s.half_length + std::max(s.radius_a, s.radius_b);
+    case ShapeType::Box:
+      return s.half_extents.norm();
+    default:
+      return std::numeric_limits<double>::infinity();
+  }
+}
+
 int collide(const PlacedShape& a, const PlacedShape& b, double reach, std::vector<ContactPoint>& out) {
   const ShapeType ta = a.shape->type, tb = b.shape->type;
+  // Broad phase: bounding spheres further apart than reach cannot touch (two capsules are
+  // otherwise a search inside a search: thousands of distance evaluations a pair).
+  const double bound = boundingRadius(*a.shape) + boundingRadius(*b.shape) + std::max(reach, 0.0);
+  if (std::isfinite(bound) && (a.pose.translation() - b.pose.translation()).squaredNorm() > bound * bound) return 0;
   if (!supported(ta, tb)) {
     if (!supported(tb, ta)) return 0;
     const size_t first = out.size();

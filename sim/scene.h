@@ -275,11 +275,15 @@ struct HopperSection : HopperParams {
 // head's mesh (a signed distance grid built from its triangles at load) and a swing cone at the
 // root. Absent from the file: no collisions are built or stepped.
 struct CollisionSection : HeadCollisionParams {
-  bool head = true;  // the chain's links collide with the head (a chain attached to a head)
+  bool head = true;     // the chain's links collide with the head (a chain attached to a head)
+  bool ground = false;  // the hoppers' bodies and legs collide with the ground and with each other
 
   template <class V>
   void reflect(V& v) {
-    v("head", head, {.help = "The ponytail's links collide with the head's mesh"});
+    v("head", head, {.help = "The ponytail's links collide with the head's mesh (a chain attached to a head)"});
+    v("ground", ground,
+      {.help = "Every hopper's body and legs collide with the ground z = 0 and with the other hoppers (the toe has "
+               "its own contact)"});
     HeadCollisionParams::reflect(v);
   }
 };

@@ -512,8 +512,13 @@ void validateScene(const Scene& scene_in, const std::string& source) {
           "need collision.head true (collision.head false builds nothing)");
     }
   }
-  if (scene.collision && scene.collision->head) {
-    if (!scene.chain || scene.chain->attach != ChainAttach::Head || !scene.head) {
+  if (scene.collision && scene.collision->ground && !scene.hopper && scene.hoppers.empty()) {
+    errors.push_back("collision.ground: the scene has no hopper (it makes the hoppers' bodies and legs collide)");
+  }
+  if (scene.collision && (scene.collision->head || scene.collision->ground)) {
+    // collision.head is on by default: a scene that asks only for ground contacts needs no head.
+    const bool head_chain = scene.chain && scene.chain->attach == ChainAttach::Head && scene.head;
+    if (scene.collision->head && !head_chain && !scene.collision->ground) {
       errors.push_back(
           "collision.head: the ponytail collides with the head only when chain.attach is \"head\" and "
           "the scene has a head (set collision.head false, or leave the collision section out)");

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "physics/anchor_motion.h"
+#include "physics/hopper_collisions.h"
 #include "physics/keyframes.h"
 #include "sim/head_fit.h"
 #include "sim/scene_io.h"
@@ -21,16 +22,33 @@ Sim::Sim(const Scene& scene, const AssetLoader* assets) : scene_(scene), world_(
 // The ponytail against the head: the head's triangles in its body frame make the distance grid
 // (physics/head_collisions.h), each link's capsule as drawn collides with it, the root link is held
 // by a swing cone.
+// collision.ground: the hoppers' bodies and legs against the plane z = 0 and against each other,
+// in the same set (the same solve) as the head's contacts when there are both.
 void Sim::buildCollisions() {
   const CollisionSection& c = *scene_.collision;
-  if (!c.head || !chain_ || !head_) return;
-  std::vector<Eigen::Vector3d> vertices;
-  vertices.reserve(head_->mesh.positions.size());
-  for (const auto& p : head_->mesh.positions) vertices.push_back(head_->mesh_to_body * p.cast<double>());
-  std::string err;
-  collisions_ = makeHeadCollisions(world_, *chain_, head_body_, vertices, head_->mesh.indices, c, &err);
-  if (!collisions_) throw SceneError(scene_.path + ": collision: the head's mesh makes no collider: " + err);
-  collisions_->attach(world_);
+  if (c.head && chain_ && head_ && scene_.chain->attach == ChainAttach::Head) {
+    std::vector<Eigen::Vector3d> vertices;
+    vertices.reserve(head_->mesh.positions.size());
+    for (const auto& p : head_->mesh.positions) vertices.push_back(head_->mesh_to_body * p.cast<double>());
+    std::string err;
+    collisions_ = makeHeadCollisions(world_, *chain_, head_body_, vertices, head_->mesh.indices, c, &err);
+    if (!collisions_) throw SceneError(scene_.path + ": collision: the head's mesh makes no collider: " + err);
+  }
+  if (c.ground && !hoppers_.empty()) {
+    if (!collisions_) {
+      CollisionParams cp;
+      cp.friction = c.friction;
+      cp.restitution = c.restitution;
+      cp.margin = c.margin;
+      collisions_ = std::make_shared<Collisions>(cp, world_.params().solver);
+    }
+    const int ground = collisions_->addShape(kWorldBody, Shape::plane(Eigen::Vector3d::UnitZ()));
+    std::vector<HopperShapes> shapes;
+    for (const auto& h : hoppers_) shapes.push_back(addHopperShapes(*collisions_, h->model(), ground));
+    for (size_t i = 0; i < shapes.size(); ++i)
+      for (size_t j = i + 1; j < shapes.size(); ++j) pairHoppers(*collisions_, shapes[i], shapes[j]);
+  }
+  if (collisions_) collisions_->attach(world_);
 }
 
 void Sim::buildHead(const AssetLoader* assets) {

@@ -1,0 +1,27 @@
+// The hopper's body and legs as collision shapes (physics/shapes.h), as they are drawn: the body's
+// main hull a capsule along its x axis, the upper leg and the foot's rod tapered capsules. The toe
+// sphere keeps its own ground contact (physics/contact.h, GroundContact): the foot's capsule stops
+// two toe radii above the toe's centre, so the two never touch the ground at the same place.
+#pragma once
+
+#include <vector>
+
+#include "physics/collisions.h"
+#include "physics/hopper.h"
+
+namespace ponyhop {
+
+struct HopperShapes {
+  int body = -1, upper = -1, foot = -1;  // shapes of the hull, the upper leg and the foot's rod
+  int toe = -1;                          // the toe sphere (against other hoppers only)
+  std::vector<int> all() const { return {body, upper, foot, toe}; }
+};
+
+// Adds the shapes of the hopper `m` to `col`; with ground >= 0 (a plane shape), pairs of the hull,
+// the upper leg and the foot's rod with it, at the hopper's own friction.
+HopperShapes addHopperShapes(Collisions& col, const HopperModel& m, int ground);
+
+// Pairs every shape of a with every shape of b (two hoppers that can run into each other).
+void pairHoppers(Collisions& col, const HopperShapes& a, const HopperShapes& b);
+
+}  // namespace ponyhop
