@@ -191,7 +191,9 @@ int runPoses(const Scene& scene, double duration, const SimArgs& args) {
     for (long k = 0; k < n; ++k) times.push_back(double(k) / args.rate);
   }
   Sim rt(scene, &assimpAssets());
-  const std::string tmp = args.poses + ".tmp";
+  // Written to a temporary name of this process and renamed (as --csv): a failed, stopped or
+  // concurrent run never replaces a good file.
+  const std::string tmp = args.poses + ".partial-" + std::to_string(getpid());
   std::FILE* f = std::fopen(tmp.c_str(), "w");
   if (!f) throw SceneError("--poses " + args.poses + ": cannot write the file");
   std::fprintf(f, "t,body,name,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz\n");
@@ -200,12 +202,13 @@ int runPoses(const Scene& scene, double duration, const SimArgs& args) {
   PoseFrame fr;
   long rows = 0;
   bool ok = true;
+  int sig = 0;  // SIGINT or SIGTERM came: stop, write nothing
   if (times.empty()) {
     sampler.at(0.0, fr);
     writePoseRows(f, fr, ids);
     ++rows;
     const double end = duration - 0.5 * scene.physics.dt;
-    while (ok && rt.time() < end) {
+    while (ok && rt.time() < end && !(sig = InterruptGuard::signal())) {
       ok = sampler.nextStep(fr);
       if (ok) {
         writePoseRows(f, fr, ids);
@@ -214,11 +217,19 @@ int runPoses(const Scene& scene, double duration, const SimArgs& args) {
     }
   } else {
     for (double t : times) {
+      if ((sig = InterruptGuard::signal())) break;
       ok = sampler.at(t, fr);
       if (!ok) break;
       writePoseRows(f, fr, ids);
       ++rows;
     }
+  }
+  if (sig) {
+    std::fclose(f);
+    std::remove(tmp.c_str());
+    std::fprintf(stderr, "ponyhop sim: stopped by %s; %s was not written\n", sig == SIGINT ? "SIGINT" : "SIGTERM",
+                 args.poses.c_str());
+    return InterruptGuard::exitCode(sig);
   }
   const bool written = std::fflush(f) == 0 && !std::ferror(f);
   std::fclose(f);

@@ -148,6 +148,33 @@ TEST(OutputSafety, SigintAndSigtermStopARenderCleanly) {
   }
 }
 
+// `sim` too: a long run's CSV (--csv) or pose file (--poses) is written under FILE.partial-PID;
+// SIGINT or SIGTERM removes it and leaves the previous file as it was.
+TEST(OutputSafety, SigintAndSigtermStopASimCleanly) {
+  for (const std::string flag : {"--csv", "--poses"}) {
+    for (const int sig : {SIGINT, SIGTERM}) {
+      const std::string dir = scratch("sim_signal_" + flag.substr(2) + "_" + std::to_string(sig));
+      const std::string out = dir + "/out.csv";
+      writeFile(out, "previous");
+      Child c({"sim", "assets/scenes/chain.json", "--duration", "100000", flag, out}, dir + "/log.txt");
+      const std::string partial = out + ".partial-" + std::to_string(c.pid);
+      bool started = false;  // rows are being written
+      for (int i = 0; i < 1200 && !started; ++i) {
+        std::error_code ec;
+        started = fs::exists(partial) && fs::file_size(partial, ec) > 1000;
+        if (!started) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      }
+      ASSERT_TRUE(started) << flag << ": no " << partial << "\n" << c.output();
+      kill(c.pid, sig);
+      EXPECT_EQ(c.wait(), 128 + sig) << flag << "\n" << c.output();
+      EXPECT_NE(c.output().find(sig == SIGINT ? "stopped by SIGINT" : "stopped by SIGTERM"), std::string::npos)
+          << c.output();
+      EXPECT_EQ(readFile(out), "previous") << flag;
+      EXPECT_FALSE(fs::exists(partial)) << flag << ": " << partial << " left behind";
+    }
+  }
+}
+
 TEST(OutputSafety, NextRunCleansWhatASigkilledRunLeft) {
   const std::string dir = scratch("sigkill");
   const std::string out = dir + "/out";

@@ -77,8 +77,8 @@ double smallestHullGap(bool ground) {
     "hopper": { "position": [-1.2, 0.0, 1.05], "script": [ { "t": 0.0, "vx": 0.0 }, { "t": 1.0, "vx": 0.6 } ] },
     "hoppers": [ { "position": [1.2, 0.0, 1.05], "command": { "heading": 180.0 },
                    "script": [ { "t": 0.0, "vx": 0.0, "heading": 180.0 }, { "t": 1.0, "vx": -0.6, "heading": 180.0 } ] } ],
-    "collision": { "ground": )" + std::string(ground ? "true" : "false") +
-                           R"(, "head": false } })";
+    "collision": { "ground": )" +
+                           std::string(ground ? "true" : "false") + R"(, "head": false } })";
   const Scene scene = parseSceneText(text, "two hoppers");
   Sim sim(scene);
   EXPECT_EQ(sim.hoppers().size(), 2u);
