@@ -962,12 +962,15 @@ void Renderer::endFrame() {
   stats_.triangles += I.hulls.size() * I.hull_triangles;
 
   if (!I.lines.empty()) {
+    // Debug lines (the drag line, render.colliders) over the picture: no depth test.
+    glDisable(GL_DEPTH_TEST);
     glUseProgram(I.prog_lines);
     setMat4(I.prog_lines, "u_viewProj", view_proj);
     glBindVertexArray(I.lines_vao);
     glBindBuffer(GL_ARRAY_BUFFER, I.lines_vbo);
     glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(I.lines.size() * sizeof(LineVertex)), I.lines.data(), GL_STREAM_DRAW);
     glDrawArrays(GL_LINES, 0, GLsizei(I.lines.size()));
+    glEnable(GL_DEPTH_TEST);
     ++stats_.draw_calls;
   }
   glBindVertexArray(0);

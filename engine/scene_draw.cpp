@@ -1,5 +1,8 @@
 #include "engine/scene_draw.h"
 
+#include <cmath>
+#include <numbers>
+
 namespace ponyhop {
 namespace {
 
@@ -84,6 +87,7 @@ void SceneDraw::draw(const Sim& sim, Renderer& renderer, const Scene& drawing, u
   }
   if (const Chain* chain = sim.chain(); chain && !(hide & kChain))
     drawChain(sim, *chain, drawing.chain ? *drawing.chain : *scene.chain, renderer);
+  if (drawing.render.colliders) drawColliders(sim, renderer);
 }
 
 HairMesh SceneDraw::chainHair(const Sim& sim, const Chain& chain, const ChainSection& look) const {
@@ -125,6 +129,81 @@ void SceneDraw::drawChain(const Sim& sim, const Chain& chain, const ChainSection
   const double r = chain.radii.front();
   renderer.drawTaperedCapsule(root - 0.15 * r * axis, root + 0.45 * r * axis, 1.12 * r, 1.06 * r,
                               material(look.hair.tie_color, 0.5f, 60.0f));
+}
+
+}  // namespace ponyhop
+
+namespace ponyhop {
+
+namespace {
+
+// A circle of radius r about c in the plane spanned by the unit vectors u, v.
+void circle(Renderer& r, const Eigen::Vector3d& c, const Eigen::Vector3d& u, const Eigen::Vector3d& v, double radius,
+            const Eigen::Vector3f& colour) {
+  constexpr int kSegments = 24;
+  for (int i = 0; i < kSegments; ++i) {
+    const double a0 = 2.0 * std::numbers::pi * i / kSegments, a1 = 2.0 * std::numbers::pi * (i + 1) / kSegments;
+    r.drawLine(c + radius * (std::cos(a0) * u + std::sin(a0) * v), c + radius * (std::cos(a1) * u + std::sin(a1) * v),
+               colour);
+  }
+}
+
+}  // namespace
+
+void SceneDraw::drawColliders(const Sim& sim, Renderer& renderer) const {
+  const Collisions* col = sim.collisions();
+  if (!col) return;
+  const Eigen::Vector3f cyan(0.1f, 0.85f, 0.95f), red(0.95f, 0.15f, 0.1f);
+  const World& world = sim.world();
+  for (size_t i = 0; i < col->shapes().size(); ++i) {
+    const Shape& shape = col->shapes()[i];
+    const int body = col->shapeBody(int(i));
+    const PlacedShape p = body == kWorldBody ? place(shape, Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity())
+                                             : place(shape, world.body(body).x, world.body(body).q);
+    const Eigen::Matrix3d R = p.pose.linear();
+    const Eigen::Vector3d c = p.pose.translation(), ex = R.col(0), ey = R.col(1), ez = R.col(2);
+    switch (shape.type) {
+      case ShapeType::Sphere:
+        circle(renderer, c, ex, ey, shape.radius, cyan);
+        circle(renderer, c, ey, ez, shape.radius, cyan);
+        circle(renderer, c, ez, ex, shape.radius, cyan);
+        break;
+      case ShapeType::Capsule: {
+        // End rings, four lines along the sides (a tapered capsule's, end radius to end radius)
+        // and the end spheres' outlines.
+        const Eigen::Vector3d a = c + shape.half_length * ez, b = c - shape.half_length * ez;
+        circle(renderer, a, ex, ey, shape.radius_a, cyan);
+        circle(renderer, b, ex, ey, shape.radius_b, cyan);
+        for (const Eigen::Vector3d& side : {ex, ey, Eigen::Vector3d(-ex), Eigen::Vector3d(-ey)})
+          renderer.drawLine(a + shape.radius_a * side, b + shape.radius_b * side, cyan);
+        circle(renderer, a, ex, ez, shape.radius_a, cyan);
+        circle(renderer, b, ex, ez, shape.radius_b, cyan);
+        break;
+      }
+      case ShapeType::Box: {
+        const Eigen::Vector3d h = shape.half_extents;
+        const auto corner = [&](int m) {
+          return Eigen::Vector3d(c + ((m & 1) ? h.x() : -h.x()) * ex + ((m & 2) ? h.y() : -h.y()) * ey +
+                                 ((m & 4) ? h.z() : -h.z()) * ez);
+        };
+        for (int k = 0; k < 8; ++k)
+          for (int axis = 0; axis < 3; ++axis)
+            if (!(k & (1 << axis))) renderer.drawLine(corner(k), corner(k | (1 << axis)), cyan);  // each edge once
+        break;
+      }
+      case ShapeType::Plane:  // drawn as the ground
+      case ShapeType::Sdf:    // the head's mesh is its picture
+        break;
+    }
+  }
+  // Contacts touching now (within the margin): a cross at the point and the normal, 5 cm.
+  for (const Collisions::Row& row : col->detect(world.bodies(), col->params().margin + 1e-4)) {
+    if (row.angular) continue;
+    renderer.drawLine(row.point, row.point + 0.05 * row.normal, red);
+    const Eigen::Vector3d u = row.normal.unitOrthogonal(), v = row.normal.cross(u);
+    renderer.drawLine(row.point - 0.015 * u, row.point + 0.015 * u, red);
+    renderer.drawLine(row.point - 0.015 * v, row.point + 0.015 * v, red);
+  }
 }
 
 }  // namespace ponyhop

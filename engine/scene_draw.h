@@ -34,6 +34,8 @@ class SceneDraw {
 
  private:
   void drawChain(const Sim& sim, const Chain& chain, const ChainSection& look, Renderer& renderer) const;
+  // render.colliders: the collision shapes as wireframes and the contacts as normals, on top.
+  void drawColliders(const Sim& sim, Renderer& renderer) const;
   bool draft_ = false;
   Renderer* renderer_ = nullptr;
   MeshHandle head_;

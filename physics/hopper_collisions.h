@@ -1,5 +1,6 @@
-// The hopper's body and legs as collision shapes (physics/shapes.h), as they are drawn: the body's
-// main hull a capsule along its x axis, the upper leg and the foot's rod tapered capsules. The toe
+// The hopper's body and legs as collision shapes (physics/shapes.h), as they are drawn
+// (engine/scene_draw.cpp): the body's main hull a capsule along its x axis and its two side pods
+// tapered capsules beside it, the upper leg and the foot's rod tapered capsules. The toe
 // sphere keeps its own ground contact (physics/contact.h, GroundContact): the foot's capsule stops
 // two toe radii above the toe's centre, so the two never touch the ground at the same place.
 #pragma once
@@ -13,8 +14,9 @@ namespace ponyhop {
 
 struct HopperShapes {
   int body = -1, upper = -1, foot = -1;  // shapes of the hull, the upper leg and the foot's rod
+  int pods[2] = {-1, -1};                // the hull's side pods
   int toe = -1;                          // the toe sphere (against other hoppers only)
-  std::vector<int> all() const { return {body, upper, foot, toe}; }
+  std::vector<int> all() const { return {body, pods[0], pods[1], upper, foot, toe}; }
 };
 
 // Adds the shapes of the hopper `m` to `col`; with ground >= 0 (a plane shape), pairs of the hull,

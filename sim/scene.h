@@ -101,6 +101,7 @@ struct RenderParams {
   bool ground = true;                              // draw the ground plane
   double ground_height = 0.0;                      // m, height of the drawn ground plane (z)
   bool transparent = false;                        // no background: PNGs with alpha (the ground is drawn when `ground`)
+  bool colliders = false;                          // draw the collision shapes and the contacts over the picture
 
   template <class V>
   void reflect(V& v) {
@@ -121,6 +122,8 @@ struct RenderParams {
     v("ground_height", ground_height, {.unit = "m", .min = -1e3, .max = 1e3, .help = "Height of the ground plane"});
     v("transparent", transparent,
       {.help = "No background: PNG frames with alpha (set ground false for the object alone)"});
+    v("colliders", colliders,
+      {.help = "Draw the collision shapes (cyan wireframes) and each contact (a red normal) over the picture"});
   }
 };
 
