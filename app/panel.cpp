@@ -711,24 +711,23 @@ void Panel::drawLook() {
   std::snprintf(buf, sizeof buf, "= %.3g g the first link (chain.mass)", 1000.0 * c.mass);
   scale("weight", "Weight", look.weight_g, 0.5, 500.0, "%.1f g", true, "Mass of the whole ponytail", buf,
         [&](double v) { setWeight(c, v); });
+  // A root-to-tip ratio (chain.stiffness_tip, chain.damping_tip) under its root value.
+  const auto tipScale = [&](const char* key, double& ratio, double at_tip, const char* unit, const char* what) {
+    std::snprintf(buf, sizeof buf, "= tip %.3g %s (x%.3g of the root)", at_tip, unit, ratio);
+    const std::string help =
+        std::string("The tip joint's ") + what + " over the root's; the joints between follow a smooth curve";
+    scale(key, "  toward tip", ratio, 0.01, 10.0, "x%.3g", true, help.c_str(), buf, [&](double v) { ratio = v; });
+  };
   std::snprintf(buf, sizeof buf, "= %.3g N m/rad at the root; swings in %.2f s", c.stiffness, swingPeriod(c, g));
   scale("stiffness", "Stiffness", look.stiffness, 0.0, 1.5, "%.3f", false,
         "0: limp. 1: the root spring holds the ponytail straight out against its weight (stiffness^3 x M g d)", buf,
         [&](double v) { setStiffness(c, std::max(v, 0.0), g); });
-  std::snprintf(buf, sizeof buf, "= tip %.3g N m/rad (x%.3g of the root)", jointStiffness(c, c.links - 1),
-                c.stiffness_tip);
-  scale("stiffness_tip", "  toward tip", c.stiffness_tip, 0.01, 10.0, "x%.3g", true,
-        "The tip joint's stiffness over the root's; the joints between follow a smooth curve", buf,
-        [&](double v) { c.stiffness_tip = v; });
+  tipScale("stiffness_tip", c.stiffness_tip, jointStiffness(c, c.links - 1), "N m/rad", "stiffness");
   std::snprintf(buf, sizeof buf, "= damping %.3g N m s/rad (damping ratio %.3g)", c.damping, 1.0 - look.bounce);
   scale("bounce", "Bounce", look.bounce, 0.0, 1.0, "%.3f", false,
         "1: swings on and on. 0: settles without swinging (critically damped root swing)", buf,
         [&](double v) { setBounce(c, std::min(v, 1.0), g); });
-  std::snprintf(buf, sizeof buf, "= tip %.3g N m s/rad (x%.3g of the root)", jointDamping(c, c.links - 1),
-                c.damping_tip);
-  scale("damping_tip", "  toward tip", c.damping_tip, 0.01, 10.0, "x%.3g", true,
-        "The tip joint's damping over the root's; the joints between follow a smooth curve", buf,
-        [&](double v) { c.damping_tip = v; });
+  tipScale("damping_tip", c.damping_tip, jointDamping(c, c.links - 1), "N m s/rad", "damping");
   std::snprintf(buf, sizeof buf, "= drag %.3g N s/m^2", c.drag);
   scale("air", "Air", look.air, 0.0, 0.99, "%.2f", false,
         "Share of its speed the ponytail loses to the air in one second", buf,
