@@ -22,7 +22,7 @@ void renderSceneView(Renderer& renderer, LiveSim& sim, const Camera& camera, int
   rp.height = std::max(height, 1);
   rp.quality = quality;
   renderer.beginFrame(camera, sim.applied().light, rp);
-  sim.draw(renderer);
+  sim.draw(renderer, quality == RenderQuality::Draft);
   renderer.endFrame();
   Readouts& r = sim.readouts();
   const RenderStats& st = renderer.stats();

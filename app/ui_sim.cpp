@@ -331,8 +331,9 @@ bool LiveSim::load(const std::string& path) {
   return true;
 }
 
-void LiveSim::draw(Renderer& renderer) {
+void LiveSim::draw(Renderer& renderer, bool draft) {
   draw_.upload(*runtime_, renderer);
+  draw_.setDraft(draft);
   draw_.draw(*runtime_, renderer, applied_);  // the look from the applied scene: chain.color/hair are live
   const PerturbationTarget& p = *perturbation_;
   if (p.active() && p.body < runtime_->world().bodyCount()) {

@@ -144,7 +144,8 @@ class LiveSim {
 
   // GL: uploads the runtime's meshes (once per runtime) and draws the current state, plus the
   // perturbation spring as a line.
-  void draw(Renderer& renderer);
+  // Draft: the hair with its draft strand count (chain.hair.strands_draft), as the view moves.
+  void draw(Renderer& renderer, bool draft = false);
 
   // How long the last rebuild took (ms): the panel shows it, so slow rebuilds are visible.
   double lastRebuildMs() const { return rebuild_ms_; }

@@ -38,6 +38,7 @@ void RenderSession::renderFrame(double t, std::vector<uint8_t>& rgba, unsigned h
   const Camera cam = sceneCamera(scene_, sim_, t, follow_, t - last_t_);
   last_t_ = t;
   renderer_->beginFrame(cam, scene_.light, scene_.render);
+  draw_.setDraft(scene_.render.quality == RenderQuality::Draft);  // fewer hair strands too
   draw_.draw(sim_, *renderer_, scene_, hide);
   renderer_->endFrame();
   renderer_->readPixels(rgba);

@@ -8,6 +8,9 @@
 #include <cmath>
 #include <cstring>
 
+#include "engine/render_session.h"
+#include "sim/scene_io.h"
+
 using namespace ponyhop;
 
 namespace {
@@ -178,6 +181,22 @@ TEST(Hair, DraftDrawsFewerStrandsAndTheMeshIsDeterministic) {
   ASSERT_EQ(a.vertices.size(), b.vertices.size());
   EXPECT_EQ(0, std::memcmp(a.vertices.data(), b.vertices.data(), a.vertices.size() * sizeof(HairVertex)));
   EXPECT_LT(a.indices.size(), full.indices.size());
+}
+
+// A render in draft quality (render.quality, or the window while the view moves) draws the draft
+// strand count: fewer triangles than final.
+TEST(Hair, DraftQualityRendersFewerStrands) {
+  size_t triangles[2] = {0, 0};
+  for (const int draft : {0, 1}) {
+    Scene scene = loadScene("assets/scenes/ponytail.json", {{"render.quality", draft ? "draft" : "final"}});
+    scene.render.width = 160;
+    scene.render.height = 90;
+    RenderSession session(scene);
+    std::vector<uint8_t> rgba;
+    session.renderFrame(0.0, rgba);
+    triangles[draft] = session.stats().triangles;
+  }
+  EXPECT_LT(triangles[1], triangles[0]) << "draft " << triangles[1] << ", final " << triangles[0];
 }
 
 }  // namespace
