@@ -3,6 +3,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "physics/hopper_collisions.h"
+
 namespace ponyhop {
 namespace {
 
@@ -31,16 +33,16 @@ void drawHopper(const Hopper& hopper, const HopperSection& p, const World& world
     return Eigen::Vector3d(s.body_x + s.body_q * Eigen::Vector3d(x, y, z));
   };
   const double rz = half.z();
-  const double ry = 0.75 * half.y();
-  // Main hull: a capsule along the body's x axis, squashed look from two overlapping capsules.
-  renderer.drawCapsule(at(-(half.x() - rz), 0.0, 0.0), at(half.x() - rz, 0.0, 0.0), rz, paint);
+  const auto atBody = [&](const Eigen::Vector3d& v) { return at(v.x(), v.y(), v.z()); };
+  // Main hull: a capsule along the body's x axis (its collision shape too, physics/hopper_collisions.h),
+  // squashed look from a second, overlapping capsule.
+  const std::array<CapsuleSpan, 3> hull = hopperHull(p);
+  renderer.drawCapsule(atBody(hull[0].a), atBody(hull[0].b), hull[0].ra, paint);
   renderer.drawCapsule(at(-(half.x() - rz) * 0.8, 0.0, 0.15 * rz), at((half.x() - rz) * 0.8, 0.0, 0.15 * rz), 0.9 * rz,
                        paint);
   // Side pods (the body's mass is spread out: its inertia is large) and a sensor dome on top.
-  renderer.drawTaperedCapsule(at(-0.55 * half.x(), ry + 0.3 * rz, -0.1 * rz),
-                              at(0.35 * half.x(), ry + 0.3 * rz, -0.1 * rz), 0.55 * rz, 0.45 * rz, dark);
-  renderer.drawTaperedCapsule(at(-0.55 * half.x(), -(ry + 0.3 * rz), -0.1 * rz),
-                              at(0.35 * half.x(), -(ry + 0.3 * rz), -0.1 * rz), 0.55 * rz, 0.45 * rz, dark);
+  for (int k = 1; k <= 2; ++k)
+    renderer.drawTaperedCapsule(atBody(hull[k].a), atBody(hull[k].b), hull[k].ra, hull[k].rb, dark);
   renderer.drawSphere(at(0.25 * half.x(), 0.0, 0.85 * rz), 0.45 * rz, metal);
   // Hip ball, upper leg (tube), foot (rod) and toe.
   renderer.drawSphere(s.hip, 1.35 * p.upper_radius, dark);

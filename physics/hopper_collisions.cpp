@@ -2,24 +2,41 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <numbers>
 
 namespace ponyhop {
+
+std::array<CapsuleSpan, 3> hopperHull(const HopperParams& p) {
+  const Eigen::Vector3d half = 0.5 * p.body_size;
+  const double rz = half.z();
+  const double ry = 0.75 * half.y();
+  const double side = ry + 0.3 * rz;
+  return {CapsuleSpan{Eigen::Vector3d(-(half.x() - rz), 0.0, 0.0), Eigen::Vector3d(half.x() - rz, 0.0, 0.0), rz, rz},
+          CapsuleSpan{Eigen::Vector3d(-0.55 * half.x(), side, -0.1 * rz),
+                      Eigen::Vector3d(0.35 * half.x(), side, -0.1 * rz), 0.55 * rz, 0.45 * rz},
+          CapsuleSpan{Eigen::Vector3d(-0.55 * half.x(), -side, -0.1 * rz),
+                      Eigen::Vector3d(0.35 * half.x(), -side, -0.1 * rz), 0.55 * rz, 0.45 * rz}};
+}
+
+namespace {
+
+// A span as a Shape: its z axis from b toward a, centred between them.
+Shape capsuleOf(const CapsuleSpan& c) {
+  const Eigen::Vector3d axis = c.a - c.b;
+  const double length = axis.norm();
+  const Eigen::Quaterniond rot = length > 0.0 ? Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), axis)
+                                              : Eigen::Quaterniond::Identity();
+  return Shape::capsule(0.5 * length, c.ra, c.rb, 0.5 * (c.a + c.b), rot);
+}
+
+}  // namespace
 
 HopperShapes addHopperShapes(Collisions& col, const HopperModel& m, int ground) {
   const HopperParams& p = m.params;
   HopperShapes s;
-  // The hull: a capsule along the body's x axis, radius half the body's height (engine/scene_draw.cpp).
-  const double rz = 0.5 * p.body_size.z();
-  const double half = std::max(0.5 * p.body_size.x() - rz, 0.0);
-  const Eigen::Quaterniond z_to_x(Eigen::AngleAxisd(0.5 * std::numbers::pi, Eigen::Vector3d::UnitY()));
-  s.body = col.addShape(m.body, Shape::capsule(half, rz, rz, Eigen::Vector3d::Zero(), z_to_x));
-  // The side pods: from x = -0.55 hx (radius 0.55 rz) to x = +0.35 hx (radius 0.45 rz), beside the hull.
-  const double hx = 0.5 * p.body_size.x(), side = 0.75 * 0.5 * p.body_size.y() + 0.3 * rz;
-  for (int k = 0; k < 2; ++k) {
-    const Eigen::Vector3d at(-0.1 * hx, k == 0 ? side : -side, -0.1 * rz);
-    s.pods[k] = col.addShape(m.body, Shape::capsule(0.45 * hx, 0.45 * rz, 0.55 * rz, at, z_to_x));
-  }
+  const std::array<CapsuleSpan, 3> hull = hopperHull(p);
+  s.body = col.addShape(m.body, capsuleOf(hull[0]));
+  s.pods[0] = col.addShape(m.body, capsuleOf(hull[1]));
+  s.pods[1] = col.addShape(m.body, capsuleOf(hull[2]));
   // The upper leg: hip end (+z) to its lower end, tapering to 0.8 of its radius.
   s.upper = col.addShape(m.upper, Shape::capsule(0.5 * p.upper_length, p.upper_radius, 0.8 * p.upper_radius));
   // The foot's rod: from its upper end (+z) down to two toe radii above the toe's centre.

@@ -5,12 +5,24 @@
 // two toe radii above the toe's centre, so the two never touch the ground at the same place.
 #pragma once
 
+#include <Eigen/Core>
+#include <array>
 #include <vector>
 
 #include "physics/collisions.h"
 #include "physics/hopper.h"
 
 namespace ponyhop {
+
+// A (tapered) capsule from end a (radius ra) to end b (radius rb), in a body's frame.
+struct CapsuleSpan {
+  Eigen::Vector3d a, b;
+  double ra = 0.0, rb = 0.0;
+};
+
+// The hopper's hull in its body frame: the main hull along x, then the two side pods. One
+// description for the drawing (engine/scene_draw.cpp) and the collision shapes below.
+std::array<CapsuleSpan, 3> hopperHull(const HopperParams& p);
 
 struct HopperShapes {
   int body = -1, upper = -1, foot = -1;  // shapes of the hull, the upper leg and the foot's rod
