@@ -71,6 +71,20 @@ MeshTexture readTexture(const aiScene* scene, const aiString& ref, const std::st
   return img;
 }
 
+// The up axis the file states (MeshData::file_up). An importer that converts a z-up format to
+// assimp's y up puts the rotation on the root node: the root's y row then reads the file's z.
+char statedUpAxis(const aiScene& scene) {
+  const aiMatrix4x4& r = scene.mRootNode->mTransformation;
+  const double row_y = std::sqrt(double(r.b1) * r.b1 + double(r.b2) * r.b2 + double(r.b3) * r.b3);
+  if (row_y > 0.0 && std::abs(double(r.b3)) > 0.99 * row_y) return 'y';
+  int32_t up = -1;
+  if (scene.mMetaData && scene.mMetaData->Get("UpAxis", up)) {  // FBX: 1 y, 2 z
+    if (up == 1) return 'y';
+    if (up == 2) return 'z';
+  }
+  return 0;
+}
+
 // assimp itself, in whatever process calls it.
 bool importMesh(const std::string& path, MeshData& out, std::string* err) {
   Assimp::Importer importer;
@@ -85,12 +99,18 @@ bool importMesh(const std::string& path, MeshData& out, std::string* err) {
     flags |= aiProcess_RemoveComponent;
     importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, aiComponent_NORMALS);
   }
-  const aiScene* scene = importer.ReadFile(path, flags);
+  // Read first, post-process after: the root node's own transform (which PreTransformVertices
+  // bakes in and resets) tells whether the importer turned the file's axes.
+  const aiScene* scene = importer.ReadFile(path, 0);
+  char file_up = 0;
+  if (scene && scene->mRootNode) file_up = statedUpAxis(*scene);
+  if (scene) scene = importer.ApplyPostProcessing(flags);
   if (!scene || !scene->mRootNode || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
     if (err) *err = path + ": " + importer.GetErrorString();
     return false;
   }
   MeshData m;
+  m.file_up = file_up;
   std::map<std::string, int> texture_of;  // by reference, -1: unreadable
   for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
     const aiMesh* am = scene->mMeshes[mi];
@@ -261,6 +281,7 @@ bool loadMesh(const std::string& path, MeshData& out, std::string* err) {
         putArray(result, m.normals);
         putArray(result, m.indices);
         putMaterials(result, m);
+        putArray(result, std::vector<char>{m.file_up});
         return true;
       },
       importLimits(), &bytes, &e);
@@ -271,12 +292,15 @@ bool loadMesh(const std::string& path, MeshData& out, std::string* err) {
   // What comes back is checked like any input: sizes agree, indices in range, values finite.
   MeshData m;
   size_t at = 0;
+  std::vector<char> file_up;
   if (!getArray(bytes, at, m.positions) || !getArray(bytes, at, m.normals) || !getArray(bytes, at, m.indices) ||
-      !getMaterials(bytes, at, m) || at != bytes.size() || m.normals.size() != m.positions.size() ||
-      m.indices.size() % 3 != 0) {
+      !getMaterials(bytes, at, m) || !getArray(bytes, at, file_up) || at != bytes.size() ||
+      m.normals.size() != m.positions.size() || m.indices.size() % 3 != 0 || file_up.size() != 1 ||
+      (file_up[0] != 0 && file_up[0] != 'y' && file_up[0] != 'z')) {
     if (err) *err = path + ": the import process returned inconsistent data";
     return false;
   }
+  m.file_up = file_up[0];
   for (const auto& p : m.positions) {
     if (!p.allFinite()) {
       if (err) *err = path + ": a vertex position is not a finite number";

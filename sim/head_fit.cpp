@@ -1,10 +1,12 @@
 #include "sim/head_fit.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <set>
 #include <vector>
@@ -23,7 +25,7 @@ Eigen::Matrix3d upFix(UpAxis a) {
 
 // The head of a whole-body mesh: walking down from the top, the head widens, narrows at the neck
 // and widens again at the shoulders; the neck is the narrowest slice between. Returns the neck's
-// height, or the top seventh of the mesh when no neck shows within its top 40 %.
+// height, or the top seventh of the mesh when no neck shows between 8 % and 25 % from its top.
 float findNeck(const MeshData& m, int up, float top, float height) {
   constexpr int kBins = 64;
   const int a1 = (up + 1) % 3, a2 = (up + 2) % 3;
@@ -55,29 +57,90 @@ float findNeck(const MeshData& m, int up, float top, float height) {
   for (int b = narrowing; b < limit && w[size_t(b)] <= 1.15f * head_w; ++b) {
     if (w[size_t(b)] < w[size_t(neck)]) neck = b;
   }
-  return top - (float(neck) + 0.5f) / kBins * height;
+  // A person is 6 to 8 heads tall: a "neck" in the top 8 % is hair, horns or a hat narrowing, and
+  // one below the top quarter is the waist of a figure whose head and shoulders are one width.
+  const float from_top = (float(neck) + 0.5f) / kBins;
+  if (from_top < 0.08f || from_top > 0.25f) return top - height / 7.0f;
+  return top - from_top * height;
+}
+
+// The head's bounds above the neck: the largest connected piece there (by vertex count) and the
+// pieces that touch its bounds (horns, eyes, a hat), not a hand raised beside it. Vertices are
+// joined by position, so texture seams do not split a piece.
+Eigen::AlignedBox3f headAboveNeck(const MeshData& m, int up, float neck) {
+  std::vector<uint32_t> parent(m.positions.size());
+  for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  const auto find = [&parent](uint32_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  const auto join = [&](uint32_t a, uint32_t b) { parent[find(a)] = find(b); };
+  std::map<std::array<float, 3>, uint32_t> at;
+  for (uint32_t i = 0; i < m.positions.size(); ++i) {
+    const auto& p = m.positions[i];
+    const auto [it, fresh] = at.emplace(std::array<float, 3>{p.x(), p.y(), p.z()}, i);
+    if (!fresh) join(i, it->second);
+  }
+  for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
+    const uint32_t a = m.indices[t], b = m.indices[t + 1], c = m.indices[t + 2];
+    if (m.positions[a][up] < neck || m.positions[b][up] < neck || m.positions[c][up] < neck) continue;
+    join(a, b);
+    join(b, c);
+  }
+  std::map<uint32_t, std::pair<size_t, Eigen::AlignedBox3f>> pieces;
+  for (uint32_t i = 0; i < m.positions.size(); ++i) {
+    if (m.positions[i][up] < neck) continue;
+    auto& piece = pieces[find(i)];
+    if (piece.first == 0) piece.second.setEmpty();
+    ++piece.first;
+    piece.second.extend(m.positions[i]);
+  }
+  Eigen::AlignedBox3f head;
+  head.setEmpty();
+  size_t most = 0;
+  for (const auto& [root, piece] : pieces) {
+    if (piece.first > most) {
+      most = piece.first;
+      head = piece.second;
+    }
+  }
+  Eigen::AlignedBox3f all = head;
+  for (const auto& [root, piece] : pieces)
+    if (piece.second.intersects(head)) all.extend(piece.second);
+  return all;
 }
 
 }  // namespace
 
 UpAxis detectUpAxis(const std::string& path, const MeshData& mesh, std::string* reason) {
+  const auto say = [reason](UpAxis a, const std::string& why) {
+    if (reason) *reason = why;
+    return a;
+  };
+  // What the file states, as the importer left it.
+  if (mesh.file_up == 'y') return say(UpAxis::Y, "the importer made the file y up");
+  if (mesh.file_up == 'z') return say(UpAxis::Z, "the file says z up");
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  static const std::set<std::string> y_up{".gltf", ".glb", ".dae", ".zae",     ".x",  ".b3d",
-                                          ".ms3d", ".ac",  ".acc", ".irrmesh", ".fbx"};
-  static const std::set<std::string> z_up{".md2", ".md3", ".mdl", ".mdc", ".iqm", ".3ds", ".blend", ".smd", ".dxf"};
-  if (y_up.count(ext)) {
-    if (reason) *reason = ext + " files are y up";
-    return UpAxis::Y;
+  // glTF is y up by its specification; assimp turns Collada's Z_UP and the Quake family's z up
+  // (MD2, MD3, MDL, MDC, IQM, HMP) and 3DS into y up. Said here for callers without the mesh.
+  static const std::set<std::string> y_up{".gltf", ".glb", ".dae", ".zae", ".md2", ".md3",
+                                          ".mdl",  ".mdc", ".iqm", ".hmp", ".3ds"};
+  if (y_up.count(ext)) return say(UpAxis::Y, ext + " files are y up after import");
+  // The file says nothing (OBJ, PLY, STL, OFF, Blender, SMD, X...): the shape. A figure exported
+  // standing on the origin has its lowest point at 0 along its up axis while it is centred
+  // across; otherwise heads and bodies are taller than deep.
+  if (mesh.bbox.isEmpty()) return say(UpAxis::Y, "assimp's convention (y up)");
+  const Eigen::Vector3f size = mesh.bbox.sizes();
+  const auto stands_on = [&](int k) {
+    return std::abs(mesh.bbox.min()[k]) <= 0.02f * size[k] && mesh.bbox.max()[k] > 0.5f * size[k];
+  };
+  if (stands_on(1) != stands_on(2)) {
+    const UpAxis a = stands_on(2) ? UpAxis::Z : UpAxis::Y;
+    return say(a, std::string("the mesh stands on the origin along ") + (a == UpAxis::Z ? "z" : "y"));
   }
-  if (z_up.count(ext)) {
-    if (reason) *reason = ext + " files are z up";
-    return UpAxis::Z;
-  }
-  const Eigen::Vector3f size = mesh.bbox.isEmpty() ? Eigen::Vector3f::Zero() : Eigen::Vector3f(mesh.bbox.sizes());
   const UpAxis a = size.z() > size.y() ? UpAxis::Z : UpAxis::Y;
-  if (reason) *reason = std::string("the mesh is longest along ") + (a == UpAxis::Z ? "z" : "y") + " (of y and z)";
-  return a;
+  return say(a, std::string("the mesh is longest along ") + (a == UpAxis::Z ? "z" : "y") + " (of y and z)");
 }
 
 HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData& mesh) {
@@ -90,13 +153,14 @@ HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData&
   const int up = upIndex(f.up);
   const Eigen::Vector3f size = mesh.bbox.sizes();
   const float height = size[up];
-  const float across = std::max(size[(up + 1) % 3], size[(up + 2) % 3]);
-  if (height > 1.6f * across) {  // a whole body: keep the part above the neck
+  const float wide = std::max(size[(up + 1) % 3], size[(up + 2) % 3]);
+  const float deep = std::min(size[(up + 1) % 3], size[(up + 2) % 3]);
+  // A whole body: much taller than wide, or (arms spread in a T pose) much taller than deep. Keep
+  // the part above the neck.
+  if (height > 1.6f * wide || height > 2.2f * deep) {
     f.whole_body = true;
     f.neck = findNeck(mesh, up, mesh.bbox.max()[up], height);
-    f.head_bounds.setEmpty();
-    for (const auto& p : mesh.positions)
-      if (p[up] >= f.neck) f.head_bounds.extend(p);
+    f.head_bounds = headAboveNeck(mesh, up, f.neck);
   }
   const Eigen::Vector3d c = f.head_bounds.center().cast<double>();
   const Eigen::Vector3d half = 0.5 * f.head_bounds.sizes().cast<double>();

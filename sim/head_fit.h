@@ -26,9 +26,10 @@ struct HeadFit {
   Eigen::Vector3d pivot = Eigen::Vector3d::Zero();  // mesh coordinates of the body origin
 };
 
-// The up axis a file is in: glTF, Collada (assimp turns it y up), X, B3D, MS3D, AC3D are y up; the
-// Quake formats (MD2, MD3, MDL, MDC, IQM), 3DS, Blender, SMD are z up; otherwise (OBJ, PLY, STL,
-// OFF...) the longer of the y and z extents (heads and bodies are taller than deep).
+// The up axis of a mesh as imported: what the file states (MeshData::file_up: assimp turns the
+// Quake formats, 3DS and Collada's Z_UP into y up; FBX says it), else what its format is after
+// import (glTF y up), else its shape: standing on the origin along y or z, or the longer of y and
+// z (heads and bodies are taller than deep).
 UpAxis detectUpAxis(const std::string& path, const MeshData& mesh, std::string* reason);
 
 // The fit of `mesh` (loaded from `path`) under `head`.

@@ -36,6 +36,11 @@ struct MeshData {
   std::vector<MeshPart> parts;          // index ranges by texture, or empty
   std::vector<MeshTexture> textures;
   std::vector<std::string> warnings;  // e.g. a texture that cannot be read
+  // The up axis the file itself states, as assimp returns it: 'y' when the importer turned the
+  // file's z up into y up (a rotation on its root node: MD2, IQM, 3DS, MDL...) or the file says y
+  // (FBX's UpAxis); 'z' when the file says z and was not turned; 0 when the file says nothing
+  // (OBJ, PLY, STL, Blender...).
+  char file_up = 0;
 
   size_t triangleCount() const { return indices.size() / 3; }
   // More than one plain colour: vertex colours, several base colours, or a texture.

@@ -160,7 +160,7 @@ struct EnumNames<HeadMaterials> {
 // bounds, the pivot and the anchor.
 struct HeadParams {
   std::string mesh = "assets/head/head.gltf";  // path, relative to the repository or the scene file
-  UpAxis up_axis = UpAxis::Auto;               // the mesh's up axis (auto: from the format, else the shape)
+  UpAxis up_axis = UpAxis::Auto;               // the mesh's up axis (auto: what the file states, else the shape)
   double height = 0.25;                     // m, rescale so the head (not a whole body) is this tall (0: use `scale`)
   double scale = 1.0;                       // mesh units to m (when height is 0)
   Eigen::Vector3d offset{0.0, 0.0, 0.0};    // m, added after scale and rotation (body frame)
@@ -181,7 +181,8 @@ struct HeadParams {
   void reflect(V& v) {
     v("mesh", mesh, {.help = "Mesh file (OBJ, glTF/GLB, FBX, PLY, STL, ...)", .apply = Apply::Restart});
     v("up_axis", up_axis,
-      {.help = "The mesh's up axis (auto: glTF/Collada/X y, Quake/3DS/Blender z, else the longer of y and z)",
+      {.help = "The mesh's up axis (auto: what the file states after import, else the axis it stands on, else the "
+               "longer of y and z)",
        .apply = Apply::Restart});
     v("height", height,
       {.unit = "m",

@@ -11,6 +11,7 @@
 #include "engine/asset_loader.h"
 #include "engine/frame_writer.h"
 #include "engine/mesh.h"
+#include "physics/shapes.h"
 #include "sim/head_fit.h"
 #include "sim/scene_io.h"
 #include "sim/sim.h"
@@ -36,7 +37,9 @@ const HeadCase kHeads[] = {
     // Not the Collada duck: a whole bird whose tail is the "back of the head"; with the anchor
     // 60 % up its back, the straight ponytail of t = 0 touches the tail (at 75 % it clears the
     // duck but cuts through round skulls like Suzanne's). Left out, named in docs/HEADS.md.
-    {"sydney", "MD2/sydney.md2"},  // a whole body, Quake's z up, textured
+    {"sydney", "MD2/sydney.md2"},          // a whole body, one hand raised to the head, textured
+    {"human_blend", "BLEND/HUMAN.blend"},  // a bust, z up, centred
+    {"human_dae", "Collada/human.zae"},    // a whole body, y up, standing on the origin
 };
 
 std::vector<Override> headOverrides(const std::string& mesh) {
@@ -56,12 +59,11 @@ TEST_P(Heads, LandWellWithThePonytailOnTheBackOfTheHead) {
 
   // The head's part, in the world at t = 0.
   Eigen::AlignedBox3d box;
-  std::vector<Eigen::Vector3d> head_points, all_points;
+  std::vector<Eigen::Vector3d> all_points;
   for (const auto& p : rt.head()->mesh.positions) {
     const Eigen::Vector3d w = head.pointToWorld(rt.head()->mesh_to_body * p.cast<double>());
     all_points.push_back(w);
     if (fit.head_bounds.contains(p)) {
-      head_points.push_back(w);
       box.extend(head.q.conjugate() * (w - head.x));  // body frame
     }
   }
@@ -78,8 +80,21 @@ TEST_P(Heads, LandWellWithThePonytailOnTheBackOfTheHead) {
   const Eigen::Vector3d anchor = chain->anchor_local;
   EXPECT_GT(anchor.y(), box.center().y()) << "the anchor is on the back half";
   EXPECT_GT(anchor.z(), box.center().z()) << "the anchor is on the upper half";
+  // Nearest point of the head's own triangles (a low-poly head's vertices lie far apart).
   double nearest = 1e9;
-  for (const auto& w : head_points) nearest = std::min(nearest, (head.q.conjugate() * (w - head.x) - anchor).norm());
+  const auto& mesh_data = rt.head()->mesh;
+  const Eigen::Vector3d anchor_world = head.pointToWorld(anchor);
+  for (size_t t = 0; t + 2 < mesh_data.indices.size(); t += 3) {
+    Eigen::Vector3d v[3];
+    bool in_head = true;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3f& p = mesh_data.positions[mesh_data.indices[t + size_t(k)]];
+      in_head = in_head && fit.head_bounds.contains(p);
+      v[k] = head.pointToWorld(rt.head()->mesh_to_body * p.cast<double>());
+    }
+    if (in_head)
+      nearest = std::min(nearest, (closestPointOnTriangle(anchor_world, v[0], v[1], v[2]) - anchor_world).norm());
+  }
   EXPECT_LT(nearest, chain->radii.front() + 0.005) << "the first link holds on to the head";
 
   // At t = 0 no link but the first touches the mesh (the whole mesh: a body's back too).

@@ -312,5 +312,24 @@ TEST(SceneIo, FieldMetadataSaysHowAnEditApplies) {
   EXPECT_FALSE(findField(s, "chain.no_such_field", m));
 }
 
+// A mesh-space anchor belongs to its mesh: another head given by --set alone is anchored from its
+// own bounds (with a note saying so); given together with the anchor, or to a scene whose anchor
+// is already in bounds space, nothing changes.
+TEST(SceneIo, AnotherHeadMeshTakesItsAnchorFromItsOwnBounds) {
+  const Scene file = loadScene("assets/scenes/ponytail.json");
+  ASSERT_TRUE(file.head);
+  EXPECT_EQ(file.head->anchor_space, AnchorSpace::Mesh);
+  const Scene other = loadScene("assets/scenes/ponytail.json", {{"head.mesh", "assets/head/head.obj"}});
+  EXPECT_EQ(other.head->anchor_space, AnchorSpace::Bounds);
+  ASSERT_EQ(other.notes.size(), 1u);
+  EXPECT_NE(other.notes[0].find("head.anchor_in_bounds"), std::string::npos) << other.notes[0];
+  const Scene kept =
+      loadScene("assets/scenes/ponytail.json", {{"head.mesh", "assets/head/head.obj"}, {"head.anchor_space", "mesh"}});
+  EXPECT_EQ(kept.head->anchor_space, AnchorSpace::Mesh);
+  EXPECT_TRUE(kept.notes.empty());
+  const Scene same = loadScene("assets/scenes/ponytail.json", {{"head.mesh", "assets/head/head.gltf"}});
+  EXPECT_EQ(same.head->anchor_space, AnchorSpace::Mesh);
+}
+
 }  // namespace
 }  // namespace ponyhop
