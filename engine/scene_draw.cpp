@@ -75,6 +75,15 @@ unsigned SceneDraw::parts(const Sim& sim) {
 void SceneDraw::draw(const Sim& sim, Renderer& renderer, const Scene& drawing, unsigned hide) const {
   const Scene& scene = sim.scene();
   const World& world = sim.world();
+  if (sim.terrain() && drawing.terrain) {
+    const Material stone = material(drawing.terrain->color, 0.12f, 16.0f);
+    for (const Shape& box : sim.terrain()->shapes()) {
+      Eigen::Affine3d pose = Eigen::Affine3d::Identity();
+      pose.translate(box.offset);
+      pose.rotate(box.rotation);
+      renderer.drawBox(pose, box.half_extents, stone);
+    }
+  }
   for (size_t i = 0; i < sim.hoppers().size() && !(hide & kHopper); ++i) {
     if (sim.hoppers()[i]->built()) drawHopper(*sim.hoppers()[i], hopperSection(scene, i), world, renderer);
   }

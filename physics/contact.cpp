@@ -23,7 +23,7 @@ int FootContact::dimension() const {
 // p_b = anchor: C = R + r - anchor, J = [I  -r~], J'q' = w x (w x r), r = c - R the arm from the
 // foot's centre of mass to the sphere's centre. Row 3 is the dot-product row x_f . g with g fixed
 // in the world (physics/prismatic_joint.cpp): a torque about x_f x g, close to vertical.
-// Slide: the z row alone (C = c_z - rho).
+// Slide: the normal row alone (C = n . c - level - rho; on the plane z = 0, c_z - rho).
 void FootContact::evaluate(const RigidBody& a, const RigidBody& b, ConstraintRows& out) const {
   const Eigen::Vector3d r = a.q * center_;
   const Eigen::Vector3d c = a.x + r;
@@ -48,10 +48,11 @@ void FootContact::evaluate(const RigidBody& a, const RigidBody& b, ConstraintRow
       return;
     }
     case ContactMode::Slide:
-      out.C(0) = c.z() - radius_;
-      out.ja.row(0) << 0.0, 0.0, 1.0, minus_skew.row(2);
+      const Eigen::Vector3d& n = state_->normal;
+      out.C(0) = n.dot(c) - state_->level - radius_;
+      out.ja.row(0) << n.transpose(), n.transpose() * minus_skew;
       out.jb.row(0).setZero();
-      out.bias(0) = wwr.z();
+      out.bias(0) = n.dot(wwr);
       return;
   }
 }
@@ -59,23 +60,52 @@ void FootContact::evaluate(const RigidBody& a, const RigidBody& b, ConstraintRow
 void KineticFriction::apply(std::vector<RigidBody>& bodies) const {
   if (state_->mode != ContactMode::Slide) return;
   RigidBody& foot = bodies[foot_];
-  const Eigen::Vector3d p = foot.pointToWorld(center_) - radius_ * Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d p = foot.pointToWorld(center_) - radius_ * state_->normal;
   const Eigen::Vector3d f = -mu_ * state_->normal_force * state_->slip_dir;
   foot.force += f;
   foot.torque += (p - foot.x).cross(f);
 }
 
 GroundContact::GroundContact(World& world, int foot, const Eigen::Vector3d& center_local, double radius, double mu,
-                             double twist_radius)
+                             double twist_radius, std::shared_ptr<const Terrain> terrain)
     : foot_(foot),
       center_(center_local),
       radius_(radius),
       mu_(mu),
       twist_radius_(twist_radius),
-      state_(std::make_shared<ContactState>()) {
+      state_(std::make_shared<ContactState>()),
+      terrain_(std::move(terrain)) {
   joint_ = world.addJoint(std::make_unique<FootContact>(foot, center_local, radius, state_));
   world.addForceElement(std::make_unique<KineticFriction>(foot, center_local, radius, mu, state_));
 }
+
+Terrain::Surface GroundContact::groundAt(const Eigen::Vector3d& c) const {
+  if (terrain_) return terrain_->at(c);
+  Terrain::Surface s;
+  s.distance = c.z();
+  return s;
+}
+
+Eigen::Vector3d GroundContact::onGround(const Eigen::Vector3d& c) const {
+  const Eigen::Vector3d& n = state_->normal;
+  if (n == Eigen::Vector3d::UnitZ()) return Eigen::Vector3d(c.x(), c.y(), state_->level + radius_);
+  return c + (state_->level + radius_ - n.dot(c)) * n;
+}
+
+namespace {
+
+// The part of v along the ground (v minus its part along the normal).
+Eigen::Vector3d tangential(const Eigen::Vector3d& v, const Eigen::Vector3d& n) {
+  if (n == Eigen::Vector3d::UnitZ()) return Eigen::Vector3d(v.x(), v.y(), 0.0);
+  return v - v.dot(n) * n;
+}
+
+double tangentialNorm(const Eigen::Vector3d& v, const Eigen::Vector3d& n) {
+  if (n == Eigen::Vector3d::UnitZ()) return std::hypot(v.x(), v.y());
+  return tangential(v, n).norm();
+}
+
+}  // namespace
 
 int GroundContact::rowOffset(const World& world) const {
   int row = 0;
@@ -88,9 +118,10 @@ void GroundContact::update(World& world) {
   if (state_->mode == ContactMode::Off) {
     const RigidBody& f = world.body(foot_);
     const Eigen::Vector3d c = f.pointToWorld(center_);
-    const double gap = c.z() - radius_;
+    const Terrain::Surface ground = groundAt(c);
+    const double gap = ground.distance - radius_;
     // Touching and moving into the ground (or clearly below it): the foot lands.
-    if (gap < -1e-6 || (gap <= 0.0 && f.velocityAt(c).z() <= 0.0)) touchdown(world);
+    if (gap < -1e-6 || (gap <= 0.0 && ground.normal.dot(f.velocityAt(c)) <= 0.0)) touchdown(world, ground);
     return;
   }
   checkForces(world);
@@ -103,7 +134,7 @@ Eigen::VectorXd GroundContact::projectVelocities(World& world, bool& ok) {
   return y.segment(rowOffset(world), world.joints()[joint_]->dimension());
 }
 
-void GroundContact::touchdown(World& world) {
+void GroundContact::touchdown(World& world, const Terrain::Surface& ground) {
   std::vector<RigidBody>& bodies = world.bodies();
   const std::vector<RigidBody> before = bodies;
   const double energy_before = world.kineticEnergy();
@@ -116,10 +147,12 @@ void GroundContact::touchdown(World& world) {
   const RigidBody& f = bodies[foot_];
   const Eigen::Vector3d c = f.pointToWorld(center_);
   const Eigen::Vector3d xf = f.q * Eigen::Vector3d::UnitX();
-  const Eigen::Vector3d g = Eigen::Vector3d::UnitZ().cross(xf);
+  const Eigen::Vector3d g = ground.normal.cross(xf);
 
   state_->mode = mu_ > 0.0 ? ContactMode::Stick : ContactMode::Slide;
-  state_->anchor = Eigen::Vector3d(c.x(), c.y(), radius_);
+  state_->normal = ground.normal;
+  state_->level = ground.level;
+  state_->anchor = onGround(c);
   state_->twist = twist_radius_ > 0.0 && mu_ > 0.0 && g.norm() > 1e-6;
   if (state_->twist) state_->twist_ref = g.normalized();
 
@@ -132,13 +165,14 @@ void GroundContact::touchdown(World& world) {
   bool ok = true;
   Eigen::VectorXd y = projectVelocities(world, ok);
   if (ok && state_->mode == ContactMode::Stick) {
-    if (state_->twist && std::abs(y(3)) > mu_ * twist_radius_ * y(2)) {
+    const Eigen::Vector3d& n = state_->normal;
+    if (state_->twist && std::abs(y(3)) > mu_ * twist_radius_ * n.dot(y.head<3>())) {
       state_->twist = false;  // the landing twists the foot: torsional friction cannot hold it
       ++stats_.twist_slips;
       restoreVelocities();
       y = projectVelocities(world, ok);
     }
-    if (ok && std::hypot(y(0), y(1)) > mu_ * y(2)) {
+    if (ok && tangentialNorm(y.head<3>(), n) > mu_ * n.dot(y.head<3>())) {
       // Outside the friction cone: a sliding landing. Normal impulse alone, then Coulomb's
       // friction impulse mu P_n against the remaining slip (the joints share it out).
       ++stats_.sliding_touchdowns;
@@ -148,9 +182,8 @@ void GroundContact::touchdown(World& world) {
       if (ok) {
         RigidBody& foot = bodies[foot_];
         const Eigen::Vector3d cc = foot.pointToWorld(center_);
-        const Eigen::Vector3d p_contact = cc - radius_ * Eigen::Vector3d::UnitZ();
-        Eigen::Vector3d vt = foot.velocityAt(p_contact);
-        vt.z() = 0.0;
+        const Eigen::Vector3d p_contact = cc - radius_ * state_->normal;
+        const Eigen::Vector3d vt = tangential(foot.velocityAt(p_contact), state_->normal);
         if (vt.norm() > 1e-9) {
           state_->slip_dir = vt.normalized();
           const Eigen::Vector3d impulse = -mu_ * std::max(0.0, y(0)) * state_->slip_dir;
@@ -177,8 +210,9 @@ void GroundContact::checkForces(World& world) {
   const Eigen::VectorXd& lambda = world.lambda();
   const int row = rowOffset(world);
   if (state_->mode == ContactMode::Stick) {
-    const double n = lambda(row + 2);
-    const Eigen::Vector3d ft(lambda(row), lambda(row + 1), 0.0);
+    const Eigen::Vector3d force = lambda.segment<3>(row);
+    const double n = state_->normal.dot(force);
+    const Eigen::Vector3d ft = tangential(force, state_->normal);
     state_->normal_force = n;
     state_->friction_force = ft;
     state_->twist_torque = state_->twist ? lambda(row + 3) : 0.0;
@@ -217,12 +251,11 @@ void GroundContact::checkForces(World& world) {
   if (mu_ <= 0.0) return;
   const RigidBody& foot = world.body(foot_);
   const Eigen::Vector3d c = foot.pointToWorld(center_);
-  Eigen::Vector3d vt = foot.velocityAt(c - radius_ * Eigen::Vector3d::UnitZ());
-  vt.z() = 0.0;
+  const Eigen::Vector3d vt = tangential(foot.velocityAt(c - radius_ * state_->normal), state_->normal);
   if (vt.dot(state_->slip_dir) <= 0.0) {
     // Kinetic friction has stopped the slip: stick where the foot is now.
     state_->mode = ContactMode::Stick;
-    state_->anchor = Eigen::Vector3d(c.x(), c.y(), radius_);
+    state_->anchor = onGround(c);
     state_->twist = false;
     bool ok = true;
     projectVelocities(world, ok);

@@ -1,4 +1,5 @@
-// The foot against the ground plane z = 0: an active-set Lagrange-multiplier contact (in the
+// The foot against the ground (the plane z = 0, or a terrain of boxes on it: physics/terrain.h,
+// met through the tangent plane under the toe, n . y = level): an active-set Lagrange-multiplier contact (in the
 // spirit of the method, exact; why this and not a stiff spring: docs/HOPPER.md).
 //
 // The foot's toe is a sphere (centre c fixed in the foot, radius rho). Its contact is one
@@ -10,7 +11,7 @@
 //          torsion row C = x_f . g (x_f the foot's x axis, g a horizontal world vector with
 //          x_f . g = 0 at touchdown; the dot-product row of physics/prismatic_joint.cpp) while
 //          torsional friction holds. lambda = (friction x, friction y, normal, twist torque).
-//   Slide  C = c_z - rho (1 row, the normal force); kinetic friction mu N against the slip
+//   Slide  C = n . c - level - rho (1 row, the normal force); kinetic friction mu N against the slip
 //          direction is an external force (KineticFriction), N taken from the last solve.
 //
 // GroundContact decides the mode after every step (World's contact stage):
@@ -41,6 +42,7 @@
 #include "physics/constraint.h"
 #include "physics/controller.h"
 #include "physics/force_elements.h"
+#include "physics/terrain.h"
 #include "physics/world.h"
 
 namespace ponyhop {
@@ -54,6 +56,8 @@ struct ContactState {
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();          // Stick: where c is held (world)
   Eigen::Vector3d twist_ref = Eigen::Vector3d::UnitY();      // Stick: g (world, horizontal)
   Eigen::Vector3d slip_dir = Eigen::Vector3d::UnitX();       // Slide: unit direction of slip
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();         // the ground's plane under the toe (in contact)
+  double level = 0.0;                                        //   n . y = level
   double normal_force = 0.0;                                 // N, last solve (0 when Off)
   Eigen::Vector3d friction_force = Eigen::Vector3d::Zero();  // N, tangential, last solve
   double twist_torque = 0.0;                                 // N m, last solve
@@ -101,9 +105,10 @@ struct ContactStats {
 class GroundContact final : public ContactSet {
  public:
   // Adds the contact constraint and the friction element to `world` for the toe sphere of body
-  // `foot` (centre in the foot's frame, radius). Contact with the plane z = 0.
+  // `foot` (centre in the foot's frame, radius). Contact with `terrain`, or the plane z = 0 when
+  // it is null.
   GroundContact(World& world, int foot, const Eigen::Vector3d& center_local, double radius, double mu,
-                double twist_radius);
+                double twist_radius, std::shared_ptr<const Terrain> terrain = nullptr);
 
   // The contact stage (World calls it after each accepted substep).
   void update(World& world) override;
@@ -118,11 +123,23 @@ class GroundContact final : public ContactSet {
   const ContactStats& stats() const { return stats_; }
   int jointIndex() const { return joint_; }
   Eigen::Vector3d center(const World& world) const { return world.body(foot_).pointToWorld(center_); }
-  // The lowest point of the toe sphere (the contact point in stance).
-  Eigen::Vector3d point(const World& world) const { return center(world) - radius_ * Eigen::Vector3d::UnitZ(); }
+  // The toe sphere's point against the ground (in stance the contact point; in flight its lowest point).
+  Eigen::Vector3d point(const World& world) const {
+    return center(world) - radius_ * (inContact() ? state_->normal : Eigen::Vector3d::UnitZ());
+  }
+  const Terrain* terrain() const { return terrain_.get(); }
+  // The height of the ground under the toe in stance (exactly 0 on the plane z = 0), else 0.
+  double groundHeight(const World& world) const {
+    if (!inContact() || state_->normal == Eigen::Vector3d::UnitZ()) return inContact() ? state_->level : 0.0;
+    return point(world).z();
+  }
 
  private:
-  void touchdown(World& world);
+  void touchdown(World& world, const Terrain::Surface& ground);
+  // The plane under the toe: the terrain's, or z = 0.
+  Terrain::Surface groundAt(const Eigen::Vector3d& c) const;
+  // The toe's centre moved along the ground's normal to rest on it (exact on the plane z = 0).
+  Eigen::Vector3d onGround(const Eigen::Vector3d& c) const;
   void checkForces(World& world);
   // Velocities onto the joints' and the contact's velocity constraints (World's projection,
   // through its solver); returns the contact's impulse rows (empty when it has none) or sets
@@ -135,6 +152,7 @@ class GroundContact final : public ContactSet {
   double radius_, mu_, twist_radius_;
   int joint_ = -1;
   std::shared_ptr<ContactState> state_;
+  std::shared_ptr<const Terrain> terrain_;
   ContactStats stats_;
 };
 

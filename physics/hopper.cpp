@@ -153,8 +153,8 @@ void computeHopperForces(const HopperModel& m, const HopperSetpoints& s, double 
 
 // ---------------------------------------------------------------------------------------------
 
-std::shared_ptr<Hopper> Hopper::add(World& world, const HopperParams& params) {
-  auto h = std::make_shared<Hopper>(Key{}, world, params);
+std::shared_ptr<Hopper> Hopper::add(World& world, const HopperParams& params, std::shared_ptr<const Terrain> terrain) {
+  auto h = std::make_shared<Hopper>(Key{}, world, params, std::move(terrain));
   if (h->built()) {
     world.addController(h);
     world.addContactSet(h->contact_);
@@ -162,7 +162,8 @@ std::shared_ptr<Hopper> Hopper::add(World& world, const HopperParams& params) {
   return h;
 }
 
-Hopper::Hopper(Key, World& world, const HopperParams& params) : params_(params) {
+Hopper::Hopper(Key, World& world, const HopperParams& params, std::shared_ptr<const Terrain> terrain)
+    : params_(params) {
   mem_.command = params.command;
   if (std::string e = validate(params); !e.empty()) {
     world.fail(e);
@@ -219,7 +220,8 @@ Hopper::Hopper(Key, World& world, const HopperParams& params) : params_(params) 
   m.knee_joint =
       world.addJoint(std::make_unique<PrismaticJoint>(m.upper, Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity(),
                                                       m.foot, Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
-  contact_ = std::make_shared<GroundContact>(world, m.foot, m.toe_in_foot, p.toe_radius, p.friction, p.twist_radius);
+  contact_ = std::make_shared<GroundContact>(world, m.foot, m.toe_in_foot, p.toe_radius, p.friction, p.twist_radius,
+                                             std::move(terrain));
 
   mem_.setpoints.leg_length = p.rest_length;
   mem_.setpoints.heading = mem_.heading;
@@ -314,7 +316,8 @@ void Hopper::think(World& world) {
           // Per-hop trim of the thrust from the apex error (integral action on the losses the
           // energy estimate below does not know: damping, the foot's impact, a ponytail).
           mem_.height_trim =
-              std::clamp(mem_.height_trim + p.height_gain * (cmd.height - mem_.last_apex), -p.thrust_max, p.thrust_max);
+              std::clamp(mem_.height_trim + p.height_gain * (cmd.height - (mem_.last_apex - mem_.stance_ground)),
+                         -p.thrust_max, p.thrust_max);
         }
         // Per-hop integral of the speed error on the foot placement (the neutral point
         // x' T_s / 2 is only approximately where the hopper neither speeds up nor slows down).
@@ -340,8 +343,9 @@ void Hopper::think(World& world) {
         // Energy to reach the commanded apex from here (vertical part): the spring, extended to
         // r0 + delta, must release 1/2 k (r0 + delta - r)^2 = M g (h_d - z) - 1/2 M z'^2.
         const double m_total = mass();
-        const double needed =
-            std::max(0.0, m_total * g * (cmd.height - body.x.z()) - 0.5 * m_total * body.v.z() * body.v.z());
+        mem_.stance_ground = contact_->groundHeight(world);
+        const double needed = std::max(0.0, m_total * g * (cmd.height + mem_.stance_ground - body.x.z()) -
+                                                0.5 * m_total * body.v.z() * body.v.z());
         const double feedforward = std::sqrt(2.0 * needed / p.leg_stiffness) - (p.rest_length - leg.length);
         mem_.thrust = std::clamp(feedforward + mem_.height_trim, -0.5 * (p.rest_length - p.min_length), p.thrust_max);
       }

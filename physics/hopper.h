@@ -86,8 +86,10 @@ class Hopper final : public Controller {
   // a controller (think + muscles) and its contact as a contact set: world.step() then runs it.
   // Invalid params: the world stops with the message (world.status()), nothing is built, and
   // built() is false.
-  static std::shared_ptr<Hopper> add(World& world, const HopperParams& params);
-  Hopper(Key, World& world, const HopperParams& params);
+  // The toe meets `terrain` (physics/terrain.h), or the plane z = 0 when it is null.
+  static std::shared_ptr<Hopper> add(World& world, const HopperParams& params,
+                                     std::shared_ptr<const Terrain> terrain = nullptr);
+  Hopper(Key, World& world, const HopperParams& params, std::shared_ptr<const Terrain> terrain);
 
   // Think (seed 000): the state machine; World::step calls it once per step, first.
   void think(World& world) override;
@@ -147,6 +149,7 @@ class Hopper final : public Controller {
     double stance_time = 0.2;
     double flight_max_z = -1e300;
     double last_apex = 0.0;
+    double stance_ground = 0.0;  // m, the ground's height under the toe in the last stance (terrain)
     double thrust = 0.0;
     double height_trim = 0.0;
     Eigen::Vector2d speed_trim = Eigen::Vector2d::Zero();        // m, integral part of the foot placement

@@ -30,7 +30,7 @@ Shape capsuleOf(const CapsuleSpan& c) {
 
 }  // namespace
 
-HopperShapes addHopperShapes(Collisions& col, const HopperModel& m, int ground) {
+HopperShapes addHopperShapes(Collisions& col, const HopperModel& m, const std::vector<int>& scenery) {
   const HopperParams& p = m.params;
   HopperShapes s;
   const std::array<CapsuleSpan, 3> hull = hopperHull(p);
@@ -46,10 +46,9 @@ HopperShapes addHopperShapes(Collisions& col, const HopperModel& m, int ground) 
                                                  Eigen::Vector3d(0.0, 0.0, 0.5 * (top + bottom))));
   }
   s.toe = col.addShape(m.foot, Shape::sphere(p.toe_radius, m.toe_in_foot));
-  if (ground >= 0) {
+  for (int ground : scenery)
     for (int shape : {s.body, s.pods[0], s.pods[1], s.upper, s.foot})
       if (shape >= 0) col.addPair(shape, ground, p.friction);
-  }
   return s;
 }
 

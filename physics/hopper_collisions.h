@@ -31,9 +31,9 @@ struct HopperShapes {
   std::vector<int> all() const { return {body, pods[0], pods[1], upper, foot, toe}; }
 };
 
-// Adds the shapes of the hopper `m` to `col`; with ground >= 0 (a plane shape), pairs of the hull,
-// the upper leg and the foot's rod with it, at the hopper's own friction.
-HopperShapes addHopperShapes(Collisions& col, const HopperModel& m, int ground);
+// Adds the shapes of the hopper `m` to `col` and pairs the hull, the upper leg and the foot's rod
+// with each of `scenery` (the ground plane, a terrain's boxes), at the hopper's own friction.
+HopperShapes addHopperShapes(Collisions& col, const HopperModel& m, const std::vector<int>& scenery);
 
 // Pairs every shape of a with every shape of b (two hoppers that can run into each other).
 void pairHoppers(Collisions& col, const HopperShapes& a, const HopperShapes& b);

@@ -14,6 +14,7 @@
 #include "physics/keyframe_params.h"
 #include "physics/physics_params.h"
 #include "physics/reflect.h"
+#include "physics/terrain.h"
 
 namespace ponyhop {
 
@@ -292,6 +293,19 @@ struct CollisionSection : HeadCollisionParams {
   }
 };
 
+// Boxes on the ground (physics/terrain.h): steps, and slopes as tilted boxes. The hoppers' toes
+// stand on them; with collision.ground their bodies and legs meet them too. Drawn as boxes.
+struct TerrainSection {
+  std::vector<TerrainBox> boxes;
+  Eigen::Vector3d color{0.42, 0.36, 0.3};  // linear RGB
+
+  template <class V>
+  void reflect(V& v) {
+    v("boxes", boxes, {.help = "Boxes standing on or in the ground plane"});
+    v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Colour of the boxes", .apply = Apply::Live});
+  }
+};
+
 struct Scene {
   std::string path;       // the file it was read from ("" when built in code)
   std::string name;       // a short title
@@ -306,6 +320,7 @@ struct Scene {
   std::optional<HopperSection> hopper;
   std::vector<HopperSection> hoppers;  // more hoppers in the same world (each with its own position)
   std::optional<CollisionSection> collision;
+  std::optional<TerrainSection> terrain;
   std::vector<std::string> notes;  // what the reader chose for the user (not a field), shown on stderr
 
   template <class V>
@@ -329,6 +344,9 @@ struct Scene {
     v("hopper", hopper, {.help = "Raibert hopper (body, leg, ground contact, controller)"});
     v("hoppers", hoppers, {.help = "More hoppers in the same world, each a hopper section", .apply = Apply::Restart});
     v("collision", collision, {.help = "Collisions: the ponytail against the head"});
+    v("terrain", terrain,
+      {.help = "Boxes on the ground (steps, slopes) for the hoppers' toes and, with collision.ground, their bodies",
+       .apply = Apply::Restart});
   }
 };
 

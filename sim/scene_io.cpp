@@ -531,6 +531,9 @@ void validateScene(const Scene& scene_in, const std::string& source) {
           "need collision.head true (collision.head false builds nothing)");
     }
   }
+  if (scene.terrain && !scene.hopper && scene.hoppers.empty()) {
+    errors.push_back("terrain: the scene has no hopper (the boxes are ground for the hoppers' toes and bodies)");
+  }
   if (scene.collision && scene.collision->ground && !scene.hopper && scene.hoppers.empty()) {
     errors.push_back("collision.ground: the scene has no hopper (it makes the hoppers' bodies and legs collide)");
   }

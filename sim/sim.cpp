@@ -13,6 +13,7 @@ namespace ponyhop {
 Sim::Sim(const Scene& scene, const AssetLoader* assets) : scene_(scene), world_(scene.physics) {
   if (!world_.ok()) throw SceneError(scene_.path + ": physics: " + world_.status());
   if (scene_.head) buildHead(assets);
+  if (scene_.terrain) terrain_ = std::make_shared<const Terrain>(scene_.terrain->boxes);
   buildHoppers();
   if (scene_.chain) buildChain();
   if (scene_.collision) buildCollisions();
@@ -42,9 +43,11 @@ void Sim::buildCollisions() {
       cp.margin = c.margin;
       collisions_ = std::make_shared<Collisions>(cp, world_.params().solver);
     }
-    const int ground = collisions_->addShape(kWorldBody, Shape::plane(Eigen::Vector3d::UnitZ()));
+    std::vector<int> scenery{collisions_->addShape(kWorldBody, Shape::plane(Eigen::Vector3d::UnitZ()))};
+    if (terrain_)
+      for (const Shape& box : terrain_->shapes()) scenery.push_back(collisions_->addShape(kWorldBody, box));
     std::vector<HopperShapes> shapes;
-    for (const auto& h : hoppers_) shapes.push_back(addHopperShapes(*collisions_, h->model(), ground));
+    for (const auto& h : hoppers_) shapes.push_back(addHopperShapes(*collisions_, h->model(), scenery));
     for (size_t i = 0; i < shapes.size(); ++i)
       for (size_t j = i + 1; j < shapes.size(); ++j) pairHoppers(*collisions_, shapes[i], shapes[j]);
   }
@@ -105,7 +108,7 @@ void Sim::buildHoppers() {
   if (scene_.hopper) all.push_back(&*scene_.hopper);
   for (const HopperSection& p : scene_.hoppers) all.push_back(&p);
   for (size_t i = 0; i < all.size(); ++i) {
-    hoppers_.push_back(Hopper::add(world_, *all[i]));
+    hoppers_.push_back(Hopper::add(world_, *all[i], terrain_));
     if (!world_.ok()) {
       const bool listed = !(scene_.hopper && i == 0);
       const std::string which = listed ? "hoppers." + std::to_string(i - (scene_.hopper ? 1 : 0)) + ": " : "";

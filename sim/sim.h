@@ -54,6 +54,7 @@ class Sim {
   const HeadAsset* head() const { return head_ ? &*head_ : nullptr; }
   // The hoppers, in scene order (`hopper`, then each of `hoppers`).
   const std::vector<std::shared_ptr<Hopper>>& hoppers() const { return hoppers_; }
+  const Terrain* terrain() const { return terrain_.get(); }
   const Hopper* hopper(size_t i = 0) const { return i < hoppers_.size() ? hoppers_[i].get() : nullptr; }
   Hopper* hopper(size_t i = 0) { return i < hoppers_.size() ? hoppers_[i].get() : nullptr; }
   // The scene's collisions (collision section), null when it names none.
@@ -99,6 +100,7 @@ class Sim {
   std::optional<Chain> chain_;
   std::vector<std::shared_ptr<Hopper>> hoppers_;
   std::shared_ptr<Collisions> collisions_;
+  std::shared_ptr<const Terrain> terrain_;  // the scene's terrain section (null: the plane z = 0 alone)
 };
 
 }  // namespace ponyhop
