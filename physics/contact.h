@@ -1,6 +1,7 @@
-// The foot against the ground (the plane z = 0, or a terrain of boxes on it: physics/terrain.h,
-// met through the tangent plane under the toe, n . y = level): an active-set Lagrange-multiplier contact (in the
-// spirit of the method, exact; why this and not a stiff spring: docs/HOPPER.md).
+// The foot against the ground: an active-set Lagrange-multiplier contact (in the spirit of the
+// method, exact; why this and not a stiff spring: docs/HOPPER.md). The ground is the plane z = 0,
+// or a terrain of boxes on it (physics/terrain.h) met through the tangent plane under the toe,
+// n . y = level (n = +z, level = 0 on the plane; the formulas below are written for it).
 //
 // The foot's toe is a sphere (centre c fixed in the foot, radius rho). Its contact is one
 // Constraint whose rows change with its mode (the active set):
@@ -54,7 +55,7 @@ struct ContactState {
   ContactMode mode = ContactMode::Off;
   bool twist = false;                                        // Stick: the torsion row is active
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();          // Stick: where c is held (world)
-  Eigen::Vector3d twist_ref = Eigen::Vector3d::UnitY();      // Stick: g (world, horizontal)
+  Eigen::Vector3d twist_ref = Eigen::Vector3d::UnitY();      // Stick: g (world, along the ground)
   Eigen::Vector3d slip_dir = Eigen::Vector3d::UnitX();       // Slide: unit direction of slip
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();         // the ground's plane under the toe (in contact)
   double level = 0.0;                                        //   n . y = level
@@ -130,7 +131,8 @@ class GroundContact final : public ContactSet {
   const Terrain* terrain() const { return terrain_.get(); }
   // The height of the ground under the toe in stance (exactly 0 on the plane z = 0), else 0.
   double groundHeight(const World& world) const {
-    if (!inContact() || state_->normal == Eigen::Vector3d::UnitZ()) return inContact() ? state_->level : 0.0;
+    if (!inContact()) return 0.0;
+    if (state_->normal == Eigen::Vector3d::UnitZ()) return state_->level;  // a level face: exact
     return point(world).z();
   }
 

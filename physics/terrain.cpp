@@ -1,6 +1,5 @@
 #include "physics/terrain.h"
 
-#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -29,19 +28,6 @@ Terrain::Surface Terrain::at(const Eigen::Vector3d& x) const {
     }
   }
   return s;
-}
-
-double Terrain::heightAt(double x, double y) const {
-  // Down from high above: the first surface met (bisection on the signed distance along z).
-  double top = 0.0;
-  for (const Shape& box : shapes_) top = std::max(top, box.offset.z() + box.half_extents.norm());
-  double hi = top + 1.0, lo = 0.0;
-  if (at(Eigen::Vector3d(x, y, lo)).distance > 0.0) return 0.0;
-  for (int i = 0; i < 60; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (at(Eigen::Vector3d(x, y, mid)).distance > 0.0 ? hi : lo) = mid;
-  }
-  return lo;
 }
 
 }  // namespace ponyhop

@@ -28,7 +28,10 @@ struct TerrainBox {
     v("center", center, {.unit = "m", .min = -1e4, .max = 1e4, .help = "Centre of the box (world)"});
     v("size", size, {.unit = "m", .min = 1e-3, .max = 1e4, .help = "Edge lengths along the box's own x, y, z"});
     v("rotation", rotation,
-      {.unit = "deg", .min = -360, .max = 360, .help = "Euler angles about x, y, z (R = Rz Ry Rx): a slope is a tilted box"});
+      {.unit = "deg",
+       .min = -360,
+       .max = 360,
+       .help = "Euler angles about x, y, z (R = Rz Ry Rx): a slope is a tilted box"});
   }
 };
 
@@ -44,8 +47,6 @@ class Terrain {
   };
   // The ground's tangent plane nearest to x.
   Surface at(const Eigen::Vector3d& x) const;
-  // The height of the ground's top surface above (x, y) (0 where no box is): for placing things.
-  double heightAt(double x, double y) const;
 
   // The boxes as world-fixed shapes (Shape::box with the box's pose).
   const std::vector<Shape>& shapes() const { return shapes_; }

@@ -37,7 +37,6 @@ TEST(Terrain, TheTangentPlaneOfABoxASlopeAndThePlane) {
   EXPECT_NEAR(top.distance, 0.2, 1e-12);
   EXPECT_NEAR((top.normal - Eigen::Vector3d::UnitZ()).norm(), 0.0, 1e-12);
   EXPECT_NEAR(top.level, 0.1, 1e-12);
-  EXPECT_NEAR(t.heightAt(2.2, 0.1), 0.1, 1e-9);
   // Beside the step, low: the plane z = 0 is nearer than the step's side.
   EXPECT_EQ(t.at(Eigen::Vector3d(0.5, 0.0, 0.02)).normal, Eigen::Vector3d::UnitZ());
   // Above the slope's middle: the normal tilted by 10 degrees toward -x.
@@ -45,7 +44,6 @@ TEST(Terrain, TheTangentPlaneOfABoxASlopeAndThePlane) {
   EXPECT_NEAR(std::acos(s.normal.z()) / kDeg, 10.0, 1e-9);
   EXPECT_LT(s.normal.x(), 0.0);
   EXPECT_NEAR(s.distance, 0.5 * std::cos(10.0 * kDeg) - 0.1, 1e-9);
-  EXPECT_NEAR(t.heightAt(-3.0, 0.0), 0.1 / std::cos(10.0 * kDeg), 1e-9);
 }
 
 TEST(HopperTerrain, RunsUpASlopeAcrossAPlateauAndDownAStep) {
@@ -73,9 +71,10 @@ TEST(HopperTerrain, RunsUpASlopeAcrossAPlateauAndDownAStep) {
   }
   ASSERT_TRUE(sim.ok()) << sim.status();
   const Eigen::Vector3d end = sim.world().body(h.model().body).x;
-  std::printf("[ terrain ] deepest toe %.2e m, max tilt %.1f deg, lowest body %.3f m, highest stance %.3f m, "
-              "%d touchdowns on the boxes, ends at x = %.2f m\n",
-              deepest, max_tilt / kDeg, lowest_body, highest_stance, stances_on_boxes, end.x());
+  std::printf(
+      "[ terrain ] deepest toe %.2e m, max tilt %.1f deg, lowest body %.3f m, highest stance %.3f m, "
+      "%d touchdowns on the boxes, ends at x = %.2f m\n",
+      deepest, max_tilt / kDeg, lowest_body, highest_stance, stances_on_boxes, end.x());
   EXPECT_GT(deepest, -1e-3) << "the toe never sinks into the terrain";
   EXPECT_GT(highest_stance, 0.15) << "it stood on the plateau";
   EXPECT_GE(stances_on_boxes, 8);
