@@ -239,8 +239,15 @@ std::string plotScaling(const std::string& dir, const std::vector<ScalingRow>& r
        "stabilization; peers: their own step)'\n"
     << "set logscale xy\nset xlabel 'links N'\nset ylabel 'microseconds per step'\nset key left top\nset grid\n"
     << "plot ";
+  // A colour per series (ten, none repeated: gnuplot's own cycle has eight); ours solid and
+  // thick, the peers (engine/method) thin, dashed, each with its own marker.
+  static const char* kColors[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                                  "#8c564b", "#e377c2", "#17becf", "#bcbd22", "#7f7f7f"};
   for (size_t i = 0; i < solvers.size(); ++i) {
-    g << "'" << data << "' index " << i << " using 1:2 with linespoints lw 2 pt 7 title '" << solvers[i] << "', ";
+    const bool peer = solvers[i].find('/') != std::string::npos;
+    g << "'" << data << "' index " << i << " using 1:2 with linespoints lc rgb '" << kColors[i % 10] << "' "
+      << (peer ? "lw 1.5 dt 2 pt " + std::to_string(4 + i % 8) : std::string("lw 3 pt 7")) << " title '" << solvers[i]
+      << "', ";
   }
   g << fmt(y8, "%.6g") << "*(x/" << n0 << ".0) with lines dt 2 lc rgb 'gray40' title 'guide: n', " << fmt(y8, "%.6g")
     << "*(x/" << n0 << ".0)**3 with lines dt 3 lc rgb 'gray20' title 'guide: n^3'\n";
