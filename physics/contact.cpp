@@ -80,10 +80,8 @@ GroundContact::GroundContact(World& world, int foot, const Eigen::Vector3d& cent
 }
 
 Terrain::Surface GroundContact::groundAt(const Eigen::Vector3d& c) const {
-  if (terrain_) return terrain_->at(c);
-  Terrain::Surface s;
-  s.distance = c.z();
-  return s;
+  static const Terrain kPlane;  // no boxes: the plane z = 0
+  return (terrain_ ? *terrain_ : kPlane).at(c);
 }
 
 Eigen::Vector3d GroundContact::onGround(const Eigen::Vector3d& c) const {

@@ -392,13 +392,10 @@ Scene parseScene(const json& j_in, const std::string& source, const std::vector<
   if (!j.is_object()) throw SceneError(source + ": a scene file must be a JSON object { ... }");
   // A mesh-space anchor belongs to the mesh it was written for: another mesh given by --set alone
   // takes its anchor from its own bounds (head.anchor_in_bounds).
-  bool other_mesh = false, anchor_given = false;
-  for (const auto& o : overrides) {
-    other_mesh = other_mesh || o.key == "head.mesh" || o.key == "head";
-    anchor_given = anchor_given || o.key == "head" || o.key.rfind("head.anchor", 0) == 0;
-  }
+  bool anchor_given = false;
+  for (const auto& o : overrides) anchor_given = anchor_given || o.key == "head" || o.key.rfind("head.anchor", 0) == 0;
   const bool mesh_anchor = j.contains("head") && j["head"].is_object() && j["head"].contains("anchor_space") &&
-                           j["head"]["anchor_space"] == "mesh";
+                           j["head"]["anchor_space"] == "mesh" && j["head"].contains("mesh");
   for (const auto& o : overrides) {
     const std::string section = o.key.substr(0, o.key.find('.'));
     for (const char* opt : kOptionalSections) {
@@ -410,8 +407,7 @@ Scene parseScene(const json& j_in, const std::string& source, const std::vector<
     applyOverride(j, o);
   }
   std::string anchor_note;
-  if (other_mesh && !anchor_given && mesh_anchor && j["head"].is_object() && j["head"].contains("mesh") &&
-      j_in["head"].contains("mesh") && j["head"]["mesh"] != j_in["head"]["mesh"]) {
+  if (mesh_anchor && !anchor_given && j["head"]["mesh"] != j_in["head"]["mesh"]) {
     j["head"]["anchor_space"] = "bounds";
     anchor_note = "head.anchor is in the coordinates of the scene's own mesh (" +
                   shortText(j_in["head"]["mesh"].dump()) + "); on " + shortText(j["head"]["mesh"].dump()) +
