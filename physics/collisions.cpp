@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "physics/pgs.h"
 #include "physics/solver_factory.h"
 #include "physics/stabilization.h"
 #include "physics/world.h"
@@ -12,7 +13,6 @@ namespace ponyhop {
 namespace {
 
 constexpr double kActiveSlop = 1e-6;  // m: a contact this close after the stage persists
-constexpr int kMaxSweeps = 5000;      // projected Gauss-Seidel sweeps at most
 constexpr int kPositionPasses = 4;    // push-out and joint re-projection rounds at most
 
 const RigidBody& bodyOf(const std::vector<RigidBody>& bodies, int i) {
@@ -24,58 +24,6 @@ Vector6d velocityOf(const RigidBody& b) {
   Vector6d v;
   v << b.v, b.w;
   return v;
-}
-
-// Projected Gauss-Seidel on  P >= 0 (normal rows), |P_t| <= mu P_n (tangent pairs after their
-// normal), with velocity u = u0 + D P and targets: normal u_n >= target_n with complementarity,
-// tangents u_t = 0 inside the disc. `blocks` lists each constraint's first row and row count.
-int projectedGaussSeidel(const Eigen::MatrixXd& d, const Eigen::VectorXd& u0, const Eigen::VectorXd& target,
-                         const std::vector<std::pair<int, int>>& blocks, const std::vector<double>& mu,
-                         Eigen::VectorXd& p) {
-  const int m = static_cast<int>(u0.size());
-  p = Eigen::VectorXd::Zero(m);
-  Eigen::VectorXd u = u0;
-  double scale = 1e-300;
-  for (int i = 0; i < m; ++i) scale = std::max(scale, std::abs(u0(i) - target(i)) / std::max(d(i, i), 1e-300));
-  const auto update = [&](int i, double value) {
-    const double delta = value - p(i);
-    if (delta == 0.0) return 0.0;
-    p(i) = value;
-    u += d.col(i) * delta;
-    return std::abs(delta);
-  };
-  int sweep = 0;
-  for (; sweep < kMaxSweeps; ++sweep) {
-    double change = 0.0;
-    for (size_t c = 0; c < blocks.size(); ++c) {
-      const int n = blocks[c].first;
-      if (d(n, n) > 1e-300) change = std::max(change, update(n, std::max(0.0, p(n) + (target(n) - u(n)) / d(n, n))));
-      if (blocks[c].second == 3) {
-        for (int t = n + 1; t <= n + 2; ++t)
-          if (d(t, t) > 1e-300) update(t, p(t) - u(t) / d(t, t));
-        const double limit = mu[c] * p(n);
-        const double len = std::hypot(p(n + 1), p(n + 2));
-        if (len > limit) {
-          const double s = len > 0.0 ? limit / len : 0.0;
-          const double p1 = p(n + 1) * s, p2 = p(n + 2) * s;
-          change = std::max(change, update(n + 1, p1));
-          change = std::max(change, update(n + 2, p2));
-        }
-        // The tangents' change counts too (sticking).
-      }
-    }
-    double tangent_residual = 0.0;
-    for (size_t c = 0; c < blocks.size(); ++c) {
-      if (blocks[c].second != 3) continue;
-      const int n = blocks[c].first;
-      const bool inside = std::hypot(p(n + 1), p(n + 2)) < mu[c] * p(n) * (1.0 - 1e-12);
-      if (inside)
-        tangent_residual =
-            std::max(tangent_residual, std::hypot(u(n + 1), u(n + 2)) / std::max(d(n + 1, n + 1), 1e-300));
-    }
-    if (change <= 1e-13 * scale && tangent_residual <= 1e-12 * scale) break;
-  }
-  return sweep + 1;
 }
 
 }  // namespace

@@ -12,16 +12,21 @@
 //          torsion row C = x_f . g (x_f the foot's x axis, g a horizontal world vector with
 //          x_f . g = 0 at touchdown; the dot-product row of physics/prismatic_joint.cpp) while
 //          torsional friction holds. lambda = (friction x, friction y, normal, twist torque).
-//   Slide  C = n . c - level - rho (1 row, the normal force); kinetic friction mu N against the slip
-//          direction is an external force (KineticFriction), N taken from the last solve.
+//   Slide  C = n . c - level - rho (1 row, the normal force N); kinetic friction mu N against the
+//          slip direction acts at the contact point (KineticFriction) with the N of the same
+//          joint-force solve: the solve is linear in the friction's magnitude, so two solves give
+//          the consistent N exactly (slideForces in contact.cpp).
 //
 // GroundContact decides the mode after every step (World's contact stage):
-//   touchdown  Off and the sphere reaches the plane moving down: Stick at the landing point;
-//              positions projected onto C = 0 (no penetration is ever left in a state) and
-//              velocities projected onto J v = 0 in the mass metric: a perfectly inelastic
-//              impulse, which can only remove kinetic energy (Kelvin). If the impulse lies outside
-//              the friction cone (|P_t| > mu P_n) the landing is a sliding one instead (normal
-//              impulse only, then a friction impulse mu P_n against the slip).
+//   touchdown  Off and the sphere reaches the plane moving down: positions projected onto C = 0
+//              (no penetration is ever left in a state), then one impulse with friction in the
+//              same solve: the contact point's normal and two tangent velocities, their Delassus
+//              matrix through the joints (the World's own mass-metric projection), and the cone
+//              problem P_n >= 0, u_n' = 0, |P_t| <= mu P_n with P_t against the slip that remains
+//              (physics/pgs.h). The impulse stops the slip: Stick at the landing point (its rows'
+//              projection is that impulse, exact). It cannot: Slide on, with that impulse, which
+//              only removes kinetic energy and never turns the slip around, and N and friction at
+//              once (no step without friction).
 //   liftoff    in contact and the normal multiplier, solved at the state just reached, is
 //              N <= 0: the ground would have to pull, so the rows are dropped (unilateral).
 //   slip       Stick and |lambda_t| > mu N: Slide, the slip direction opposite the friction
@@ -29,9 +34,11 @@
 //              torsion row for the rest of the stance.
 //   re-stick   Slide and the slip velocity reversed (v_t . slip_dir <= 0): Stick where it is.
 //
-// Cost: one extra force evaluation (a joint-force solve) per step in contact, and one or two
-// projections per touchdown. Accuracy: a contact event is resolved at the end of the step in
-// which it happens (up to one step late); the inelastic projection is exact for that state.
+// Friction is a cone (an isotropic disc), as in the collision stage: the toe is a sphere, so no
+// direction along the ground is special, and a pyramid's facets would steer a slip toward them.
+// Cost: one extra force evaluation (a joint-force solve) per step in stick, three in slide, and
+// up to six projections per touchdown. Accuracy: a contact event is resolved at the end of the
+// step in which it happens (up to one step late); the impulse is exact for that state.
 #pragma once
 
 #include <Eigen/Core>
@@ -80,7 +87,8 @@ class FootContact final : public Constraint {
   std::shared_ptr<ContactState> state_;
 };
 
-// Kinetic friction while sliding: f = -mu N slip_dir at the contact point (N from the last solve).
+// Kinetic friction while sliding: f = -mu N slip_dir at the contact point (N solved with it:
+// GroundContact::slideForces).
 class KineticFriction final : public ForceElement {
  public:
   KineticFriction(int foot, const Eigen::Vector3d& center_local, double radius, double mu,
@@ -101,6 +109,10 @@ struct ContactStats {
   int slips = 0;                              // Stick -> Slide transitions in stance
   int twist_slips = 0;                        // torsion rows dropped
   double max_touchdown_energy_gain = -1e300;  // J, kinetic energy after - before the impulse
+  // m/s: over sliding landings, the largest slip speed after the impulse against the direction
+  // of the slip before it (positive would be a friction impulse that reversed the slip)
+  double max_slip_reversal = -1e300;
+  int inconsistent_slides = 0;  // slide solves without a consistent N (Painleve), kept the first solve's
 };
 
 class GroundContact final : public ContactSet {
@@ -143,6 +155,18 @@ class GroundContact final : public ContactSet {
   // The toe's centre moved along the ground's normal to rest on it (exact on the plane z = 0).
   Eigen::Vector3d onGround(const Eigen::Vector3d& c) const;
   void checkForces(World& world);
+  void checkSlide(World& world, int row);
+  // Slide: the normal force N and the kinetic friction mu N solved together at the current state.
+  void slideForces(World& world);
+  // The touchdown impulse with friction in the same solve (contact.cpp): applied to the
+  // velocities; `sticks` when it stops the slip inside the cone.
+  struct Impact {
+    double normal = 0.0;                                 // P_n, N s
+    Eigen::Vector3d slip = Eigen::Vector3d::Zero();      // tangential velocity of the contact point after
+    Eigen::Vector3d approach = Eigen::Vector3d::Zero();  // ... and before
+    bool sticks = true;
+  };
+  Impact impact(World& world, bool& ok);
   // Velocities onto the joints' and the contact's velocity constraints (World's projection,
   // through its solver); returns the contact's impulse rows (empty when it has none) or sets
   // ok = false.
