@@ -20,7 +20,7 @@ long stepsFor(double duration, double dt) { return std::lround(duration / dt); }
 
 std::unique_ptr<Sim> build(const BenchCase& c, const Method& m, double dt) {
   std::vector<Override> o = c.overrides;
-  for (Override& x : methodOverrides(m, dt)) o.push_back(std::move(x));
+  for (Override& x : methodOverrides(m, dt, c.control_period)) o.push_back(std::move(x));
   return std::make_unique<Sim>(loadScene(c.scene, o));
 }
 
@@ -36,31 +36,33 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-std::vector<Override> methodOverrides(const Method& m, double dt) {
+std::vector<Override> methodOverrides(const Method& m, double dt, double control_period) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", dt);
+  std::snprintf(buf, sizeof buf, "%.17g", control_period > 0.0 ? control_period : dt);
+  const long substeps = control_period > 0.0 ? std::max(1L, std::lround(control_period / dt)) : 1L;
   char tol[32];
   std::snprintf(tol, sizeof tol, "%.17g", kBenchTolerance);
   return {{"physics.solver", m.solver},
           {"physics.integrator", m.integrator},
           {"physics.stabilization", m.stabilization},
           {"physics.dt", buf},
-          {"physics.substeps", "1"},
+          {"physics.substeps", std::to_string(substeps)},
           {"physics.max_step_rotation", m.step == StepControl::Auto ? "2" : "0"},
           {"physics.tolerance", m.step == StepControl::Tol ? tol : "0"}};
 }
 
 Trajectory simulateTrajectory(const BenchCase& c, const Method& m, double dt, double duration) {
   Trajectory t;
-  const long every = sampleEvery(dt);
-  t.stride = every * dt;
+  const double ws = c.worldStep(dt);
+  const long every = sampleEvery(ws);
+  t.stride = every * ws;
   auto rt = build(c, m, dt);
   if (!rt->ok()) {
     t.status = rt->status();
     return t;
   }
   t.p.push_back(rt->trackedPoint());
-  const long n = stepsFor(duration, dt);
+  const long n = stepsFor(duration, ws);
   for (long i = 1; i <= n; ++i) {
     if (!rt->step()) {
       t.status = rt->status();
@@ -72,7 +74,7 @@ Trajectory simulateTrajectory(const BenchCase& c, const Method& m, double dt, do
 }
 
 std::array<double, 2> trajectoryError(const Trajectory& run, const Trajectory& ref, double horizon) {
-  const long ratio = std::max(1L, std::lround(run.stride / kBenchGrid));
+  const long ratio = std::max(1L, std::lround(run.stride / ref.stride));
   double sum = 0.0, worst = 0.0;
   long count = 0;
   for (size_t k = 0; k < run.p.size() && k * run.stride <= horizon + 1e-9; ++k) {
@@ -89,12 +91,13 @@ std::array<double, 2> trajectoryError(const Trajectory& run, const Trajectory& r
 RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizon, int repeats,
                    const Trajectory& reference) {
   RunResult r;
-  const long n = stepsFor(horizon, dt);
-  const long every = sampleEvery(dt);
+  const double ws = c.worldStep(dt);
+  const long n = stepsFor(horizon, ws);
+  const long every = sampleEvery(ws);
   r.steps = n;
   std::unique_ptr<Sim> first;
   Trajectory traj;
-  traj.stride = every * dt;
+  traj.stride = every * ws;
   std::vector<double> per_step;
   std::vector<StageTimes> stages;
   std::vector<double> substeps;
@@ -135,15 +138,17 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   for (size_t i = 0; i < per_step.size(); ++i) {
     if (std::abs(per_step[i] - med) < std::abs(per_step[pick] - med)) pick = i;
   }
-  r.us_per_step = 1e6 * med;
+  // Per step of dt (a World step of a control period holds period / dt of them).
+  const double per = dt / ws;
+  r.us_per_step = 1e6 * med * per;
   r.us_per_sim_second = r.us_per_step / dt;
-  r.substeps = substeps[pick];
+  r.substeps = substeps[pick] * per;
   double staged = 0.0;
   for (int s = 0; s < StageTimes::kCount; ++s) {
-    r.stage_us[s] = 1e6 * stages[pick].seconds[s] / std::max(1L, r.steps);
+    r.stage_us[s] = 1e6 * stages[pick].seconds[s] / std::max(1L, r.steps) * per;
     staged += r.stage_us[s];
   }
-  r.other_us = std::max(0.0, 1e6 * per_step[pick] - staged);
+  r.other_us = std::max(0.0, 1e6 * per_step[pick] * per - staged);
   if (r.status != "ok") return r;
   const auto err = trajectoryError(traj, reference, horizon);
   r.err_rms = err[0];
@@ -152,8 +157,8 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   // Long run: the first repeat continued (untimed) to the long duration.
   Sim& rt = *first;
   r.tolerance_misses = rt.world().toleranceMisses();
-  const long total_steps = stepsFor(c.long_duration, dt);
-  const long sample = std::max(1L, std::lround(kDriftSample / dt));
+  const long total_steps = stepsFor(c.long_duration, ws);
+  const long sample = std::max(1L, std::lround(kDriftSample / ws));
   const double e0 = rt.chainEnergy();  // after the horizon: equal to the start's up to the drift so far
   auto fresh = build(c, m, dt);
   const double e_start = fresh->chainEnergy();

@@ -30,6 +30,16 @@ struct BenchCase {
   std::string anchor;          // chain: fixed | shake; hopper: ""
   bool conservative = false;   // energy is conserved (fixed anchor, no damping): its drift is measured
   double long_duration = 0.0;  // s, the long run (drift, boundedness)
+  // > 0: the scene's controllers think once per this period (s) whatever the step: every run
+  // steps the World by it (physics.dt) in period / dt substeps of dt. The hopper's Think runs
+  // at 1 kHz in every run, so runs and reference share one controller and differ only in their
+  // integration (its decisions, taken once per World step, are otherwise up to a step late).
+  double control_period = 0.0;
+  std::vector<int> dt_denominators;           // this case's dts (1 / d s); empty: the bench's
+  double horizon_target = 0.0;                // s, the reference must converge this long (0: the bench's cap)
+  std::vector<Override> reference_overrides;  // added for the reference's runs only
+  // The World's step of a run at dt.
+  double worldStep(double dt) const { return control_period > 0.0 ? control_period : dt; }
 };
 
 // A position sampled every `stride` seconds from t = 0 (p[k] at k stride): every step of the run,
@@ -63,13 +73,14 @@ struct Method {
 };
 
 // The overrides that make a run use `method` at step dt: fixed steps (dt means dt), or dt split
-// by the method's step control.
-std::vector<Override> methodOverrides(const Method& method, double dt);
+// by the method's step control. With a control period: physics.dt = the period, in period / dt
+// substeps.
+std::vector<Override> methodOverrides(const Method& method, double dt, double control_period = 0.0);
 
 // Runs the case with the method at dt for `duration` seconds and samples the tracked point.
 Trajectory simulateTrajectory(const BenchCase& c, const Method& method, double dt, double duration);
 
-// RMS and max distance of `run` from `reference` (sampled every kBenchGrid) over run's samples
+// RMS and max distance of `run` from `reference` (its stride dividing run's) over run's samples
 // in [0, horizon]. Returns {rms, max}.
 std::array<double, 2> trajectoryError(const Trajectory& run, const Trajectory& reference, double horizon);
 

@@ -50,6 +50,7 @@ struct BenchArgs {
   std::string chain_scene = "assets/scenes/chain.json";
   std::string hopper_scene = "assets/scenes/hopper.json";
   bool hopper = true;
+  bool chains = true;
   bool peers = true;
   double long_fixed = -1.0, long_shake = -1.0, long_hopper = -1.0;  // s, < 0: the mode's default
   int repeats = -1;
@@ -147,17 +148,23 @@ struct Reference {
 
 // Halves the reference step from h0 until the runs at h and h/2 agree within kConverged over at
 // least `target` seconds (or h reaches h_min). The finer run is the reference.
-Reference computeReference(const BenchCase& c, const Config& cfg, double target, std::vector<ReferenceCheck>& checks) {
+Reference computeReference(const BenchCase& bench_case, const Config& cfg, double target,
+                           std::vector<ReferenceCheck>& checks) {
   Reference ref;
+  BenchCase c = bench_case;
+  for (const Override& o : bench_case.reference_overrides) c.overrides.push_back(o);
+  // With a control period, the reference's steps divide it: the period / 16 down to / 128.
+  const double h0 = c.control_period > 0.0 ? c.control_period / 16.0 : cfg.reference_h0;
+  const double h_min = c.control_period > 0.0 ? c.control_period / 128.0 : cfg.reference_h_min;
   ref.method = {"featherstone", "rk4", "none"};
-  Trajectory a = simulateTrajectory(c, ref.method, cfg.reference_h0, cfg.reference_span);
+  Trajectory a = simulateTrajectory(c, ref.method, h0, cfg.reference_span);
   if (a.p.size() < 2) {  // featherstone cannot express this scene (the hopper's contact)
     ref.note = "reduced coordinates cannot run this scene (" + a.status +
                "); the reference is maximal-coordinate dense/rk4/projection, converged the same way";
     ref.method = {"dense", "rk4", "projection"};
-    a = simulateTrajectory(c, ref.method, cfg.reference_h0, cfg.reference_span);
+    a = simulateTrajectory(c, ref.method, h0, cfg.reference_span);
   }
-  double h = cfg.reference_h0;
+  double h = h0;
   while (true) {
     std::fprintf(stderr, "bench: %s reference %s at h = 1/%.0f s\n", c.id.c_str(), ref.method.name().c_str(), 2.0 / h);
     Trajectory b = simulateTrajectory(c, ref.method, 0.5 * h, cfg.reference_span);
@@ -167,9 +174,9 @@ Reference computeReference(const BenchCase& c, const Config& cfg, double target,
     bool within = true;
     for (size_t k = 0; k < n; ++k) {
       const double d = (a.p[k] - b.p[k]).norm();
-      if (k * kBenchGrid <= check_time + 1e-9) max_diff = std::max(max_diff, d);
+      if (k * a.stride <= check_time + 1e-9) max_diff = std::max(max_diff, d);
       if (within && d <= kConverged)
-        horizon = k * kBenchGrid;
+        horizon = k * a.stride;
       else
         within = false;
     }
@@ -178,7 +185,7 @@ Reference computeReference(const BenchCase& c, const Config& cfg, double target,
     ref.trajectory = std::move(b);
     ref.h = 0.5 * h;
     ref.horizon = horizon;
-    if (horizon >= target - 1e-9 || 0.5 * h <= cfg.reference_h_min * 1.0001) break;
+    if (horizon >= target - 1e-9 || 0.5 * h <= h_min * 1.0001) break;
     a = std::move(ref.trajectory);
     h *= 0.5;
   }
@@ -213,7 +220,8 @@ void writeSummary(std::ofstream& f, const std::vector<std::unique_ptr<BenchCase>
        "accurate). *Default*: what a scene gets without settings ("
     << kDefaultMethod
     << " at dt = 1/240 s, "
-       "ponyhop's 2 deg step control); its rank is by cost among the bounded runs.\n\n"
+       "ponyhop's 2 deg step control; the hopper: at its scene's 1 ms); its rank is by cost among the bounded "
+       "runs.\n\n"
     << "| case | fastest bounded | best accuracy per cost | the default | default's cost rank |\n"
     << "|---|---|---|---|---|\n";
   const auto describe = [](const BenchRow& r) {
@@ -221,6 +229,7 @@ void writeSummary(std::ofstream& f, const std::vector<std::unique_ptr<BenchCase>
            fmt(r.r.err_rms) + " m";
   };
   for (const auto& c : cases) {
+    const double default_dt = c->control_period > 0.0 ? c->control_period : 1.0 / 240.0;
     const BenchRow* fastest = nullptr;
     const BenchRow* best = nullptr;
     const BenchRow* def = nullptr;
@@ -232,7 +241,7 @@ void writeSummary(std::ofstream& f, const std::vector<std::unique_ptr<BenchCase>
       if (bounded && (!fastest || row.r.us_per_sim_second < fastest->r.us_per_sim_second)) fastest = &row;
       const double score = row.r.err_rms * row.r.us_per_sim_second;
       if (!best || score < best->r.err_rms * best->r.us_per_sim_second) best = &row;
-      if (row.method == kDefaultMethod && std::abs(row.dt - 1.0 / 240.0) < 1e-12) def = &row;
+      if (row.method == kDefaultMethod && std::abs(row.dt - default_dt) < 1e-12) def = &row;
     }
     std::string rank = "-";
     if (def && def->r.long_status == "ok") {
@@ -284,7 +293,9 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
        "centre) from the reference at the run's own steps over the converged horizon. Long runs continue the "
        "first run untimed: energy drift max|E - E0| (fixed anchor, conservative), joint drift (max |C| sampled "
        "every 1/240 s) and bounded (joints within 1 cm, speed below 100 m/s, energy drift below E0, the hopper "
-       "between 0.2 and 5 m high).\n\n";
+       "between 0.2 and 5 m high). The hopper's runs step the World at its controller's period (the scene's "
+       "dt, 1 ms: Think once per step) in 1 ms / dt fixed substeps of dt, so every run and the reference share one "
+       "controller; its dt column is the substep and its costs are per substep.\n\n";
   for (const auto& n : notes) f << "- " << n << '\n';
   if (!notes.empty()) f << '\n';
 
@@ -298,7 +309,7 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
       << fmt(c.max_diff) << " | " << fmt(c.check_time) << " | " << fmt(c.horizon) << " |\n";
   }
   f << "\nHorizon used for the error columns (the converged horizon, cut to a multiple of 1/60 s and at most "
-    << fmt(cfg.horizon_cap) << " s):\n\n";
+    << fmt(cfg.horizon_cap) << " s; the hopper's at most 2 s, three stances):\n\n";
   for (size_t i = 0; i < refs.size(); ++i) {
     f << "- " << cases[i]->title << ": reference " << refs[i].method.name() << " at h = " << dtName(refs[i].h)
       << " s, converged for " << fmt(refs[i].horizon) << " s; error measured over ";
@@ -312,7 +323,9 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
   for (size_t ci = 0; ci < refs.size(); ++ci) {
     const BenchCase& c = *cases[ci];
     f << "\n## " << c.title << "\n\n![error against cost](error_vs_cost_" << c.id << ".png)\n\n";
-    const double pick = args.quick ? 1.0 / 480.0 : 1.0 / 240.0;
+    const double pick = !c.dt_denominators.empty() ? 1.0 / c.dt_denominators.front()
+                        : args.quick               ? 1.0 / 480.0
+                                                   : 1.0 / 240.0;
     f << "### All methods at dt = " << dtName(pick) << " s\n\n"
       << "| method | status | substeps | us/step | ms per sim. s | RMS err (m) | max err (m) | energy drift (J) | "
          "joint drift (m) "
@@ -524,6 +537,7 @@ int runBench(BenchArgs& args) {
                   std::to_string(EnumNames<Stabilization>::names.size()) + ".");
 
   std::vector<std::unique_ptr<BenchCase>> cases;
+  if (!args.chains) cfg.links.clear();
   if (args.scaling_only) {
     cfg.links.clear();
     args.hopper = false;
@@ -548,6 +562,13 @@ int runBench(BenchArgs& args) {
     c->title = "hopper";
     c->scene = args.hopper_scene;
     c->long_duration = cfg.long_hopper;
+    // Think at the scene's rate (1 kHz) in every run; the runs' steps divide it. The reference
+    // locates touchdowns to round-off depth and converges over three stances (2 s).
+    c->control_period = loadScene(args.hopper_scene).physics.dt;
+    for (int k : args.quick ? std::vector<int>{1, 4} : std::vector<int>{1, 2, 4, 8})
+      c->dt_denominators.push_back(static_cast<int>(std::lround(k / c->control_period)));
+    c->horizon_target = args.quick ? cfg.horizon_cap : 2.0;
+    c->reference_overrides = {{"hopper.impact_tolerance", "1e-12"}};
     cases.push_back(std::move(c));
   }
   // Small cases first (the hopper right after N = 8): a stopped long bench keeps the cheap ones.
@@ -622,14 +643,15 @@ int runBench(BenchArgs& args) {
   };
   for (const auto& cp : cases) {
     const BenchCase& c = *cp;
-    Reference ref = computeReference(c, cfg, std::min(cfg.horizon_cap, 1.0), checks);
-    double horizon = std::floor(std::min(ref.horizon, cfg.horizon_cap) * 60.0 + 1e-9) / 60.0;
+    const double cap = c.horizon_target > 0.0 ? c.horizon_target : cfg.horizon_cap;
+    Reference ref = computeReference(c, cfg, std::min(cap, cfg.reference_span), checks);
+    double horizon = std::floor(std::min(ref.horizon, cap) * 60.0 + 1e-9) / 60.0;
     if (horizon < 1.0 / 60.0) {
       notes.push_back(c.title + ": the reference converged for only " + fmt(ref.horizon) +
                       " s; errors are measured over 1/60 s and are not meaningful beyond it");
       horizon = 1.0 / 60.0;
     }
-    for (int d : cfg.dt_denominators) {
+    for (int d : c.dt_denominators.empty() ? cfg.dt_denominators : c.dt_denominators) {
       const double dt = 1.0 / d;
       for (const Method& m : methods) {
         BenchRow row{&c, m.name(), m.solver, m.integrator, m.stabilization, m.stepName(), dt, horizon, {}};
@@ -697,6 +719,7 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 100000));
   cmd->add_flag("!--no-scaling", args->scaling, "Leave out the cost-against-N sweep");
   cmd->add_flag("--scaling-only", args->scaling_only, "Only the cost-against-N sweep (no chains, no hopper)");
+  cmd->add_flag("!--no-chains", args->chains, "Leave out the chain cases (the hopper and the sweeps stay)");
   cmd->add_flag("!--no-collision", args->collision,
                 "Leave out the collision cost (the ponytail with its head collider on and off)");
   cmd->add_option("--ponytail-scene", args->ponytail_scene, "The scene of the collision cost");
@@ -730,6 +753,7 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
     if (!args->dts.empty()) args->command_line += " --dts " + list(args->dts);
     if (!args->scaling) args->command_line += " --no-scaling";
     if (args->scaling_only) args->command_line += " --scaling-only";
+    if (!args->chains) args->command_line += " --no-chains";
     if (!args->collision) args->command_line += " --no-collision";
     if (args->ponytail_scene != BenchArgs{}.ponytail_scene)
       args->command_line += " --ponytail-scene " + args->ponytail_scene;

@@ -107,6 +107,16 @@ int GroundContact::rowOffset(const World& world) const {
   return row;
 }
 
+// A touchdown inside the substep just taken: the toe, in flight at its start, ends it deeper than
+// the tolerance. (Liftoff is not located: the ground can pull for at most the rest of one step,
+// an impulse of order N' h^2 / 2; locating it by the normal force's sign costs a joint-force
+// solve per substep in stance, and the bisection's mixed substep sizes set off the stability
+// watch of explicit methods on the light foot's servo right after liftoff.)
+bool GroundContact::impactInside(const World& world) const {
+  if (!(impact_tolerance_ > 0.0) || !world.ok() || state_->mode != ContactMode::Off) return false;
+  return groundAt(center(world)).distance - radius_ < -impact_tolerance_;
+}
+
 void GroundContact::update(World& world) {
   if (!world.ok()) return;
   if (state_->mode == ContactMode::Off) {

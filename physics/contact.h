@@ -37,8 +37,10 @@
 // Friction is a cone (an isotropic disc), as in the collision stage: the toe is a sphere, so no
 // direction along the ground is special, and a pyramid's facets would steer a slip toward them.
 // Cost: one extra force evaluation (a joint-force solve) per step in stick, three in slide, and
-// up to six projections per touchdown. Accuracy: a contact event is resolved at the end of the
-// step in which it happens (up to one step late); the impulse is exact for that state.
+// up to six projections per touchdown. Accuracy: touchdowns are located within the step
+// (locateEvents: the substep is bisected until the toe ends it at most that deep); liftoff and
+// slip are resolved at the end of the substep in which they happen (up to one substep late). The
+// impulse is exact for the state it acts at.
 #pragma once
 
 #include <Eigen/Core>
@@ -122,9 +124,14 @@ class GroundContact final : public ContactSet {
   // it is null.
   GroundContact(World& world, int foot, const Eigen::Vector3d& center_local, double radius, double mu,
                 double twist_radius, std::shared_ptr<const Terrain> terrain = nullptr);
+  // Touchdowns located within the step (0: at the end of the step in which they happen): one
+  // that ends a substep deeper than `depth` (m) splits the substep (World's bisection, to 1/1024
+  // of it), so the impulse acts at most `depth` past the touching state.
+  void locateEvents(double depth) { impact_tolerance_ = depth; }
 
   // The contact stage (World calls it after each accepted substep).
   void update(World& world) override;
+  bool impactInside(const World& world) const override;
   // The active set and the counters (what update() changes).
   std::any saveState() const override { return std::pair<ContactState, ContactStats>(*state_, stats_); }
   void restoreState(const std::any& s) override {
@@ -179,6 +186,7 @@ class GroundContact final : public ContactSet {
   int joint_ = -1;
   std::shared_ptr<ContactState> state_;
   std::shared_ptr<const Terrain> terrain_;
+  double impact_tolerance_ = 0.0;
   ContactStats stats_;
 };
 

@@ -222,6 +222,7 @@ Hopper::Hopper(Key, World& world, const HopperParams& params, std::shared_ptr<co
                                                       m.foot, Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
   contact_ = std::make_shared<GroundContact>(world, m.foot, m.toe_in_foot, p.toe_radius, p.friction, p.twist_radius,
                                              std::move(terrain));
+  contact_->locateEvents(p.impact_tolerance);
 
   mem_.setpoints.leg_length = p.rest_length;
   mem_.setpoints.heading = mem_.heading;

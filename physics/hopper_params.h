@@ -104,6 +104,9 @@ struct HopperParams {
   // Ground contact (plane z = 0).
   double friction = 1.0;       // Coulomb mu
   double twist_radius = 0.02;  // m, torsional friction limit = mu * normal force * twist_radius
+  // m, touchdowns are located within the step to this depth (physics/contact.h); 0: at the end
+  // of the step in which they happen
+  double impact_tolerance = 1e-4;
 
   // Initial state and commands.
   Eigen::Vector3d position{0.0, 0.0, 1.05};  // m, body centre of mass at t = 0 (leg vertical, at rest length)
@@ -171,6 +174,11 @@ struct HopperParams {
       {.unit = "m", .min = 0, .max = 1, .help = "THRUST ends this short of the setpoint"});
     v("friction", friction, {.min = 0, .max = 10, .help = "Coulomb friction coefficient of the foot"});
     v("twist_radius", twist_radius, {.unit = "m", .min = 0, .max = 1, .help = "Torsional friction radius of the foot"});
+    v("impact_tolerance", impact_tolerance,
+      {.unit = "m",
+       .min = 0,
+       .max = 1,
+       .help = "Touchdowns are located within the step to this depth (0: at the end of the step)"});
     v("position", position,
       {.unit = "m", .min = -1e4, .max = 1e4, .help = "Body centre of mass at t = 0", .apply = Apply::Restart});
     v("velocity", velocity,

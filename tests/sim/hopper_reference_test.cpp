@@ -1,0 +1,76 @@
+// The hopper's converged reference (the bench's, app/cmd_bench.cpp): with its controller thinking
+// at the scene's 1 ms in every run and touchdowns located within the step, RK4 runs whose substeps
+// differ by 2x agree within 1e-7 m over three stance phases. Without either they part: touchdowns
+// taken at the end of a substep are up to a substep late, and a controller that thinks once per
+// World step decides at different times when the step changes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "sim/scene_io.h"
+#include "sim/sim.h"
+
+namespace ponyhop {
+namespace {
+
+struct HopRun {
+  std::vector<Eigen::Vector3d> body;  // every World step (1 ms)
+  int stances = 0;
+};
+
+// The hopper scene for 2 s with dense/rk4/projection, the World stepping `dt` in `substeps`.
+HopRun hop(double dt, int substeps, const std::string& impact_tolerance) {
+  Scene scene = loadScene("assets/scenes/hopper.json", {{"physics.solver", "dense"},
+                                                        {"physics.integrator", "rk4"},
+                                                        {"physics.stabilization", "projection"},
+                                                        {"physics.dt", std::to_string(dt)},
+                                                        {"physics.substeps", std::to_string(substeps)},
+                                                        {"hopper.impact_tolerance", impact_tolerance}});
+  Sim sim(scene);
+  HopRun r;
+  bool was = false;
+  const long steps = std::lround(2.0 / dt);
+  for (long i = 0; i < steps && sim.ok(); ++i) {
+    sim.step();
+    r.body.push_back(sim.trackedPoint());
+    const bool in = sim.hopper()->inContact();
+    if (in && !was) ++r.stances;
+    was = in;
+  }
+  EXPECT_TRUE(sim.ok()) << sim.status();
+  return r;
+}
+
+// Time (s) until the two runs, sampled every `every` and `every_b` steps, first differ by more than 1e-7 m.
+double agreeFor(const HopRun& a, int every_a, const HopRun& b, int every_b, double sample) {
+  for (size_t k = 0; k * every_a < a.body.size() && k * every_b < b.body.size(); ++k) {
+    if ((a.body[k * every_a] - b.body[k * every_b]).norm() > 1e-7) return k * sample;
+  }
+  return 2.0;
+}
+
+TEST(HopperReference, ConvergesOverThreeStancesWithAFixedControlRateAndLocatedTouchdowns) {
+  const HopRun a = hop(1e-3, 16, "1e-12"), b = hop(1e-3, 32, "1e-12");
+  const double located = agreeFor(a, 1, b, 1, 1e-3);
+  // Touchdowns at the end of the step: the same controller, but an impact up to a substep late.
+  const HopRun c = hop(1e-3, 16, "0"), d = hop(1e-3, 32, "0");
+  const double late = agreeFor(c, 1, d, 1, 1e-3);
+  // The World's step halved instead: the controller thinks twice as often (its decisions move).
+  const HopRun e = hop(1.0 / 16000.0, 1, "1e-12"), f = hop(1.0 / 32000.0, 1, "1e-12");
+  const double think = agreeFor(e, 16, f, 32, 1e-3);
+  std::printf(
+      "[ reference ] 1/16 vs 1/32 ms substeps agree within 1e-7 m for %.3f s (%d stances); touchdowns at the step's "
+      "end: %.3f s; the controller at the step: %.3f s\n",
+      located, a.stances, late, think);
+  EXPECT_GE(a.stances, 4) << "2 s holds at least three whole stances";
+  EXPECT_GE(located, 2.0);
+  EXPECT_LT(late, 1.9) << "without locating touchdowns the runs part within the three stances (at the third "
+                           "touchdown, 1.29 s, when this test was written)";
+  EXPECT_LT(think, 0.5) << "with the controller thinking at every step the runs part at once";
+}
+
+}  // namespace
+}  // namespace ponyhop
