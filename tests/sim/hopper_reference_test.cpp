@@ -68,7 +68,7 @@ TEST(HopperReference, ConvergesOverThreeStancesWithAFixedControlRateAndLocatedTo
   EXPECT_GE(a.stances, 4) << "2 s holds at least three whole stances";
   EXPECT_GE(located, 2.0);
   EXPECT_LT(late, 1.9) << "without locating touchdowns the runs part within the three stances (at the third "
-                           "touchdown, 1.29 s, when this test was written)";
+                          "touchdown, 1.29 s, when this test was written)";
   EXPECT_LT(think, 0.5) << "with the controller thinking at every step the runs part at once";
 }
 
