@@ -189,7 +189,6 @@ GroundContact::Impact GroundContact::impact(World& world, bool& ok) {
     }
   }
   const Eigen::Vector3d u = u0 + d * Eigen::Vector3d(impulse);
-  out.normal = impulse(0);
   out.slip = u(1) * t1 + u(2) * t2;
   out.approach = tangential(f0.velocityAt(p), n);
   // Sticking: the slip left is round-off of the approach speed.

@@ -168,7 +168,6 @@ class GroundContact final : public ContactSet {
   // The touchdown impulse with friction in the same solve (contact.cpp): applied to the
   // velocities; `sticks` when it stops the slip inside the cone.
   struct Impact {
-    double normal = 0.0;                                 // P_n, N s
     Eigen::Vector3d slip = Eigen::Vector3d::Zero();      // tangential velocity of the contact point after
     Eigen::Vector3d approach = Eigen::Vector3d::Zero();  // ... and before
     bool sticks = true;
