@@ -39,6 +39,36 @@ PanelLayout layoutFor(int w, int h) {
   return l;
 }
 
+// ImGui 1.86 reads the keys as one down-state per frame: a tap whose press and release both arrive
+// between two frames is never seen as pressed (every tap at a few frames a second, every synthetic
+// key of xdotool). Releases of keys pressed since the last frame wait for the next one, as ImGui
+// 1.87's input queue does; everything else goes straight to the backend.
+struct KeyTrickle {
+  std::vector<int> pressed;  // keys pressed since the frame began
+  struct Release {
+    int key, scancode, mods;
+  };
+  std::vector<Release> deferred;
+  GLFWwindow* window = nullptr;
+
+  // Before glfwPollEvents: the releases held back from the last frame.
+  void nextFrame() {
+    for (const Release& r : deferred) ImGui_ImplGlfw_KeyCallback(window, r.key, r.scancode, GLFW_RELEASE, r.mods);
+    deferred.clear();
+    pressed.clear();
+  }
+};
+KeyTrickle g_keys;
+
+void trickleKey(GLFWwindow* window, int key, int scancode, int action, int mods) {
+  if (action == GLFW_RELEASE && std::find(g_keys.pressed.begin(), g_keys.pressed.end(), key) != g_keys.pressed.end()) {
+    g_keys.deferred.push_back({key, scancode, mods});
+    return;
+  }
+  if (action == GLFW_PRESS) g_keys.pressed.push_back(key);
+  ImGui_ImplGlfw_KeyCallback(window, key, scancode, action, mods);
+}
+
 bool screenshot(const std::string& path, int w, int h) {
   std::vector<uint8_t> rgba(size_t(w) * size_t(h) * 4);
   glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
@@ -106,6 +136,9 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
     sim.setStepBudgetMs(25.0);  // a slow step never freezes the window: the rest is dropped, shown as "behind"
     PanelContext imgui;
     ImGui_ImplGlfw_InitForOpenGL(window, true);
+    g_keys = KeyTrickle{};
+    g_keys.window = window;
+    glfwSetKeyCallback(window, trickleKey);  // in place of the backend's, which trickleKey calls
     {
       UiGl gl;
       Renderer renderer;
@@ -118,6 +151,7 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
       int frame = 0;
       while (code == 0 && !glfwWindowShouldClose(window)) {
         const auto t_frame = Clock::now();
+        g_keys.nextFrame();
         glfwPollEvents();
         int win_w = 0, win_h = 0, fb_w = 0, fb_h = 0;
         glfwGetWindowSize(window, &win_w, &win_h);
