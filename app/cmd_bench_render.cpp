@@ -5,15 +5,20 @@
 //
 // Each configuration renders `frames` frames of the scene's own motion (the simulation steps to each
 // frame's time first; simulation time is not counted) after 2 warm-up frames (shader compilation,
-// first target allocation). The render column is the wall time of RenderSession::renderFrame (all
-// passes + the read-back); the pass columns are RenderStats (glFinish-bracketed on llvmpipe).
+// first target allocation). The configurations take turns frame by frame (one session each), so a
+// change in the machine's load falls on all of them alike, and each figure is the median over its
+// frames. The render column is the wall time of RenderSession::renderFrame (all passes + the
+// read-back); the pass columns are RenderStats (glFinish-bracketed on llvmpipe). `--set` applies
+// the same overrides to every configuration (another shadow map size, another scene's look).
 #include <sys/utsname.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <thread>
 
@@ -30,6 +35,7 @@ struct BenchRenderArgs {
   std::vector<std::string> scenes{"assets/scenes/ponytail.json", "assets/scenes/ponytail_hopper.json"};
   std::vector<std::string> sizes{"1280x720", "1920x1080"};
   int frames = 20;
+  std::vector<std::string> sets;  // applied to every configuration, before its own
   std::string out = "docs/bench/render_table.md";
 };
 
@@ -55,33 +61,55 @@ struct Row {
   double total = 0, shadow = 0, main = 0, aa = 0, readback = 0;
 };
 
-Row measure(const std::string& scene_path, const Variant& v, int w, int h, int frames) {
-  std::vector<Override> o;
-  for (const auto& s : v.sets) o.push_back(parseOverride(s));
-  Scene scene = loadScene(scene_path, o);
-  scene.render.width = w;
-  scene.render.height = h;
-  validateScene(scene, scene_path);
-  RenderSession session(scene);
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Every configuration of one scene and size, frame by frame in turn; medians per configuration.
+std::vector<Row> measureAll(const std::string& scene_path, const std::vector<std::string>& sets, int w, int h,
+                            int frames) {
+  struct Run {
+    Scene scene;
+    std::unique_ptr<RenderSession> session;
+    std::vector<double> total, shadow, main, aa, readback;
+  };
+  std::vector<Run> runs;
+  for (const Variant& v : variants()) {
+    std::vector<Override> o;
+    for (const auto& s : sets) o.push_back(parseOverride(s));
+    for (const auto& s : v.sets) o.push_back(parseOverride(s));
+    Run r;
+    r.scene = loadScene(scene_path, o);
+    r.scene.render.width = w;
+    r.scene.render.height = h;
+    validateScene(r.scene, scene_path);
+    r.session = std::make_unique<RenderSession>(r.scene);
+    runs.push_back(std::move(r));
+  }
   std::vector<uint8_t> rgba;
-  Row r;
   const int warmup = 2;
   for (int i = 0; i < warmup + frames; ++i) {
-    const double t = i / scene.render.fps;
-    if (!session.simulateTo(t)) throw SceneError(scene_path + ": the simulation stopped: " + session.status());
-    const auto t0 = Clock::now();
-    session.renderFrame(t, rgba);
-    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-    if (i < warmup) continue;
-    const RenderStats& st = session.stats();
-    r.total += ms;
-    r.shadow += st.shadow_ms;
-    r.main += st.main_ms;
-    r.aa += st.resolve_ms;
-    r.readback += st.readback_ms;
+    for (Run& r : runs) {
+      const double t = i / r.scene.render.fps;
+      if (!r.session->simulateTo(t)) throw SceneError(scene_path + ": the simulation stopped: " + r.session->status());
+      const auto t0 = Clock::now();
+      r.session->renderFrame(t, rgba);
+      const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      if (i < warmup) continue;
+      const RenderStats& st = r.session->stats();
+      r.total.push_back(ms);
+      r.shadow.push_back(st.shadow_ms);
+      r.main.push_back(st.main_ms);
+      r.aa.push_back(st.resolve_ms);
+      r.readback.push_back(st.readback_ms);
+    }
   }
-  for (double* x : {&r.total, &r.shadow, &r.main, &r.aa, &r.readback}) *x /= frames;
-  return r;
+  std::vector<Row> rows;
+  for (const Run& r : runs)
+    rows.push_back({median(r.total), median(r.shadow), median(r.main), median(r.aa), median(r.readback)});
+  return rows;
 }
 
 std::string loadAverage() {
@@ -105,11 +133,16 @@ int runBenchRender(const BenchRenderArgs& args) {
     gl_name = s.glRenderer() + " / " + s.glVersion();
   }
   md << "# Render speed\n\n"
-     << "`ponyhop bench-render` (app/cmd_bench_render.cpp): ms per frame, mean of " << args.frames
-     << " frames after 2 warm-up frames, on " << u.machine << " with " << std::thread::hardware_concurrency()
-     << " hardware threads, " << gl_name << ", LP_NUM_THREADS=" << (lp ? lp : "(unset)")
-     << ", load average at the start " << loadAverage() << ".\n\n"
-     << "*render* is the wall time of one frame (all passes and the read-back); the pass columns are "
+     << "`ponyhop bench-render` (app/cmd_bench_render.cpp): ms per frame, median of " << args.frames
+     << " frames after 2 warm-up frames (the configurations take turns frame by frame), on " << u.machine << " with "
+     << std::thread::hardware_concurrency() << " hardware threads, " << gl_name
+     << ", LP_NUM_THREADS=" << (lp ? lp : "(unset)") << ", load average at the start " << loadAverage() << ".\n\n";
+  if (!args.sets.empty()) {
+    md << "Every configuration with:";
+    for (const auto& s : args.sets) md << " `" << s << "`";
+    md << ".\n\n";
+  }
+  md << "*render* is the wall time of one frame (all passes and the read-back); the pass columns are "
         "RenderStats (glFinish-bracketed: llvmpipe rasterizes a pass synchronously at its flush). "
         "*x floor* = render / the floor of the same scene and size (1 sample, no shadow, no ground).\n\n";
   for (const auto& scene : args.scenes) {
@@ -121,12 +154,10 @@ int runBenchRender(const BenchRenderArgs& args) {
       md << "## " << scene << " at " << w << "x" << h << "\n\n"
          << "| configuration | render | shadow | main | AA | read-back | x floor |\n"
          << "|---|---:|---:|---:|---:|---:|---:|\n";
-      std::vector<Row> rows;
-      for (const Variant& v : variants()) {
-        rows.push_back(measure(scene, v, w, h, args.frames));
-        std::fprintf(stderr, "bench-render: %s %s %-38s %7.1f ms\n", scene.c_str(), size.c_str(), v.name,
-                     rows.back().total);
-      }
+      const std::vector<Row> rows = measureAll(scene, args.sets, w, h, args.frames);
+      for (size_t i = 0; i < rows.size(); ++i)
+        std::fprintf(stderr, "bench-render: %s %s %-38s %7.1f ms\n", scene.c_str(), size.c_str(), variants()[i].name,
+                     rows[i].total);
       const double floor_ms = rows[3].total;
       for (size_t i = 0; i < rows.size(); ++i) {
         const Row& r = rows[i];
@@ -166,6 +197,7 @@ void addBenchRenderCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--scenes", args->scenes, "Scenes to render (default ponytail, ponytail_hopper)")->delimiter(',');
   cmd->add_option("--sizes", args->sizes, "Frame sizes, e.g. 1280x720,1920x1080")->delimiter(',');
   cmd->add_option("--frames", args->frames, "Timed frames per configuration (default 20)")->check(CLI::Range(1, 10000));
+  cmd->add_option("--set", args->sets, "key=value overrides applied to every configuration (as render --set)");
   cmd->add_option("--out", args->out,
                   "Markdown table to write (default docs/bench/render_table.md; empty: print only)");
   cmd->callback([args, &exit_code] {

@@ -35,6 +35,7 @@ void RenderSession::skipFrame(double t) {
 }
 
 void RenderSession::renderFrame(double t, std::vector<uint8_t>& rgba, unsigned hide) {
+  context_->makeCurrent();  // several sessions may take turns on one thread (bench-render)
   const Camera cam = sceneCamera(scene_, sim_, t, follow_, t - last_t_);
   last_t_ = t;
   renderer_->beginFrame(cam, scene_.light, scene_.render);
