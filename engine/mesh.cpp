@@ -6,6 +6,7 @@
 #include <stb_image.h>
 
 #include <algorithm>
+#include <array>
 #include <assimp/Importer.hpp>
 #include <cctype>
 #include <cmath>
@@ -13,6 +14,7 @@
 #include <filesystem>
 #include <map>
 #include <numbers>
+#include <unordered_map>
 
 #include "engine/isolated.h"
 #include "sim/head_fit.h"
@@ -411,6 +413,50 @@ MeshData makeBoxMesh(const Eigen::Vector3f& h) {
     }
   m.computeBounds();
   return m;
+}
+
+int closedOrientation(const MeshData& mesh) {
+  const size_t nt = mesh.triangleCount();
+  if (nt == 0) return 0;
+  Eigen::AlignedBox3d box;
+  for (const auto& p : mesh.positions) box.extend(p.cast<double>());
+  const Eigen::Vector3d ext = box.sizes();
+  // Vertices welded by position on a grid of 1e-6 of the mesh's size: files split a vertex where
+  // its normal or uv changes, and a seam's two copies may differ in the last bits. A vertex pair
+  // that straddles a cell boundary only makes the mesh look open (drawn from both sides: safe).
+  const double cell = std::max(1e-6 * ext.maxCoeff(), 1e-12);
+  std::map<std::array<long long, 3>, uint32_t> ids;
+  std::vector<uint32_t> weld(mesh.positions.size());
+  for (size_t i = 0; i < mesh.positions.size(); ++i) {
+    const Eigen::Vector3d q = (mesh.positions[i].cast<double>() - box.min()) / cell;
+    const std::array<long long, 3> key{std::llround(q.x()), std::llround(q.y()), std::llround(q.z())};
+    weld[i] = ids.emplace(key, uint32_t(ids.size())).first->second;
+  }
+  // Every directed edge once, and its reverse once: closed and consistently wound.
+  std::unordered_map<uint64_t, int> directed;
+  directed.reserve(3 * nt);
+  double volume = 0.0;
+  for (size_t t = 0; t < nt; ++t) {
+    uint32_t v[3];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t i = mesh.indices[3 * t + size_t(k)];
+      if (i >= weld.size()) return 0;
+      v[k] = weld[i];
+    }
+    if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) continue;  // degenerate: no edge of its own
+    for (int k = 0; k < 3; ++k) {
+      if (++directed[uint64_t(v[k]) << 32 | v[(k + 1) % 3]] > 1) return 0;
+    }
+    const Eigen::Vector3d a = mesh.positions[mesh.indices[3 * t]].cast<double>();
+    const Eigen::Vector3d b = mesh.positions[mesh.indices[3 * t + 1]].cast<double>();
+    const Eigen::Vector3d c = mesh.positions[mesh.indices[3 * t + 2]].cast<double>();
+    volume += a.dot(b.cross(c)) / 6.0;
+  }
+  for (const auto& e : directed) {
+    if (directed.find((e.first << 32) | (e.first >> 32)) == directed.end()) return 0;
+  }
+  const double tiny = 1e-9 * ext.x() * ext.y() * ext.z();
+  return volume > tiny ? 1 : volume < -tiny ? -1 : 0;
 }
 
 }  // namespace ponyhop

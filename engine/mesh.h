@@ -32,6 +32,13 @@ Eigen::Vector3d meshPointToBody(const HeadParams& head, const Eigen::AlignedBox3
 // Applies a transform in place (normals by the inverse transpose, renormalized; bbox recomputed).
 void transformMesh(MeshData& mesh, const Eigen::Affine3d& T);
 
+// +1 when the mesh is closed and its triangles wind counter-clockwise seen from outside, -1 when
+// closed and wound the other way, 0 when it is open (an edge not shared by exactly two triangles
+// that pass along it in opposite directions, vertices matched by position) or has no volume. A
+// closed mesh can cull its back faces: nothing ever sees them, and a dense head drawn without
+// culling pays for every hidden triangle it rasterizes before the front one hides it.
+int closedOrientation(const MeshData& mesh);
+
 // Procedural meshes (also used by tests): a UV sphere and an axis-aligned box with flat faces.
 MeshData makeUvSphere(float radius, int slices, int stacks);
 MeshData makeBoxMesh(const Eigen::Vector3f& half_extents);

@@ -38,6 +38,8 @@ struct GpuMesh {
   Eigen::AlignedBox3d bbox;
   // With the file's materials (MeshData::colors): drawn by prog_mesh_mat, part by part.
   bool materials = false;
+  // closedOrientation(): +1/-1 closed (back faces culled in both passes), 0 open (both sides drawn).
+  int closed = 0;
   std::vector<MeshPart> parts;
   std::vector<GLuint> textures;
 };
@@ -441,6 +443,7 @@ static void uploadWithMaterials(const MeshData& m, GpuMesh& g) {
 MeshHandle Renderer::upload(const MeshData& m) {
   Impl& I = *impl_;
   GpuMesh g;
+  g.closed = closedOrientation(m);
   if (!m.colors.empty()) {
     uploadWithMaterials(m, g);
     glGenBuffers(1, &g.ebo);
@@ -708,6 +711,19 @@ void Renderer::Impl::setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_
   glUniform2f(loc(prog, "u_viewport"), float(target_w), float(target_h));
 }
 
+// Back faces of a closed mesh are culled: the mesh's own winding and a mirroring model matrix
+// decide which side is the back. Open meshes are drawn from both sides (they may be seen, or
+// cast, through their holes).
+static void cullFor(const GpuMesh& g, const Eigen::Matrix4f& model) {
+  if (g.closed == 0) {
+    glDisable(GL_CULL_FACE);
+    return;
+  }
+  const bool mirrored = model.topLeftCorner<3, 3>().determinant() < 0.0f;
+  glEnable(GL_CULL_FACE);
+  glCullFace((g.closed > 0) != mirrored ? GL_BACK : GL_FRONT);
+}
+
 // Meshes with their file's materials (main pass): one draw per part, its texture on unit 2.
 void Renderer::Impl::drawMaterialMeshes() {
   const GLuint p = prog_mesh_mat;
@@ -726,6 +742,7 @@ void Renderer::Impl::drawMaterialMeshes() {
     glUniform4f(loc(p, "u_colorSpec"), c.x(), c.y(), c.z(), d.material.specular);
     glUniform2f(loc(p, "u_shinRim"), d.material.shininess, d.material.rim);
     glBindVertexArray(g.vao);
+    cullFor(g, d.model);
     for (const MeshPart& part : g.parts) {
       const bool tex = part.texture >= 0 && size_t(part.texture) < g.textures.size();
       glUniform1i(loc(p, "u_hasTex"), tex ? 1 : 0);
@@ -736,6 +753,8 @@ void Renderer::Impl::drawMaterialMeshes() {
     }
     glActiveTexture(GL_TEXTURE0);
   }
+  glDisable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
 }
 
 void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj,
@@ -754,8 +773,11 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
       glUniform4f(l_cs, c.x(), c.y(), c.z(), d.material.specular);
       glUniform2f(l_sr, d.material.shininess, d.material.rim);
       glBindVertexArray(g.vao);
+      cullFor(g, d.model);
       glDrawElements(GL_TRIANGLES, g.index_count, GL_UNSIGNED_INT, nullptr);
     }
+    glDisable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
   }
   if (!depth_only) drawMaterialMeshes();
   if (!hulls.empty()) {
@@ -852,7 +874,7 @@ void Renderer::endFrame() {
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
     glClear(GL_DEPTH_BUFFER_BIT);
-    glDisable(GL_CULL_FACE);  // imported meshes may be open; no culling keeps thin parts casting
+    glDisable(GL_CULL_FACE);  // open meshes cast from both sides (closed ones cull their back faces)
     // Slope-scaled bias in the depth pass (steep surfaces need more), plus the small normal offset
     // at lookup in the shader: together no acne, and the offset is too small to detach contact
     // shadows (no peter-panning).

@@ -90,6 +90,7 @@ float shadowFactor(vec3 P, vec3 N) {
   float dCentre = texture(u_shadowDepth, c.xy).r;
   if (dCentre < c.z) { sumB += dCentre; nB += 1.0; }
   if (nB == 0.0) return 1.0;  // nothing between this point and the light: fully lit, no PCF
+  if (nB == 7.0) return 0.0;  // blockers all over the widest penumbra: deep in the umbra, no PCF
   // 2) Penumbra (depths are linear for an orthographic light: metres = depth * range).
   float dBlocker = sumB / nB;
   float wTexels = (c.z - dBlocker) * u_lightDepthRange * u_penumbraSlope / u_texelWorld;

@@ -332,6 +332,32 @@ TEST(Mesh, DefaultHeadAssetLoadsWhenPresent) {
   EXPECT_LT(placed.bbox.sizes().z(), 0.4);
 }
 
+// The renderer culls the back faces of closed meshes only: an open or inside-out mesh must not be
+// taken for a closed outward one (it would show holes), and the dense head must be found closed
+// (culling halves its cost).
+TEST(Mesh, ClosedOrientationTellsClosedOutwardInwardAndOpen) {
+  const MeshData sphere = makeUvSphere(0.5f, 24, 12);
+  EXPECT_EQ(closedOrientation(sphere), 1);
+  EXPECT_EQ(closedOrientation(makeBoxMesh({0.1f, 0.2f, 0.3f})), 1);  // flat faces: vertices split per face
+  MeshData inside_out = sphere;
+  for (size_t t = 0; t + 2 < inside_out.indices.size(); t += 3)
+    std::swap(inside_out.indices[t + 1], inside_out.indices[t + 2]);
+  EXPECT_EQ(closedOrientation(inside_out), -1);
+  MeshData open = sphere;
+  open.indices.resize(open.indices.size() - 3);  // one triangle missing: a hole
+  EXPECT_EQ(closedOrientation(open), 0);
+  MeshData doubled = sphere;  // a triangle twice: an edge used three times
+  doubled.indices.insert(doubled.indices.end(), sphere.indices.begin(), sphere.indices.begin() + 3);
+  EXPECT_EQ(closedOrientation(doubled), 0);
+  EXPECT_EQ(closedOrientation(MeshData{}), 0);
+  const std::string path = "assets/head/head.gltf";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not generated yet";
+  MeshData head;
+  std::string err;
+  ASSERT_TRUE(loadMesh(path, head, &err)) << err;
+  EXPECT_EQ(closedOrientation(head), 1);
+}
+
 TEST(Mesh, ProceduralSphereIsClosedAndOutward) {
   const MeshData s = makeUvSphere(0.5f, 24, 12);
   expectUnitNormals(s);
