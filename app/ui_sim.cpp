@@ -246,7 +246,8 @@ bool LiveSim::advanceTo(double t) {
     ++steps;
   }
   target_time_ = simTime();
-  readouts_.physics_ms = smooth(readouts_.physics_ms, msSince(t0));
+  readouts_.physics_frame_ms = msSince(t0);
+  readouts_.physics_ms = smooth(readouts_.physics_ms, readouts_.physics_frame_ms);
   record(0.0, 0.0, steps ? 1000.0 * msSince(t0) / steps : readouts_.step_us.last());
   return runtime_->ok();
 }
@@ -259,6 +260,7 @@ void LiveSim::advance(double wall_dt) {
   const auto t_start = Clock::now();
   if (!running_ || !runtime_->ok()) {
     target_time_ = simTime();
+    readouts_.physics_frame_ms = 0.0;
     readouts_.physics_ms = smooth(readouts_.physics_ms, 0.0);
     record(0.0, 0.0, readouts_.step_us.last());
     return;
@@ -278,6 +280,7 @@ void LiveSim::advance(double wall_dt) {
   }
   if (out_of_time) target_time_ = simTime();  // behind: drop the backlog instead of spiralling
   const double physics_ms = msSince(t_start);
+  readouts_.physics_frame_ms = physics_ms;
   readouts_.physics_ms = smooth(readouts_.physics_ms, physics_ms);
   // The real-time factor is measured against the true wall time, so slow frames show as "behind".
   record(simTime() - t_before, wall_raw, steps ? 1000.0 * physics_ms / steps : readouts_.step_us.last());

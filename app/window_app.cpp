@@ -197,8 +197,9 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
         if (frame >= 5) {  // warm-up frames (font texture, shaders, first shadow map) are not typical
           stats.frame_ms.push_back(frame_ms);
           (quality == RenderQuality::Draft ? stats.draft_ms : stats.final_ms).push_back(frame_ms);
-          stats.physics += sim.readouts().physics_ms;
-          stats.panel += build_ms - sim.readouts().physics_ms;
+          // This frame's own physics time (the smoothed readout lags: the panel's share came out negative).
+          stats.physics += sim.readouts().physics_frame_ms;
+          stats.panel += build_ms - sim.readouts().physics_frame_ms;
           stats.render += render_ms;
           stats.compose += compose_ms;
           ++stats.n;

@@ -203,6 +203,7 @@ struct Renderer::Impl {
   void collectGpuTimes(RenderStats& st);
 
   void ensureTargets(int w, int h, int samples, bool post);
+  bool screenBox(const Eigen::Matrix4f& view_proj, int w, int h, int box[4]) const;
   void ensureShadowMap(int size);
   void ensureGroundShadow(int size);
   void bindShadowTextures(bool ground_shadow);  // units 0, 1: the shadow map; 2: the ground's
@@ -820,6 +821,33 @@ void Renderer::Impl::drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only
   glBindVertexArray(0);
 }
 
+// The pixel box [x0, x1) x [y0, y1) that the draw list and the debug lines cover in the main pass,
+// grown by the post filter's reach (its taps go 4 px along an edge): false when it is the whole
+// frame anyway, or a point is behind the eye (its projection is not bounded).
+bool Renderer::Impl::screenBox(const Eigen::Matrix4f& view_proj, int w, int h, int box[4]) const {
+  const Impl& I = *this;
+  if (I.draw_bounds.isEmpty() && I.lines.empty()) return false;
+  double x0 = 1e30, y0 = 1e30, x1 = -1e30, y1 = -1e30;
+  const auto add = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector4f c = view_proj * Eigen::Vector4f(float(p.x()), float(p.y()), float(p.z()), 1.0f);
+    if (!(c.w() > 1e-6f)) return false;
+    const double x = (0.5 * c.x() / c.w() + 0.5) * w, y = (0.5 * c.y() / c.w() + 0.5) * h;
+    x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    return true;
+  };
+  if (!I.draw_bounds.isEmpty())
+    for (int i = 0; i < 8; ++i)
+      if (!add(I.draw_bounds.corner(Eigen::AlignedBox3d::CornerType(i)))) return false;
+  for (const LineVertex& v : I.lines)
+    if (!add(Eigen::Vector3d(v.pos[0], v.pos[1], v.pos[2]))) return false;
+  const int reach = 6;
+  box[0] = std::clamp(int(std::floor(x0)) - reach, 0, w);
+  box[1] = std::clamp(int(std::floor(y0)) - reach, 0, h);
+  box[2] = std::clamp(int(std::ceil(x1)) + reach, 0, w);
+  box[3] = std::clamp(int(std::ceil(y1)) + reach, 0, h);
+  return (box[2] - box[0]) * int64_t(box[3] - box[1]) < int64_t(w) * h * 9 / 10;  // else: no gain
+}
+
 void Renderer::endFrame() {
   Impl& I = *impl_;
   const auto t0 = Clock::now();
@@ -1006,6 +1034,18 @@ void Renderer::endFrame() {
       glBindFramebuffer(GL_DRAW_FRAMEBUFFER, I.resolve_fbo);
       glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
     } else {
+      // The filter runs only over the screen box of what was drawn (objects, hair, lines), grown
+      // by its reach; the background and the ground around it have no edges to smooth (the
+      // checker is box-filtered, the shadows soft) and are copied as they are.
+      int box[4] = {0, 0, w, h};
+      const bool boxed = I.screenBox(view_proj, w, h, box);
+      if (boxed) {
+        glBindFramebuffer(GL_READ_FRAMEBUFFER, I.msaa_fbo);
+        glBindFramebuffer(GL_DRAW_FRAMEBUFFER, I.resolve_fbo);
+        glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+        glEnable(GL_SCISSOR_TEST);
+        glScissor(box[0], box[1], box[2] - box[0], box[3] - box[1]);
+      }
       glBindFramebuffer(GL_FRAMEBUFFER, I.resolve_fbo);
       glDisable(GL_DEPTH_TEST);
       glUseProgram(I.prog_post);
@@ -1021,6 +1061,7 @@ void Renderer::endFrame() {
       glBindTexture(GL_TEXTURE_2D, 0);  // the main pass renders into it next frame
       glActiveTexture(GL_TEXTURE0);
       glEnable(GL_DEPTH_TEST);
+      glDisable(GL_SCISSOR_TEST);
     }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     I.endPass(Impl::kResolvePass, stats_);
