@@ -148,7 +148,7 @@ void unpremultiplyAlpha(std::vector<uint8_t>& rgba) {
 
 struct Renderer::Impl {
   // Programs.
-  GLuint prog_mesh = 0, prog_hull = 0, prog_backdrop = 0, prog_ground_shadow = 0, prog_lines = 0;
+  GLuint prog_mesh = 0, prog_hull = 0, prog_ground = 0, prog_ground_shadow = 0, prog_lines = 0;
   GLuint prog_mesh_depth = 0, prog_hull_depth = 0, prog_post = 0, prog_bg = 0;
   GLuint prog_hair = 0, prog_hair_depth = 0;
   GLuint prog_mesh_mat = 0;
@@ -268,7 +268,7 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
 Renderer::~Renderer() {
   if (!glDeleteProgram) return;  // GL never loaded: nothing was created
   Impl& I = *impl_;
-  for (GLuint p : {I.prog_mesh, I.prog_mesh_mat, I.prog_hull, I.prog_backdrop, I.prog_ground_shadow, I.prog_lines,
+  for (GLuint p : {I.prog_mesh, I.prog_mesh_mat, I.prog_hull, I.prog_ground, I.prog_ground_shadow, I.prog_lines,
                    I.prog_mesh_depth, I.prog_hull_depth, I.prog_post, I.prog_bg, I.prog_hair, I.prog_hair_depth})
     if (p) glDeleteProgram(p);
   for (int i = 0; i < int(I.meshes.size()); ++i) release(MeshHandle{i});
@@ -303,7 +303,7 @@ bool Renderer::init(std::string* err) {
   const P progs[] = {{&I.prog_mesh, "mesh", kMeshVS, kLitFS},
                      {&I.prog_mesh_mat, "mesh with materials", kMeshMatVS, kMeshMatFS},
                      {&I.prog_hull, "hull", kCapsuleVS, kLitFS},
-                     {&I.prog_backdrop, "backdrop", kBackdropVS, kBackdropFS},
+                     {&I.prog_ground, "ground", kGroundVS, kGroundFS},
                      {&I.prog_ground_shadow, "ground shadow", kFullscreenVS, kGroundShadowFS},
                      {&I.prog_lines, "lines", kLinesVS, kLinesFS},
                      {&I.prog_mesh_depth, "mesh depth", kMeshVS, kDepthFS},
@@ -785,9 +785,9 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
     glUseProgram(hull_prog);
     if (depth_only) setMat4(hull_prog, "u_viewProj", view_proj);
     glBindVertexArray(hull_vao);
-    // Hulls are closed and wound counter-clockwise: cull their back faces in the main pass (half
-    // the rasterization). The shadow pass draws both sides (thin links keep casting).
-    if (!depth_only) glEnable(GL_CULL_FACE);
+    // Hulls are closed and wound counter-clockwise: cull their back faces in both passes (half
+    // the rasterization; the front faces alone give the nearest depth seen from the light).
+    glEnable(GL_CULL_FACE);
     glDrawElementsInstanced(GL_TRIANGLES, hull_index_count, GL_UNSIGNED_INT, nullptr, GLsizei(hulls.size()));
     glDisable(GL_CULL_FACE);
   }
@@ -966,37 +966,8 @@ void Renderer::endFrame() {
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   I.bindShadowTextures(true);
 
-  // Background and ground in one full-screen pass: every pixel shaded once; it writes the ground's
-  // depth (or the far plane) so objects below the ground stay hidden. Without a ground, the
-  // gradient alone (none when transparent: alpha 0 where nothing is drawn).
   stats_.draw_calls = 0;
-  if (!I.params.ground) {
-    glDisable(GL_DEPTH_TEST);
-    if (!I.params.transparent) {
-      I.setCommonUniforms(I.prog_bg, view_proj, light_vp, normal_offset, shadows_on);
-      glBindVertexArray(I.empty_vao);
-      glDrawArrays(GL_TRIANGLES, 0, 3);
-      stats_.draw_calls = 1;
-    }
-    glEnable(GL_DEPTH_TEST);
-  } else {
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_ALWAYS);
-    const GLuint p = I.prog_backdrop;
-    I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
-    setMat4(p, "u_invViewProj", view_proj.inverse());
-    glUniform1i(loc(p, "u_groundOn"), I.params.ground ? 1 : 0);
-    glUniform1i(loc(p, "u_transparent"), I.params.transparent ? 1 : 0);
-    glUniform1f(loc(p, "u_groundZ"), float(I.params.ground_height));
-    setVec3(p, "u_groundAlbedo", srgbToLinear(I.params.ground_color.cast<float>()));
-    glUniform1f(loc(p, "u_gridSpacing"), float(std::max(I.params.grid_spacing, 0.0)));
-    glUniform3f(loc(p, "u_fadeCenter"), float(cam.target.x()), float(cam.target.y()), 0.0f);
-    glUniform2f(loc(p, "u_fade"), float(fade_start), float(fade_end));
-    glUniform1i(loc(p, "u_groundShadow"), 2);
-    glBindVertexArray(I.empty_vao);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    stats_.draw_calls = 1;
-  }
+  glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
 
   I.setCommonUniforms(I.prog_mesh, view_proj, light_vp, normal_offset, shadows_on);
@@ -1010,6 +981,35 @@ void Renderer::endFrame() {
   stats_.draw_calls += int(I.mesh_draws.size()) + (I.hulls.empty() ? 0 : 1);
   for (const MeshDraw& d : I.mesh_draws) stats_.triangles += size_t(I.meshes[size_t(d.mesh)].index_count / 3);
   stats_.triangles += I.hulls.size() * I.hull_triangles;
+
+  // The ground after the objects: the early depth test skips the pixels they cover, and its nearer
+  // fragments still hide whatever is below it. It writes its depth, so that the background, last,
+  // fills only the pixels nothing was drawn on (none when transparent: alpha 0 there).
+  glBindVertexArray(I.empty_vao);
+  if (I.params.ground) {
+    const GLuint p = I.prog_ground;
+    I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
+    glUniform3f(loc(p, "u_quadCenter"), float(cam.target.x()), float(cam.target.y()), float(I.params.ground_height));
+    glUniform1f(loc(p, "u_quadHalf"), float(ground_half));
+    glUniform1i(loc(p, "u_transparent"), I.params.transparent ? 1 : 0);
+    setVec3(p, "u_groundAlbedo", srgbToLinear(I.params.ground_color.cast<float>()));
+    glUniform1f(loc(p, "u_gridSpacing"), float(std::max(I.params.grid_spacing, 0.0)));
+    glUniform3f(loc(p, "u_fadeCenter"), float(cam.target.x()), float(cam.target.y()), 0.0f);
+    glUniform2f(loc(p, "u_fade"), float(fade_start), float(fade_end));
+    glUniform1i(loc(p, "u_groundShadow"), 2);
+    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    ++stats_.draw_calls;
+  }
+  if (!I.params.transparent) {
+    glDepthFunc(GL_LEQUAL);  // the far plane, where the depth is still the cleared 1
+    glDepthMask(GL_FALSE);
+    I.setCommonUniforms(I.prog_bg, view_proj, light_vp, normal_offset, shadows_on);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDepthMask(GL_TRUE);
+    glDepthFunc(GL_LESS);
+    ++stats_.draw_calls;
+  }
+  glBindVertexArray(0);
 
   if (!I.lines.empty()) {
     // Debug lines (the drag line, render.colliders) over the picture: no depth test.

@@ -332,31 +332,27 @@ void main() {
 )GLSL";
 
 // ---------------------------------------------------------------------------------------------
-// Background and ground in one full-screen pass (no overdraw: each pixel is shaded once). The
-// vertex shader carries the pixel's points on the near and far planes as homogeneous world
-// coordinates (linear in screen space, so interpolation is exact); the fragment shader intersects
-// the eye ray with the ground plane, shades the ground there or the background gradient, and
-// writes the hit's depth so objects drawn later are hidden below the ground as before.
-const char* const kBackdropVS = R"GLSL(
-uniform mat4 u_invViewProj;
-out vec4 v_near;
-out vec4 v_far;
+// The ground: a square on the plane z = u_groundZ around the point looked at, as wide as the fade,
+// drawn after the objects. Its depth comes from rasterization, so the early depth test skips every
+// pixel an object covers (no shading wasted), and it still hides whatever is below the ground (its
+// fragments are nearer there). The background gradient fills what is left (kBackgroundFS at the
+// far plane), after it.
+const char* const kGroundVS = R"GLSL(
+uniform mat4 u_viewProj;
+uniform vec3 u_quadCenter;  // on the ground plane
+uniform float u_quadHalf;   // m
+out vec3 v_world;
 void main() {
-  vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
-  v_near = u_invViewProj * vec4(p, -1.0, 1.0);
-  v_far = u_invViewProj * vec4(p, 1.0, 1.0);
-  gl_Position = vec4(p, 1.0, 1.0);
+  vec2 c = vec2(float(gl_VertexID & 1), float((gl_VertexID >> 1) & 1)) * 2.0 - 1.0;  // a strip of 4
+  v_world = vec3(u_quadCenter.xy + c * u_quadHalf, u_quadCenter.z);
+  gl_Position = u_viewProj * vec4(v_world, 1.0);
 }
 )GLSL";
 
-const char* const kBackdropFS = R"GLSL(
-in vec4 v_near;
-in vec4 v_far;
+const char* const kGroundFS = R"GLSL(
+in vec3 v_world;
 out vec4 o_color;
-uniform mat4 u_viewProj;
-uniform int u_groundOn;
-uniform int u_transparent;     // 1: no background (alpha 0 where there is no ground)
-uniform float u_groundZ;
+uniform int u_transparent;     // 1: no background (alpha 0 where the ground has faded out)
 uniform vec3 u_groundAlbedo;   // linear
 uniform float u_gridSpacing;   // m (0: plain)
 uniform vec3 u_fadeCenter;     // point the fade distance is measured from
@@ -395,30 +391,24 @@ vec3 shadeGround(vec3 P, vec3 albedo) {
 
 void main() {
   vec3 bg = background(gl_FragCoord.y / u_viewport.y);
-  vec3 pn = v_near.xyz / v_near.w, pf = v_far.xyz / v_far.w;
-  float dz = pf.z - pn.z;
-  float t = abs(dz) > 1e-12 ? (u_groundZ - pn.z) / dz : -1.0;
-  vec3 P = pn + t * (pf - pn);
+  vec3 P = v_world;
   float d = length(P.xy - u_fadeCenter.xy);
   float f = smoothstep(u_fade.x, u_fade.y, d);
   // Derivatives below are taken in uniform control flow; the choice is made after.
   vec2 gp = u_gridSpacing > 0.0 ? P.xy / u_gridSpacing : vec2(0.0);
   float k = filteredChecker(gp);
-  if (u_groundOn == 0 || t <= 0.0 || t >= 1.0 || f >= 1.0) {
+  if (f >= 1.0) {  // faded into the background: its colour exactly, so the square's edge is unseen
     o_color = u_transparent != 0 ? vec4(0.0) : vec4(bg, 1.0);
-    gl_FragDepth = 1.0;
     return;
   }
   vec3 albedo = u_groundAlbedo;
   if (u_gridSpacing > 0.0) albedo *= mix(0.93, 1.05, k);  // subtle: about +-6 %
   vec3 c = linearToSrgb(toneMap(shadeGround(P, albedo)));
   o_color = vec4(mix(c, bg, f), 1.0);
-  vec4 clip = u_viewProj * vec4(P, 1.0);
-  gl_FragDepth = clamp(0.5 * clip.z / clip.w + 0.5, 0.0, 1.0);
 }
 )GLSL";
 
-// The background alone (frames without a ground): the gradient, no depth.
+// The background gradient, at the far plane after everything else: where nothing was drawn.
 const char* const kBackgroundFS = R"GLSL(
 out vec4 o_color;
 void main() {

@@ -10,14 +10,14 @@ extern const char* const kMeshVS;        // meshes and boxes: per-draw model mat
 extern const char* const kMeshMatVS;     // meshes with their own colours/texture coordinates
 extern const char* const kCapsuleVS;     // spheres / capsules / tapered capsules: one instanced draw
 extern const char* const kFullscreenVS;  // full-screen triangle from gl_VertexID (ground shadow pass)
-extern const char* const kBackdropVS;    // full-screen triangle carrying each pixel's eye ray
+extern const char* const kGroundVS;      // the ground square (a strip of 4 from gl_VertexID)
 extern const char* const kLinesVS;       // debug lines
 extern const char* const kHairVS;        // hair strands (camera- or light-facing ribbons) and core tube
 // Fragment shaders.
 extern const char* const kLitFS;           // Blinn-Phong + rim, shadowed key light, fill, hemi ambient
 extern const char* const kMeshMatFS;       // kLitFS with the albedo times vertex colour and base-colour texture
-extern const char* const kBackdropFS;      // background + ground plane in one pass (ray-plane hit)
-extern const char* const kBackgroundFS;    // the gradient alone (no ground)
+extern const char* const kGroundFS;        // the checker ground fading into the background
+extern const char* const kBackgroundFS;    // the background gradient (where nothing was drawn)
 extern const char* const kGroundShadowFS;  // the ground's soft shadow into a small texture
 extern const char* const kPostAaFS;        // post-process anti-aliasing of the finished frame
 extern const char* const kLinesFS;
