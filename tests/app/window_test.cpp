@@ -91,33 +91,11 @@ TEST(WindowTest, ViewIsDraftWhileMovingAndFinalWhenStill) {
     GTEST_SKIP() << "xvfb-run or xdotool is missing (scripts/setup.sh installs both)";
   }
   const std::string dir = testing::scratch("window_quality");
-  const std::string qlog = dir + "/quality.log", script = dir + "/drive.sh";
-  {
-    std::ofstream f(script);
-    f << "EXE='" << PONYHOP_EXE << "'; QLOG='" << qlog << "'\n"
-      << R"SH(
-rm -f "$QLOG"
-"$EXE" run assets/scenes/ponytail.json --size 1280x720 --no-vsync --frames 90 --quality-log "$QLOG" &
-pid=$!
-lines() { if [ -f "$QLOG" ]; then wc -l < "$QLOG"; else echo 0; fi; }
-# Waits until the window has shown $1 more frames (or gave up after 60 s, or exited).
-waitfor() {
-  n=$(( $(lines) + $1 )); i=0
-  while [ "$(lines)" -lt "$n" ] && kill -0 $pid 2> /dev/null && [ $i -lt 600 ]; do sleep 0.1; i=$((i + 1)); done
-}
-waitfor 6                                   # the scene plays
-xdotool mousemove 440 360                   # no window manager: focus the window, then pause
-win=$(xdotool search --pid $pid 2> /dev/null | head -1)
-[ -n "$win" ] && xdotool windowfocus --sync "$win" 2> /dev/null
-xdotool key space
-waitfor 8                                   # still
-xdotool mousedown 1                         # orbit: drag in the scene view
-for k in 1 2 3 4 5 6; do xdotool mousemove_relative -- 12 3; waitfor 1; done
-xdotool mouseup 1
-wait $pid                                   # still again until the last frame
-)SH";
-  }
-  const std::string cmd = "xvfb-run -a -s '-screen 0 1280x720x24' sh " + script + " > " + dir + "/run.log 2>&1";
+  const std::string qlog = dir + "/quality.log";
+  // scripts/window_drive.sh: play, Space, still, drag, still (the default phases).
+  const std::string cmd = "xvfb-run -a -s '-screen 0 1280x720x24' sh scripts/window_drive.sh " +
+                          std::string(PONYHOP_EXE) + " assets/scenes/ponytail.json " + qlog + " 90 > " + dir +
+                          "/run.log 2>&1";
   const int status = std::system(cmd.c_str());
   const std::string log = testing::readFile(dir + "/run.log");
   ASSERT_EQ(status, 0) << log;
