@@ -42,8 +42,10 @@ std::string number(double x) {
 
 }  // namespace
 
-ConstrainedStepResult rattleStep(double t, double h, const Eigen::VectorXd& lambda_guess, ConstrainedStep& s,
-                                 double tolerance, int max_iterations) {
+ConstrainedStepResult rattleStep(double t, double h, Eigen::VectorXd& mu, ConstrainedStep& s,
+                                 const RattleOptions& options) {
+  const double tolerance = options.tolerance;
+  const int max_iterations = options.max_iterations;
   ConstrainedStepResult result;
   std::vector<RigidBody>& bodies = s.bodies;
   const size_t n = bodies.size();
@@ -60,7 +62,7 @@ ConstrainedStepResult rattleStep(double t, double h, const Eigen::VectorXd& lamb
   s.system.evaluate(bodies, s.joints);
   const ConstraintSystem jn = s.system;
   const int rows = jn.rows();
-  Eigen::VectorXd mu = lambda_guess.size() == rows ? lambda_guess : Eigen::VectorXd::Zero(rows);
+  if (mu.size() != rows) mu.setZero(rows);
 
   // Positions at t + h for multipliers mu: the first kick with J^T mu, then the drift.
   std::vector<Vector6d> fc(n);
@@ -117,7 +119,8 @@ ConstrainedStepResult rattleStep(double t, double h, const Eigen::VectorXd& lamb
     previous = err;
   }
 
-  // Second kick at (t + h, q_{n+1}) with the forces at the predicted velocity.
+  // Second kick at (t + h, q_{n+1}) from the half-step momenta p+, L+ (the first kick's) with
+  // the forces at the predicted velocity (drift() left v+ = p+ / m in the bodies).
   if (!s.forces(t + h)) return result;
   for (size_t i = 0; i < n; ++i) {
     RigidBody& b = bodies[i];
@@ -132,6 +135,21 @@ ConstrainedStepResult rattleStep(double t, double h, const Eigen::VectorXd& lamb
   if (std::string e = projectVelocities(bodies, s.joints, s.system, s.solver); !e.empty()) {
     result.failed = true;
     result.problem = "RATTLE velocity solve: " + e;
+    return result;
+  }
+  // The step's end point in the bodies' force scratch: the second kick's total force is
+  // 2 (p' - p+) / h, its constraint part J(q')^T nu; a and alpha as the joint-force stage
+  // writes them (alpha with the gyroscopic term: I^-1 (t - w x I w)).
+  for (size_t i = 0; i < n; ++i) {
+    RigidBody& b = bodies[i];
+    if (!b.isDynamic()) continue;
+    const Eigen::Matrix3d inertia = b.worldInertia();
+    const Eigen::Vector3d force = 2.0 / h * (b.mass * b.v - start[i].p) - fc[i].head<3>();
+    const Eigen::Vector3d torque = 2.0 / h * (inertia * b.w - start[i].l) - fc[i].tail<3>();
+    b.constraint_force = force - b.force;
+    b.constraint_torque = torque - b.torque;
+    b.a = force / b.mass;
+    b.alpha = b.worldInverseInertia() * (torque - b.w.cross(inertia * b.w));
   }
   return result;
 }

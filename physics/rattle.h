@@ -25,9 +25,11 @@
 //
 // The position solve is a quasi-Newton (chord) iteration: C(mu + dmu) ~ C + (h^2 / 2) A dmu with
 // the symmetric A = J M^-1 J^T at the latest iterate, factored by the World's solver (dense or
-// tree), reused while it contracts well; starting from the acceleration-level multipliers of the
-// step's start (lambda), which are already within O(h) of mu. Until max |C| <= tolerance. The
-// velocity solve is exact (linear): the mass-metric velocity projection at the new positions.
+// tree), reused while it contracts well; until max |C| <= tolerance. It starts from the caller's
+// guess: World passes the previous accepted step's mu (warm start: mu is a force, it changes by
+// O(h) per step, so the guess is as close as the acceleration-level lambda of the step's start
+// that was used before, and costs no solve). The velocity solve is exact (linear): the
+// mass-metric velocity projection at the new positions.
 //
 // Velocity-dependent forces (damping, drag, servos) are taken at the predicted velocity in the
 // second kick (explicit): the method stays second order and they only dissipate. Stiff springs
@@ -42,11 +44,21 @@
 
 namespace ponyhop {
 
-// One RATTLE step of h from time t. `lambda_guess`: multipliers of an acceleration-level solve
-// at the start (or empty). Moves the dynamic bodies in place. failed: the position solve did not
-// reach `tolerance` (m) within `max_iterations` (the caller splits the step).
-ConstrainedStepResult rattleStep(double t, double h, const Eigen::VectorXd& lambda_guess, ConstrainedStep& step,
-                                 double tolerance = 1e-12, int max_iterations = 40);
+struct RattleOptions {
+  double tolerance = 1e-12;  // m, max |C| the position solve reaches
+  int max_iterations = 40;
+};
+
+// One RATTLE step of h from time t. `mu`: in, the guess of the position multipliers (any size:
+// one that does not match the rows starts from zero); out, the converged ones (on failure, the
+// last iterate: the caller discards it with the step). Moves the dynamic bodies in place and
+// leaves the step's end point in their force scratch: force/torque = F(t + h) as used by the
+// last second kick, constraint_force/torque = J(q')^T nu, a/alpha = the accelerations of the
+// second kick (RATTLE's own accelerations at t + h; not the acceleration-level solve's lambda,
+// they differ by the method's error). failed: the position solve did not reach the tolerance
+// within max_iterations (the caller splits the step).
+ConstrainedStepResult rattleStep(double t, double h, Eigen::VectorXd& mu, ConstrainedStep& step,
+                                 const RattleOptions& options = {});
 
 // The free rigid-body rotation over h with world angular momentum L (above): body-to-world q of
 // a body with principal inertia `inertia` (body frame). Exact for symmetric bodies.

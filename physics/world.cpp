@@ -149,6 +149,23 @@ bool World::takeStep(double h) {
   split_reason_.clear();
   if (reduced_) {
     reducedStep(h);  // featherstone: one joint-space step replaces the stages below
+  } else if (params_.integrator == Integrator::Rattle) {
+    // RATTLE evaluates the forces at t itself (its first kick) and needs no acceleration-level
+    // solve: its position multipliers start from the last step's (warm start). Only when there
+    // are none for these rows (first step, a contact added or dropped rows, a restored state
+    // from before any step) the joint-force solve at t seeds them, as every step used to.
+    updateKinematicBodies(time_);  // prescribed bodies: pose, velocity, acceleration at t
+    followTeleports(h);            // a prescribed body that jumps within the step carries its chain along
+    if (!warmStartFits()) {
+      applyExternalForces();
+      applyControllerForces();
+      solveJointForces();
+      if (ok()) warm_start_.mu = solver_->lambda();
+    }
+    integrate(h);  // t += h: kick, drift, position solve, kick, velocity solve
+    // After the step: its end state with its end accelerations (the second kick's, which a step
+    // that is later undone takes back with the monitor's snapshot).
+    if (split_reason_.empty()) watchStability(h);
   } else {
     updateKinematicBodies(time_);  // prescribed bodies: pose, velocity, acceleration at t
     followTeleports(h);            // a prescribed body that jumps within the step carries its chain along
@@ -251,6 +268,7 @@ void World::snapshotInto(Snapshot& s) const {
   gatherStateInto(s.state);
   s.time = time_;
   s.monitor = monitor_;
+  s.warm_start = warm_start_;  // same rows as last time: copied without allocating
 }
 
 void World::restore(const Snapshot& s) {
@@ -258,6 +276,10 @@ void World::restore(const Snapshot& s) {
   time_ = s.time;
   stage_time_ = s.time;
   monitor_ = s.monitor;
+  // The multipliers of the last step before the snapshot: a force, so as good a guess for a
+  // retry with h / 2 as for h; the undone step's never seed anything.
+  warm_start_ = s.warm_start;
+  forces_stale_ = true;
   split_reason_.clear();
   status_.clear();  // only called on a world that was running when the snapshot was taken
 }
@@ -271,6 +293,18 @@ int World::methodOrder() const {
     default:
       return 1;  // symplectic and linearly implicit Euler
   }
+}
+
+bool World::warmStartFits() const {
+  if (!warm_start_.valid || warm_start_.dims.size() != joints_.size()) return false;
+  for (size_t j = 0; j < joints_.size(); ++j)
+    if (warm_start_.dims[j] != joints_[j]->dimension()) return false;
+  return true;
+}
+
+const Eigen::VectorXd& World::lambda() {
+  if (forces_stale_ && ok() && !reduced_) evaluate();  // featherstone keeps its own
+  return solver_->lambda();
 }
 
 double World::positionDistance(const State& a, const State& b) const {
@@ -361,7 +395,7 @@ void World::solveJointForces() {
     return stop("joint forces", e,
                 "redundant or duplicate joints, a joint between two prescribed bodies, or a zero mass or inertia");
   }
-  checkBodies("joint forces", true);
+  if (checkBodies("joint forces", true)) forces_stale_ = false;
 }
 
 void World::integrate(double h) {
@@ -379,13 +413,23 @@ void World::integrate(double h) {
                          return ok();
                        },
                        [this](double t) { updateKinematicBodies(t); }};
-    const ConstrainedStepResult r = params_.integrator == Integrator::Rattle
-                                        ? rattleStep(time_, h, solver_->lambda(), cs)
-                                        : linearlyImplicitEulerStep(time_, h, cs);
+    ConstrainedStepResult r;
+    if (params_.integrator == Integrator::Rattle) {
+      r = rattleStep(time_, h, warm_start_.mu, cs);  // mu: the guess in, this step's out
+    } else {
+      r = linearlyImplicitEulerStep(time_, h, cs);
+    }
     if (!ok()) return;
     if (r.failed) {
       split_reason_ = r.problem;  // substep() undoes the step and tries two halves
       return;
+    }
+    if (params_.integrator == Integrator::Rattle) {
+      // The next step's guess. Sized once per row layout: a steady step allocates nothing here.
+      warm_start_.dims.resize(joints_.size());
+      for (size_t j = 0; j < joints_.size(); ++j) warm_start_.dims[j] = joints_[j]->dimension();
+      warm_start_.valid = true;
+      forces_stale_ = true;  // lambda() solves on demand
     }
     time_ += h;
     stage_time_ = time_;
@@ -521,6 +565,7 @@ World::SavedState World::saveState() const {
   for (const auto& c : controllers_) s.controllers.push_back(c->saveState());
   for (const auto& c : contacts_) s.contacts.push_back(c->saveState());
   s.monitor = monitor_;
+  s.warm_start = warm_start_;
   s.tolerance_substeps = tolerance_substeps_;
   s.status = status_;
   return s;
@@ -533,6 +578,8 @@ void World::restoreState(const SavedState& s) {
     controllers_[i]->restoreState(s.controllers[i]);
   for (size_t i = 0; i < contacts_.size() && i < s.contacts.size(); ++i) contacts_[i]->restoreState(s.contacts[i]);
   monitor_ = s.monitor;
+  warm_start_ = s.warm_start;
+  forces_stale_ = true;
   tolerance_substeps_ = s.tolerance_substeps;
   status_ = s.status;
   split_reason_.clear();

@@ -57,6 +57,9 @@ class World {
 
   // The force stages at the current state and time, without stepping: fills every dynamic
   // body's a, alpha and constraint force/torque, and lambda(). For tests and drawing forces.
+  // RATTLE steps do not run the acceleration-level solve (docs/STABILITY.md, "RATTLE's warm
+  // start"): after one, the bodies' a, alpha and constraint force/torque are RATTLE's own at the
+  // end of the step (physics/rattle.h), and lambda() is brought up to date on demand.
   void evaluate();
   // Velocities of the dynamic bodies onto the joints' velocity constraints (J v = -J_k v_k) in
   // the mass metric: the least-kinetic-energy consistent velocities (Kelvin). Stops the world
@@ -68,6 +71,14 @@ class World {
   ProjectionResult projectPositionsOntoJoints();
   std::string projectVelocitiesOntoJoints(Eigen::VectorXd* impulses = nullptr);
 
+  // RATTLE's warm start: the position multipliers of the last step taken and the joints'
+  // dimensions (rows) they belong to; valid once a RATTLE step succeeded.
+  struct WarmStart {
+    Eigen::VectorXd mu;
+    std::vector<int> dims;
+    bool valid = false;
+  };
+
   // A complete snapshot: every body's state, the time, the controllers' and contact sets' own
   // state and the step control's; restoreState(saveState()) continues bit for bit as before.
   struct SavedState {
@@ -76,6 +87,7 @@ class World {
     std::vector<std::any> controllers;
     std::vector<std::any> contacts;
     StabilityMonitor monitor;
+    WarmStart warm_start;
     int tolerance_substeps = 0;
     std::string status;  // "" while running; a restore of a running state revives a stopped world
   };
@@ -97,6 +109,11 @@ class World {
   // The reduced-coordinate system (physics.solver = featherstone), else null.
   const ArticulatedSystem* reduced() const { return reduced_.get(); }
   ArticulatedSystem* reduced() { return reduced_.get(); }
+  // The multipliers of the acceleration-level joint-force solve (one per constraint row). After
+  // a RATTLE step, which does not run that solve, the non-const overload runs it first
+  // (evaluate(): at the current state, so the values are exact, not RATTLE's); the const one
+  // returns the last solve's, which may then be from an earlier state (call evaluate() first).
+  const Eigen::VectorXd& lambda();
   const Eigen::VectorXd& lambda() const { return solver_->lambda(); }
 
   // Wall time per stage of step() since construction or the last reset (physics/stage_times.h).
@@ -130,12 +147,14 @@ class World {
   void watchStability(double h);
   void followTeleports(double h);
   double maxAngularSpeed() const;
+  bool warmStartFits() const;  // warm_start_ belongs to the current joint rows
   struct Snapshot {
     State state;
     double time = 0.0;
     StabilityMonitor monitor;
+    WarmStart warm_start;  // a rejected step's multipliers must not seed the retry
   };
-  Snapshot snapshot() const { return {gatherState(), time_, monitor_}; }
+  Snapshot snapshot() const { return {gatherState(), time_, monitor_, warm_start_}; }
   // The same into `s`, reusing its storage (substep(): a steady step allocates nothing).
   void snapshotInto(Snapshot& s) const;
   void restore(const Snapshot& s);
@@ -173,7 +192,11 @@ class World {
   int tolerance_substeps_ = 0;            // tolerance mode: substeps to start the next dt with
   int tolerance_misses_ = 0;              // substeps accepted above the tolerance at the deepest split
   std::vector<Snapshot> substep_starts_;  // substep()'s snapshot per split depth
-  State state_scratch_;                   // watchStability() and integrate()
+  WarmStart warm_start_;                  // RATTLE: the last step's position multipliers
+  // The bodies moved since the last acceleration-level solve (a RATTLE step, a restore):
+  // lambda() runs it on demand.
+  bool forces_stale_ = false;
+  State state_scratch_;  // watchStability() and integrate()
   Accelerations acc_scratch_;
 };
 
