@@ -97,6 +97,8 @@ class KineticFriction final : public ForceElement {
                   std::shared_ptr<ContactState> state)
       : foot_(foot), center_(center_local), radius_(radius), mu_(mu), state_(std::move(state)) {}
   void apply(std::vector<RigidBody>& bodies) const override;
+  // mu N along the slip direction the contact stage fixed: constant within a step.
+  bool dependsOnVelocity() const override { return false; }
 
  private:
   int foot_;

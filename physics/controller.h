@@ -28,6 +28,9 @@ class Controller {
   virtual ~Controller() = default;
   virtual void think(World& /*world*/) {}
   virtual void applyForces(World& world, double t) = 0;
+  // Whether applyForces reads velocities (servo damping): RATTLE then corrects its second kick
+  // (physics/rattle.h). True unless a controller says otherwise.
+  virtual bool dependsOnVelocity() const { return true; }
   virtual std::any saveState() const { return {}; }
   virtual void restoreState(const std::any& /*state*/) {}
 };

@@ -19,6 +19,11 @@ class ForceElement {
   virtual void apply(std::vector<RigidBody>& bodies) const = 0;
   // Stored energy (conservative elements), J; 0 for dissipative ones.
   virtual double potentialEnergy(const std::vector<RigidBody>& /*bodies*/) const { return 0.0; }
+  // Whether the force depends on the bodies' velocities (damping, drag): RATTLE then corrects
+  // its second kick with a second evaluation (physics/rattle.h), which position-only forces do
+  // not need. True unless an element says otherwise: a wrong true costs an evaluation, a wrong
+  // false costs the order.
+  virtual bool dependsOnVelocity() const { return true; }
 };
 
 using ForceElements = std::vector<std::unique_ptr<ForceElement>>;
@@ -44,6 +49,7 @@ class BendingSpring final : public ForceElement {
   BendingSpring(int body_a, int body_b, double k, const Eigen::Quaterniond& rest_relative)
       : a_(body_a), b_(body_b), k_(k), rest_(rest_relative.normalized()) {}
   void apply(std::vector<RigidBody>& bodies) const override;
+  bool dependsOnVelocity() const override { return false; }  // orientations only (its damping is a JointDamper)
   double potentialEnergy(const std::vector<RigidBody>& bodies) const override;
   Eigen::Vector3d worldError(const std::vector<RigidBody>& bodies) const;  // R_b theta
 

@@ -95,6 +95,7 @@ class Hopper final : public Controller {
   void think(World& world) override;
   // ComputeControllerForces: computeHopperForces with the current setpoints.
   void applyForces(World& world, double t) override;
+  bool dependsOnVelocity() const override { return true; }  // leg and stop damping, the servos' damping
   std::any saveState() const override { return mem_; }
   void restoreState(const std::any& s) override;
 

@@ -59,6 +59,7 @@ struct ConstrainedStepResult {
   std::string problem;     // why it failed (for World::status())
   int iterations = 0;      // Newton / solver iterations used
   double joint_error = 0;  // max |C| after the step (m)
+  bool corrected = false;  // RATTLE: the velocity-dependent forces' corrector was applied
 };
 
 }  // namespace ponyhop

@@ -39,6 +39,8 @@ class Perturbation final : public ForceElement {
  public:
   explicit Perturbation(std::shared_ptr<const PerturbationTarget> target) : target_(std::move(target)) {}
   void apply(std::vector<RigidBody>& bodies) const override;
+  // The pull's damper, while a body is grabbed.
+  bool dependsOnVelocity() const override { return target_->active() && target_->damping != 0.0; }
 
  private:
   std::shared_ptr<const PerturbationTarget> target_;

@@ -31,9 +31,16 @@
 // that was used before, and costs no solve). The velocity solve is exact (linear): the
 // mass-metric velocity projection at the new positions.
 //
-// Velocity-dependent forces (damping, drag, servos) are taken at the predicted velocity in the
-// second kick (explicit): the method stays second order and they only dissipate. Stiff springs
-// are explicit as in any Verlet method: stable for h omega < 2 (see implicit_euler.h otherwise).
+// Velocity-dependent forces (damping, drag, servos): the second kick is the trapezoidal rule's
+// implicit half, p' = p+ + h/2 F(t + h, q', v'). Taking F at the predicted velocity v+ = p+ / m
+// (explicit) makes its error O(h) in F, O(h^2) per step in v': first order. With
+// `correct_velocity_forces` one fixed-point iteration follows: F again at (t + h, q', v'), the
+// second kick redone from the same p+ with it, projected again; then F's error is O(h^2), the
+// local error O(h^3) and the method second order (tests/physics/physics_rattle_order_test.cpp).
+// Without such forces (gravity, springs) the predicted velocity is exact for them and the
+// corrector is skipped by the caller: the step is then exactly the classical RATTLE.
+// Stiff springs are explicit as in any Verlet method: stable for h omega < 2 (see
+// implicit_euler.h otherwise).
 // Kinematic bodies: the position solve uses their pose at t + h and the velocity solve their
 // velocity at t + h; their acceleration is not needed.
 #pragma once
@@ -47,6 +54,10 @@ namespace ponyhop {
 struct RattleOptions {
   double tolerance = 1e-12;  // m, max |C| the position solve reaches
   int max_iterations = 40;
+  // The corrector of the second kick for velocity-dependent forces (above). Off: one force
+  // evaluation at t + h with the predicted velocity, exact only when no force depends on the
+  // velocity (World turns it off then: physics/force_elements.h, dependsOnVelocity()).
+  bool correct_velocity_forces = true;
 };
 
 // One RATTLE step of h from time t. `mu`: in, the guess of the position multipliers (any size:

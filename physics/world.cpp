@@ -302,6 +302,14 @@ bool World::warmStartFits() const {
   return true;
 }
 
+bool World::velocityDependentForces() const {
+  for (const auto& f : forces_)
+    if (f->dependsOnVelocity()) return true;
+  for (const auto& c : controllers_)
+    if (c->dependsOnVelocity()) return true;
+  return false;
+}
+
 const Eigen::VectorXd& World::lambda() {
   if (forces_stale_ && ok() && !reduced_) evaluate();  // featherstone keeps its own
   return solver_->lambda();
@@ -415,7 +423,9 @@ void World::integrate(double h) {
                        [this](double t) { updateKinematicBodies(t); }};
     ConstrainedStepResult r;
     if (params_.integrator == Integrator::Rattle) {
-      r = rattleStep(time_, h, warm_start_.mu, cs);  // mu: the guess in, this step's out
+      RattleOptions options;
+      options.correct_velocity_forces = rattle_corrector_ && velocityDependentForces();
+      r = rattleStep(time_, h, warm_start_.mu, cs, options);  // mu: the guess in, this step's out
     } else {
       r = linearlyImplicitEulerStep(time_, h, cs);
     }

@@ -54,6 +54,10 @@ class World {
   int toleranceMisses() const { return tolerance_misses_; }
   // The order of the method in use (1 symplectic/implicit Euler, 2 RATTLE, 4 RK4).
   int methodOrder() const;
+  // RATTLE's corrector for velocity-dependent forces (physics/rattle.h; on by default, and only
+  // run when a force element or controller dependsOnVelocity()). Off: the classical explicit
+  // second kick, first order with damping: for tests that measure what the corrector buys.
+  void setRattleCorrector(bool on) { rattle_corrector_ = on; }
 
   // The force stages at the current state and time, without stepping: fills every dynamic
   // body's a, alpha and constraint force/torque, and lambda(). For tests and drawing forces.
@@ -147,7 +151,8 @@ class World {
   void watchStability(double h);
   void followTeleports(double h);
   double maxAngularSpeed() const;
-  bool warmStartFits() const;  // warm_start_ belongs to the current joint rows
+  bool warmStartFits() const;            // warm_start_ belongs to the current joint rows
+  bool velocityDependentForces() const;  // any force element or controller reads velocities
   struct Snapshot {
     State state;
     double time = 0.0;
@@ -193,6 +198,7 @@ class World {
   int tolerance_misses_ = 0;              // substeps accepted above the tolerance at the deepest split
   std::vector<Snapshot> substep_starts_;  // substep()'s snapshot per split depth
   WarmStart warm_start_;                  // RATTLE: the last step's position multipliers
+  bool rattle_corrector_ = true;
   // The bodies moved since the last acceleration-level solve (a RATTLE step, a restore):
   // lambda() runs it on demand.
   bool forces_stale_ = false;

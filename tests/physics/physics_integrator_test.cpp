@@ -184,7 +184,7 @@ TEST(PhysicsIntegrator, ImplicitEulerIsStableOnStiffSpringsAndExplicitIsStopped)
     }
     // Symplectic Euler and RK4 blow up within 1-2 steps (stopped by the projection or the runaway
     // check); RATTLE's instability starts from round-off and is stopped by the stiffness monitor
-    // two steps after it dominates (measured: step 12 of 60).
+    // two steps after it dominates (measured: step 17 of 60).
     ASSERT_FALSE(cw.world.ok()) << enumName(explicit_method);
     EXPECT_LE(steps, explicit_method == Integrator::Rattle ? 240 : 2) << cw.world.status();
     EXPECT_NE(cw.world.status().find("t = "), std::string::npos);
