@@ -54,12 +54,18 @@ std::string ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, c
 std::vector<Vector6d> ConstraintSolver::massWeightedTranspose(const std::vector<RigidBody>& bodies,
                                                               const ConstraintSystem& system,
                                                               const Eigen::VectorXd& y) const {
-  std::vector<Vector6d> out(bodies.size(), Vector6d::Zero());
+  std::vector<Vector6d> out;
+  massWeightedTransposeInto(bodies, system, y, out);
+  return out;
+}
+
+void ConstraintSolver::massWeightedTransposeInto(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
+                                                 const Eigen::VectorXd& y, std::vector<Vector6d>& out) const {
+  out.assign(bodies.size(), Vector6d::Zero());
   system.addTransposeTimes(y, bodies, out);
   for (size_t i = 0; i < bodies.size(); ++i) {
     if (bodies[i].isDynamic()) out[i] = applyInverseMass(bodies[i], out[i]);
   }
-  return out;
 }
 
 }  // namespace ponyhop

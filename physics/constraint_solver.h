@@ -54,6 +54,9 @@ class ConstraintSolver {
   // for a multiplier-like vector y.
   std::vector<Vector6d> massWeightedTranspose(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
                                               const Eigen::VectorXd& y) const;
+  // The same into `out` (resized to the bodies; no allocation once it has their size).
+  void massWeightedTransposeInto(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
+                                 const Eigen::VectorXd& y, std::vector<Vector6d>& out) const;
 
  private:
   Eigen::VectorXd lambda_;

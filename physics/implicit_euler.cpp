@@ -116,14 +116,12 @@ ConstrainedStepResult linearlyImplicitEulerStep(double t, double h, ConstrainedS
   Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu;
   lu.compute(kkt);
   if (lu.info() != Eigen::Success) {
-    result.failed = true;
-    result.problem = "implicit Euler: the linearized system is singular";
+    result.fail("implicit Euler: the linearized system is singular");
     return result;
   }
   const Eigen::VectorXd sol = lu.solve(rhs);
   if (lu.info() != Eigen::Success || !sol.allFinite()) {
-    result.failed = true;
-    result.problem = "implicit Euler: the linear solve failed";
+    result.fail("implicit Euler: the linear solve failed");
     return result;
   }
   for (int k = 0; k < nd; ++k) {

@@ -11,6 +11,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
+#include <cstdio>
 #include <functional>
 #include <string>
 #include <vector>
@@ -56,10 +58,19 @@ struct ConstrainedStep {
 // World restores them and retries with smaller steps (or stops with `problem`).
 struct ConstrainedStepResult {
   bool failed = false;
-  std::string problem;     // why it failed (for World::status())
+  // Why it failed (for World::status()), in a fixed buffer: a step that fails is split and
+  // retried as part of normal work, and that allocates nothing either.
+  std::array<char, 192> problem{};
   int iterations = 0;      // Newton / solver iterations used
   double joint_error = 0;  // max |C| after the step (m)
   bool corrected = false;  // RATTLE: the velocity-dependent forces' corrector was applied
+
+  void fail(const char* what) { fail("%s", what); }
+  template <class... Args>
+  void fail(const char* format, Args... args) {
+    failed = true;
+    std::snprintf(problem.data(), problem.size(), format, args...);
+  }
 };
 
 }  // namespace ponyhop

@@ -27,21 +27,6 @@ Eigen::Quaterniond freeRotation(const Eigen::Quaterniond& q_in, const Eigen::Vec
   return about_l(q, 0.5 * h).normalized();
 }
 
-namespace {
-
-struct Start {
-  Eigen::Vector3d x, p, l;  // position, momentum + h/2 F, angular momentum + h/2 torque
-  Eigen::Quaterniond q;
-};
-
-std::string number(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", x);
-  return buf;
-}
-
-}  // namespace
-
 ConstrainedStepResult rattleStep(double t, double h, Eigen::VectorXd& mu, ConstrainedStep& s,
                                  const RattleOptions& options) {
   const double tolerance = options.tolerance;
@@ -49,10 +34,13 @@ ConstrainedStepResult rattleStep(double t, double h, Eigen::VectorXd& mu, Constr
   ConstrainedStepResult result;
   std::vector<RigidBody>& bodies = s.bodies;
   const size_t n = bodies.size();
+  RattleWork own;
+  RattleWork& work = options.work ? *options.work : own;
 
   // First kick, known part: forces at (t, q_n, v_n).
   if (!s.forces(t)) return result;
-  std::vector<Start> start(n);
+  std::vector<RattleWork::Start>& start = work.start;
+  start.resize(n);
   for (size_t i = 0; i < n; ++i) {
     const RigidBody& b = bodies[i];
     if (!b.isDynamic()) continue;
@@ -60,12 +48,14 @@ ConstrainedStepResult rattleStep(double t, double h, Eigen::VectorXd& mu, Constr
   }
   // J(q_n): the constraint impulse of the first kick acts along the start's Jacobian (SHAKE).
   s.system.evaluate(bodies, s.joints);
-  const ConstraintSystem jn = s.system;
+  work.jn = s.system;  // same rows as last step: copied into the storage it has
+  const ConstraintSystem& jn = work.jn;
   const int rows = jn.rows();
   if (mu.size() != rows) mu.setZero(rows);
 
   // Positions at t + h for multipliers mu: the first kick with J^T mu, then the drift.
-  std::vector<Vector6d> fc(n);
+  std::vector<Vector6d>& fc = work.fc;
+  fc.resize(n);
   const auto drift = [&](const Eigen::VectorXd& m) {
     std::fill(fc.begin(), fc.end(), Vector6d::Zero());
     if (rows > 0) jn.addTransposeTimes(m, bodies, fc);
@@ -93,29 +83,27 @@ ConstrainedStepResult rattleStep(double t, double h, Eigen::VectorXd& mu, Constr
     result.iterations = k;
     result.joint_error = err;
     if (!std::isfinite(err)) {
-      result.failed = true;
-      result.problem = "RATTLE position solve produced a non-finite joint error";
+      result.fail("RATTLE position solve produced a non-finite joint error");
       return result;
     }
     if (err <= tolerance) break;
     // Round-off floor: no more progress below 1e-11 m is as good as it gets.
     if (k > 0 && err > 0.5 * previous && err < 1e-11) break;
     if (k >= max_iterations || (k > 3 && err > 0.9 * previous)) {
-      result.failed = true;
-      result.problem = "RATTLE position solve did not converge (joint error " + number(err) + " m after " +
-                       std::to_string(k) + " iterations)";
+      result.fail("RATTLE position solve did not converge (joint error %.3g m after %d iterations)", err, k);
       return result;
     }
     // Refactor at the latest iterate unless the last chord step contracted by 4x or better.
     if (!factored || err > 0.25 * previous) {
       if (!s.solver.factor(bodies, s.system)) {
-        result.failed = true;
-        result.problem = "the constraint matrix J M^-1 J^T is singular";
+        result.fail("the constraint matrix J M^-1 J^T is singular");
         return result;
       }
       factored = true;
     }
-    mu += scale * s.solver.solve(-s.system.C());
+    work.rhs = -s.system.C();
+    s.solver.solveInto(work.rhs, work.dmu);
+    mu += scale * work.dmu;
     previous = err;
   }
 
@@ -132,9 +120,8 @@ ConstrainedStepResult rattleStep(double t, double h, Eigen::VectorXd& mu, Constr
   }
   // Velocity multipliers: J(q') v' = -J_k v_k, the mass-metric projection (the impulse
   // h/2 J^T nu changes p and L by exactly that correction).
-  if (std::string e = projectVelocities(bodies, s.joints, s.system, s.solver); !e.empty()) {
-    result.failed = true;
-    result.problem = "RATTLE velocity solve: " + e;
+  if (std::string e = projectVelocities(bodies, s.joints, s.system, s.solver, work.projection); !e.empty()) {
+    result.fail("RATTLE velocity solve: %s", e.c_str());
     return result;
   }
   if (options.correct_velocity_forces) {
@@ -142,7 +129,10 @@ ConstrainedStepResult rattleStep(double t, double h, Eigen::VectorXd& mu, Constr
     // redone from p+ with it. The projection is linear and J, A are those of q' (already
     // evaluated and factored by projectVelocities), so the new v' is the old one plus the
     // projected change h/2 M^-1 (F1 - F0): one more solve, no new factorization.
-    std::vector<Vector6d> v1(n), f0(n), dv(n, Vector6d::Zero());  // dv: zero for kinematic bodies
+    std::vector<Vector6d>&v1 = work.v1, &f0 = work.f0, &dv = work.dv;
+    v1.resize(n);
+    f0.resize(n);
+    dv.assign(n, Vector6d::Zero());  // zero for kinematic bodies
     for (size_t i = 0; i < n; ++i) {
       v1[i] << bodies[i].v, bodies[i].w;
       f0[i] << bodies[i].force, bodies[i].torque;
@@ -156,10 +146,12 @@ ConstrainedStepResult rattleStep(double t, double h, Eigen::VectorXd& mu, Constr
     }
     if (s.system.rows() > 0) {
       // (J M^-1 J^T) y = -J dv: J v' = -J_k v_k held before, so only dv's part is removed.
-      const Eigen::VectorXd y = s.solver.solve(-s.system.times(dv));
-      const std::vector<Vector6d> dp = s.solver.massWeightedTranspose(bodies, s.system, y);
+      s.system.timesInto(dv, work.rhs);
+      work.rhs = -work.rhs;
+      s.solver.solveInto(work.rhs, work.dmu);
+      s.solver.massWeightedTransposeInto(bodies, s.system, work.dmu, work.dp);
       for (size_t i = 0; i < n; ++i)
-        if (bodies[i].isDynamic()) dv[i] += dp[i];
+        if (bodies[i].isDynamic()) dv[i] += work.dp[i];
     }
     // The iteration contracts by about h/2 |M^-1 dF/dv| per step: the change it makes against
     // the change the first kick made from the predicted velocity v+ (mass metric). At 1 or more
@@ -179,8 +171,7 @@ ConstrainedStepResult rattleStep(double t, double h, Eigen::VectorXd& mu, Constr
       first += norm2(v1[i].head<3>() - vp, v1[i].tail<3>() - wp);
     }
     if (!std::isfinite(change)) {
-      result.failed = true;
-      result.problem = "RATTLE velocity solve: non-finite velocity correction";
+      result.fail("RATTLE velocity solve: non-finite velocity correction");
       return result;
     }
     const bool contracts = change < first;

@@ -46,10 +46,27 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <vector>
 
+#include "physics/constraint.h"
 #include "physics/integrator.h"
+#include "physics/stabilization.h"
 
 namespace ponyhop {
+
+// rattleStep's work space: the caller keeps it between steps so that a steady step allocates
+// nothing (World does; without one the step allocates its own).
+struct RattleWork {
+  struct Start {
+    Eigen::Vector3d x, p, l;  // position, momentum + h/2 F, angular momentum + h/2 torque
+    Eigen::Quaterniond q;
+  };
+  std::vector<Start> start;
+  ConstraintSystem jn;  // J(q_n): the first kick's constraint directions
+  std::vector<Vector6d> fc, v1, f0, dv, dp;
+  Eigen::VectorXd rhs, dmu;
+  VelocityProjectionWork projection;
+};
 
 struct RattleOptions {
   double tolerance = 1e-12;  // m, max |C| the position solve reaches
@@ -58,6 +75,7 @@ struct RattleOptions {
   // evaluation at t + h with the predicted velocity, exact only when no force depends on the
   // velocity (World turns it off then: physics/force_elements.h, dependsOnVelocity()).
   bool correct_velocity_forces = true;
+  RattleWork* work = nullptr;  // the caller's work space (null: the step allocates one)
 };
 
 // One RATTLE step of h from time t. `mu`: in, the guess of the position multipliers (any size:

@@ -43,23 +43,31 @@ ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constrai
 
 std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
                               ConstraintSolver& solver, Eigen::VectorXd* impulses) {
+  VelocityProjectionWork work;
+  return projectVelocities(bodies, constraints, system, solver, work, impulses);
+}
+
+std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
+                              ConstraintSolver& solver, VelocityProjectionWork& work, Eigen::VectorXd* impulses) {
   system.evaluate(bodies, constraints);
   if (impulses) impulses->resize(0);
   if (system.rows() == 0) return "";
-  std::vector<Vector6d> vel(bodies.size());
-  for (size_t i = 0; i < bodies.size(); ++i) vel[i] << bodies[i].v, bodies[i].w;
+  work.vel.resize(bodies.size());
+  for (size_t i = 0; i < bodies.size(); ++i) work.vel[i] << bodies[i].v, bodies[i].w;
   // (J M^-1 J^T) y = -(J_d v_d + J_k v_k), dv = M^-1 J^T y.
   if (!solver.factor(bodies, system)) return "the constraint matrix J M^-1 J^T is singular";
-  const Eigen::VectorXd y = solver.solve(-system.times(vel));
-  const std::vector<Vector6d> dv = solver.massWeightedTranspose(bodies, system, y);
+  system.timesInto(work.vel, work.rhs);
+  work.rhs = -work.rhs;
+  solver.solveInto(work.rhs, work.y);
+  solver.massWeightedTransposeInto(bodies, system, work.y, work.dv);
   for (size_t i = 0; i < bodies.size(); ++i) {
     RigidBody& b = bodies[i];
     if (!b.isDynamic()) continue;
-    if (!dv[i].allFinite()) return "non-finite velocity correction";
-    b.v += dv[i].head<3>();
-    b.w += dv[i].tail<3>();
+    if (!work.dv[i].allFinite()) return "non-finite velocity correction";
+    b.v += work.dv[i].head<3>();
+    b.w += work.dv[i].tail<3>();
   }
-  if (impulses) *impulses = y;
+  if (impulses) *impulses = work.y;
   return "";
 }
 

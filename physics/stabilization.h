@@ -37,5 +37,13 @@ ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constrai
 // dv = M^-1 J^T y; a contact reads its own rows' impulse from it.
 std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
                               ConstraintSolver& solver, Eigen::VectorXd* impulses = nullptr);
+// The same with the caller's work space (kept between calls: a steady step allocates nothing).
+struct VelocityProjectionWork {
+  std::vector<Vector6d> vel, dv;
+  Eigen::VectorXd rhs, y;
+};
+std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
+                              ConstraintSolver& solver, VelocityProjectionWork& work,
+                              Eigen::VectorXd* impulses = nullptr);
 
 }  // namespace ponyhop

@@ -425,13 +425,14 @@ void World::integrate(double h) {
     if (params_.integrator == Integrator::Rattle) {
       RattleOptions options;
       options.correct_velocity_forces = rattle_corrector_ && velocityDependentForces();
+      options.work = &rattle_work_;
       r = rattleStep(time_, h, warm_start_.mu, cs, options);  // mu: the guess in, this step's out
     } else {
       r = linearlyImplicitEulerStep(time_, h, cs);
     }
     if (!ok()) return;
     if (r.failed) {
-      split_reason_ = r.problem;  // substep() undoes the step and tries two halves
+      split_reason_ = r.problem.data();  // substep() undoes the step and tries two halves
       return;
     }
     if (params_.integrator == Integrator::Rattle) {

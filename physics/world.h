@@ -17,6 +17,7 @@
 #include "physics/force_elements.h"
 #include "physics/integrator.h"
 #include "physics/physics_params.h"
+#include "physics/rattle.h"
 #include "physics/rigid_body.h"
 #include "physics/stability_monitor.h"
 #include "physics/stabilization.h"
@@ -198,6 +199,7 @@ class World {
   int tolerance_misses_ = 0;              // substeps accepted above the tolerance at the deepest split
   std::vector<Snapshot> substep_starts_;  // substep()'s snapshot per split depth
   WarmStart warm_start_;                  // RATTLE: the last step's position multipliers
+  RattleWork rattle_work_;                // RATTLE: the step's work space (sized once)
   bool rattle_corrector_ = true;
   // The bodies moved since the last acceleration-level solve (a RATTLE step, a restore):
   // lambda() runs it on demand.
