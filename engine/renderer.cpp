@@ -825,8 +825,7 @@ void Renderer::Impl::drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only
 // grown by the post filter's reach (its taps go 4 px along an edge): false when it is the whole
 // frame anyway, or a point is behind the eye (its projection is not bounded).
 bool Renderer::Impl::screenBox(const Eigen::Matrix4f& view_proj, int w, int h, int box[4]) const {
-  const Impl& I = *this;
-  if (I.draw_bounds.isEmpty() && I.lines.empty()) return false;
+  if (draw_bounds.isEmpty() && lines.empty()) return false;
   double x0 = 1e30, y0 = 1e30, x1 = -1e30, y1 = -1e30;
   const auto add = [&](const Eigen::Vector3d& p) {
     const Eigen::Vector4f c = view_proj * Eigen::Vector4f(float(p.x()), float(p.y()), float(p.z()), 1.0f);
@@ -835,10 +834,10 @@ bool Renderer::Impl::screenBox(const Eigen::Matrix4f& view_proj, int w, int h, i
     x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
     return true;
   };
-  if (!I.draw_bounds.isEmpty())
+  if (!draw_bounds.isEmpty())
     for (int i = 0; i < 8; ++i)
-      if (!add(I.draw_bounds.corner(Eigen::AlignedBox3d::CornerType(i)))) return false;
-  for (const LineVertex& v : I.lines)
+      if (!add(draw_bounds.corner(Eigen::AlignedBox3d::CornerType(i)))) return false;
+  for (const LineVertex& v : lines)
     if (!add(Eigen::Vector3d(v.pos[0], v.pos[1], v.pos[2]))) return false;
   const int reach = 6;
   box[0] = std::clamp(int(std::floor(x0)) - reach, 0, w);

@@ -146,12 +146,9 @@ ConstrainedStepResult rattleStep(double t, double h, Eigen::VectorXd& mu, Constr
     }
     if (s.system.rows() > 0) {
       // (J M^-1 J^T) y = -J dv: J v' = -J_k v_k held before, so only dv's part is removed.
-      s.system.timesInto(dv, work.rhs);
-      work.rhs = -work.rhs;
-      s.solver.solveInto(work.rhs, work.dmu);
-      s.solver.massWeightedTransposeInto(bodies, s.system, work.dmu, work.dp);
+      massMetricCorrection(bodies, s.system, s.solver, dv, work.projection);
       for (size_t i = 0; i < n; ++i)
-        if (bodies[i].isDynamic()) dv[i] += work.dp[i];
+        if (bodies[i].isDynamic()) dv[i] += work.projection.dv[i];
     }
     // The iteration contracts by about h/2 |M^-1 dF/dv| per step: the change it makes against
     // the change the first kick made from the predicted velocity v+ (mass metric). At 1 or more

@@ -63,7 +63,7 @@ struct RattleWork {
   };
   std::vector<Start> start;
   ConstraintSystem jn;  // J(q_n): the first kick's constraint directions
-  std::vector<Vector6d> fc, v1, f0, dv, dp;
+  std::vector<Vector6d> fc, v1, f0, dv;
   Eigen::VectorXd rhs, dmu;
   VelocityProjectionWork projection;
 };

@@ -56,10 +56,7 @@ std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints&
   for (size_t i = 0; i < bodies.size(); ++i) work.vel[i] << bodies[i].v, bodies[i].w;
   // (J M^-1 J^T) y = -(J_d v_d + J_k v_k), dv = M^-1 J^T y.
   if (!solver.factor(bodies, system)) return "the constraint matrix J M^-1 J^T is singular";
-  system.timesInto(work.vel, work.rhs);
-  work.rhs = -work.rhs;
-  solver.solveInto(work.rhs, work.y);
-  solver.massWeightedTransposeInto(bodies, system, work.y, work.dv);
+  massMetricCorrection(bodies, system, solver, work.vel, work);
   for (size_t i = 0; i < bodies.size(); ++i) {
     RigidBody& b = bodies[i];
     if (!b.isDynamic()) continue;
@@ -69,6 +66,15 @@ std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints&
   }
   if (impulses) *impulses = work.y;
   return "";
+}
+
+void massMetricCorrection(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
+                          const ConstraintSolver& solver, const std::vector<Vector6d>& vel,
+                          VelocityProjectionWork& work) {
+  system.timesInto(vel, work.rhs);
+  work.rhs = -work.rhs;
+  solver.solveInto(work.rhs, work.y);
+  solver.massWeightedTransposeInto(bodies, system, work.y, work.dv);
 }
 
 }  // namespace ponyhop

@@ -45,5 +45,11 @@ struct VelocityProjectionWork {
 std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
                               ConstraintSolver& solver, VelocityProjectionWork& work,
                               Eigen::VectorXd* impulses = nullptr);
+// The mass-metric correction of per-body velocities `vel` with the solver already factored at
+// `system`: (J M^-1 J^T) y = -J vel into work.y, M^-1 J^T y into work.dv (the kinematic bodies'
+// zero). projectVelocities applies it to the bodies; RATTLE's corrector to a velocity change.
+void massMetricCorrection(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
+                          const ConstraintSolver& solver, const std::vector<Vector6d>& vel,
+                          VelocityProjectionWork& work);
 
 }  // namespace ponyhop
