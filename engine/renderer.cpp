@@ -19,7 +19,7 @@ using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // The ground's shadow texture has shadow_size / this texels a side (renderer.cpp, endFrame).
-constexpr int kGroundShadowDivisor = 8;
+constexpr int kGroundShadowDivisor = 4;
 
 // Angular radius of the key light (rad) for the penumbra of the soft shadows.
 constexpr double kKeyLightAngularRadius = 1.5 * 3.14159265358979 / 180.0;
@@ -851,7 +851,8 @@ void Renderer::endFrame() {
   Impl& I = *impl_;
   const auto t0 = Clock::now();
   const int w = std::clamp(I.params.width, 1, 16384), h = std::clamp(I.params.height, 1, 16384);
-  // Quality: draft drops anti-aliasing and takes a quarter-size shadow map with a plain filter.
+  // Quality: draft drops anti-aliasing and takes a half-size shadow map (512 at the default 1024)
+  // with a plain filter.
   const bool draft = I.params.quality == RenderQuality::Draft;
   const bool aa = !draft && I.params.samples > 1;
   const bool msaa = aa && I.params.antialias == AntiAlias::Msaa;
@@ -892,7 +893,7 @@ void Renderer::endFrame() {
   if (shadows_on) {
     I.beginPass(Impl::kShadowPass);
     const int size = std::clamp(I.light.shadow_size, 64, 8192);
-    I.ensureShadowMap(draft ? std::max(256, size / 4) : size);
+    I.ensureShadowMap(draft ? std::max(256, size / 2) : size);
     lf = fitLightFrustum(ld, casters, I.shadow_size, I.light.shadow_softness, I.params.ground_height);
     I.frustum = lf;
     glBindFramebuffer(GL_FRAMEBUFFER, I.shadow_fbo);

@@ -57,7 +57,7 @@ struct LightParams {
   double intensity = 2.6;                      // key light multiplier
   double ambient = 0.28;                       // hemispheric ambient / fill strength
   double fill = 0.35;                          // second, shadowless fill light from the camera side
-  int shadow_size = 2048;                      // px, shadow map resolution
+  int shadow_size = 1024;                      // px, shadow map resolution
   double shadow_softness = 1.5;                // texels, PCF filter radius
 
   template <class V>
