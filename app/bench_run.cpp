@@ -213,7 +213,10 @@ double timeSteps(const std::function<bool()>& step, double budget, int& steps,
   const double estimate = std::max(1e-7, seconds(Clock::now() - t0));
   if (after_warmup) after_warmup();
   const int blocks = 5;
-  const long per_block = std::clamp(std::lround(budget / blocks / estimate), 1L, 2000L);
+  // At most 2,000 steps per block for the default budgets (0.5 s and less); a longer budget (a
+  // profile of a small N) raises the cap with it.
+  const long cap = std::lround(2000.0 * std::max(1.0, budget / 0.5));
+  const long per_block = std::clamp(std::lround(budget / blocks / estimate), 1L, cap);
   std::vector<double> times;
   steps = 0;
   for (int b = 0; b < blocks && ok; ++b) {

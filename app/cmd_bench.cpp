@@ -58,7 +58,9 @@ struct BenchArgs {
   std::vector<std::string> anchors;  // empty: fixed and shake
   bool scaling = true;
   bool scaling_only = false;
-  std::vector<int> scaling_links;  // empty: the mode's set
+  std::vector<int> scaling_links;            // empty: the mode's set
+  std::vector<std::string> scaling_solvers;  // empty: every solver of ours
+  double scaling_budget = -1.0;              // s per (solver, N); < 0: the mode's
   bool collision = true;
   std::string ponytail_scene = "assets/scenes/ponytail.json";
   std::string command_line;
@@ -529,6 +531,7 @@ int runBench(BenchArgs& args) {
   if (!args.anchors.empty()) cfg.anchors = args.anchors;
   if (!args.dts.empty()) cfg.dt_denominators = args.dts;
   if (!args.scaling_links.empty()) cfg.scaling_links = args.scaling_links;
+  if (args.scaling_budget >= 0.0) cfg.scaling_budget = args.scaling_budget;
   if (!args.scaling) cfg.scaling_links.clear();
   std::filesystem::create_directories(args.out);
   std::vector<std::string> notes;
@@ -587,6 +590,8 @@ int runBench(BenchArgs& args) {
   // long run that is stopped early still leaves what it measured.
   std::vector<ScalingRow> scaling;
   for (auto s : EnumNames<SolverKind>::names) {
+    const auto& only = args.scaling_solvers;
+    if (!only.empty() && std::find(only.begin(), only.end(), std::string(s)) == only.end()) continue;
     for (int n : cfg.scaling_links) {
       ScalingRow r{std::string(s), n, benchScaling(args.chain_scene, std::string(s), n, cfg.scaling_budget)};
       std::fprintf(stderr, "bench: scaling %-14s N = %-5d %10.1f us/step %s\n", r.solver.c_str(), n, r.r.us_per_step,
@@ -727,6 +732,12 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
                   "Chain lengths of the sweep (default 2,4,...,1024; quick 2..32)")
       ->delimiter(',')
       ->check(CLI::Range(1, 65536));
+  cmd->add_option("--scaling-solvers", args->scaling_solvers,
+                  "Our solvers in the sweep, e.g. tree,featherstone (default all; for profiling one)")
+      ->delimiter(',');
+  cmd->add_option("--scaling-budget", args->scaling_budget,
+                  "Seconds of stepping per solver and N in the sweep (default 0.5; quick 0.02; longer for perf)")
+      ->check(CLI::Range(0.0, 3600.0));
   cmd->callback([args, &exit_code] {
     const auto list = [](const auto& v) {
       std::string s;

@@ -50,9 +50,21 @@ Eigen::VectorXd ConstraintSystem::times(const std::vector<Vector6d>& per_body) c
   return out;
 }
 
+namespace {
+// A block's Jacobian seen as a fixed 3 x 6 (spherical joints, the common case): fixed-size
+// products instead of loops over a runtime row count.
+using Jacobian3 = Eigen::Matrix<double, 3, 6>;
+Eigen::Map<const Jacobian3> fixed3(const JacobianBlock& j) { return Eigen::Map<const Jacobian3>(j.data()); }
+}  // namespace
+
 void ConstraintSystem::timesInto(const std::vector<Vector6d>& per_body, Eigen::VectorXd& out) const {
   out.setZero(rows_);
   for (const Block& b : blocks_) {
+    if (b.rows == 3) {
+      if (b.body_a != kWorldBody) out.segment<3>(b.row) += fixed3(b.ja) * per_body[b.body_a];
+      if (b.body_b != kWorldBody) out.segment<3>(b.row) += fixed3(b.jb) * per_body[b.body_b];
+      continue;
+    }
     if (b.body_a != kWorldBody) out.segment(b.row, b.rows) += b.ja * per_body[b.body_a];
     if (b.body_b != kWorldBody) out.segment(b.row, b.rows) += b.jb * per_body[b.body_b];
   }
@@ -61,6 +73,12 @@ void ConstraintSystem::timesInto(const std::vector<Vector6d>& per_body, Eigen::V
 void ConstraintSystem::addTransposeTimes(const Eigen::VectorXd& lambda, const std::vector<RigidBody>& bodies,
                                          std::vector<Vector6d>& out) const {
   for (const Block& b : blocks_) {
+    if (b.rows == 3) {
+      const auto l = lambda.segment<3>(b.row);
+      if (b.body_a != kWorldBody && bodies[b.body_a].isDynamic()) out[b.body_a] += fixed3(b.ja).transpose() * l;
+      if (b.body_b != kWorldBody && bodies[b.body_b].isDynamic()) out[b.body_b] += fixed3(b.jb).transpose() * l;
+      continue;
+    }
     const auto l = lambda.segment(b.row, b.rows);
     if (b.body_a != kWorldBody && bodies[b.body_a].isDynamic()) out[b.body_a] += b.ja.transpose() * l;
     if (b.body_b != kWorldBody && bodies[b.body_b].isDynamic()) out[b.body_b] += b.jb.transpose() * l;

@@ -688,11 +688,12 @@ std::string ArticulatedSystem::evaluate(double t, std::vector<RigidBody>& bodies
 // joint coordinates are read again from them (bit-exact comparison with what was written).
 bool ArticulatedSystem::bodiesChanged(const std::vector<RigidBody>& bodies) const {
   if (written_.size() != nodes_.size()) return true;
+  // Field by field, no 13-vector assembled per body (the same comparison: != on each double).
   for (size_t i = 0; i < nodes_.size(); ++i) {
     const RigidBody& b = bodies[nodes_[i].body];
-    Eigen::Matrix<double, 13, 1> s;
-    s << b.x, b.q.coeffs(), b.v, b.w;
-    if (s != written_[i]) return true;
+    const Eigen::Matrix<double, 13, 1>& w = written_[i];
+    if (b.x != w.segment<3>(0) || b.q.coeffs() != w.segment<4>(3) || b.v != w.segment<3>(7) || b.w != w.segment<3>(10))
+      return true;
   }
   return false;
 }

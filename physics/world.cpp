@@ -382,8 +382,9 @@ void World::applyExternalForces() {
 }
 
 void World::applyControllerForces() {
-  const auto timed = clock_.time(Stage::Controller);
+  // An empty stage is not timed: its two clock reads would cost more than its work.
   if (!ok() || controllers_.empty()) return;
+  const auto timed = clock_.time(Stage::Controller);
   for (const auto& c : controllers_) c->applyForces(*this, stage_time_);
   for (const RigidBody& b : bodies_) {
     if (b.isDynamic() && (!b.force.allFinite() || !b.torque.allFinite())) {
@@ -470,10 +471,10 @@ void World::integrate(double h) {
 }
 
 void World::stabilize() {
-  const auto timed = clock_.time(Stage::Stabilize);
-  // RATTLE keeps positions and velocities on the joints by construction.
+  // RATTLE keeps positions and velocities on the joints by construction. Nothing to do: not timed.
   if (!ok() || !split_reason_.empty() || params_.integrator == Integrator::Rattle) return;
   if (params_.stabilization != Stabilization::Projection || joints_.empty()) return;
+  const auto timed = clock_.time(Stage::Stabilize);
   updateKinematicBodies(time_);
   const ProjectionResult r = projectPositions(bodies_, joints_, system_, *solver_);
   if (!r.problem.empty() || !(r.error < 1e-6)) {
@@ -496,8 +497,8 @@ bool World::impactInside() const {
 }
 
 void World::resolveContacts() {
+  if (!ok() || contacts_.empty()) return;  // nothing to do: not timed
   const auto timed = clock_.time(Stage::Contact);
-  if (!ok() || contacts_.empty()) return;
   for (const auto& c : contacts_) c->update(*this);
   checkBodies("contact", false);
 }
