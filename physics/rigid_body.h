@@ -23,6 +23,17 @@ inline Eigen::Matrix3d skew(const Eigen::Vector3d& a) {
   return m;
 }
 
+// R diag(d) R^T (a principal inertia or its inverse turned to the world frame), symmetric by
+// construction: the six upper entries, mirrored.
+inline Eigen::Matrix3d rotateDiagonal(const Eigen::Matrix3d& r, const Eigen::Vector3d& d) {
+  const Eigen::Matrix3d rd = r * d.asDiagonal();
+  Eigen::Matrix3d out;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = i; j < 3; ++j) out(i, j) = out(j, i) = rd.row(i).dot(r.row(j));
+  }
+  return out;
+}
+
 // The unit quaternion of the rotation vector phi (axis * angle), exact for any angle.
 inline Eigen::Quaterniond quaternionFromRotationVector(const Eigen::Vector3d& phi) {
   const double angle = phi.norm();
