@@ -21,25 +21,24 @@ void ConstraintSystem::evaluate(const std::vector<RigidBody>& bodies, const Cons
   bias_.resize(rows_);
   max_error_ = 0.0;
   int row = 0;
-  ConstraintRows r;
   for (size_t j = 0; j < constraints.size(); ++j) {
     const Constraint& c = *constraints[j];
     const int m = c.dimension();
-    r.C.resize(m);
-    r.ja.resize(m, 6);
-    r.jb.resize(m, 6);
-    r.bias.resize(m);
-    c.evaluate(bodyOf(c.bodyA()), bodyOf(c.bodyB()), r);
-    Block& b = blocks_[j];
+    Block& b = blocks_[j];  // evaluated in place: no copy of the rows
+    b.C.resize(m);
+    b.ja.resize(m, 6);
+    b.jb.resize(m, 6);
+    b.bias.resize(m);
+    b.point = false;
+    c.evaluate(bodyOf(c.bodyA()), bodyOf(c.bodyB()), b);
+    b.point = b.point && m == 3;
     b.body_a = c.bodyA();
     b.body_b = c.bodyB();
     b.row = row;
     b.rows = m;
-    b.ja = r.ja;
-    b.jb = r.jb;
-    c_.segment(row, m) = r.C;
-    bias_.segment(row, m) = r.bias;
-    max_error_ = std::max(max_error_, c.error(r));
+    c_.segment(row, m) = b.C;
+    bias_.segment(row, m) = b.bias;
+    max_error_ = std::max(max_error_, c.error(b));
     row += m;
   }
 }
@@ -60,6 +59,19 @@ Eigen::Map<const Jacobian3> fixed3(const JacobianBlock& j) { return Eigen::Map<c
 void ConstraintSystem::timesInto(const std::vector<Vector6d>& per_body, Eigen::VectorXd& out) const {
   out.setZero(rows_);
   for (const Block& b : blocks_) {
+    if (b.point) {  // J_a x_a + J_b x_b = (v_a + w_a x arm_a) - (v_b + w_b x arm_b)
+      Eigen::Vector3d s = Eigen::Vector3d::Zero();
+      if (b.body_a != kWorldBody) {
+        const Vector6d& x = per_body[b.body_a];
+        s += x.head<3>() + x.tail<3>().cross(b.arm_a);
+      }
+      if (b.body_b != kWorldBody) {
+        const Vector6d& x = per_body[b.body_b];
+        s -= x.head<3>() + x.tail<3>().cross(b.arm_b);
+      }
+      out.segment<3>(b.row) = s;
+      continue;
+    }
     if (b.rows == 3) {
       if (b.body_a != kWorldBody) out.segment<3>(b.row) += fixed3(b.ja) * per_body[b.body_a];
       if (b.body_b != kWorldBody) out.segment<3>(b.row) += fixed3(b.jb) * per_body[b.body_b];
@@ -73,6 +85,18 @@ void ConstraintSystem::timesInto(const std::vector<Vector6d>& per_body, Eigen::V
 void ConstraintSystem::addTransposeTimes(const Eigen::VectorXd& lambda, const std::vector<RigidBody>& bodies,
                                          std::vector<Vector6d>& out) const {
   for (const Block& b : blocks_) {
+    if (b.point) {  // J_a^T lambda = [lambda; arm_a x lambda], J_b^T lambda = -[lambda; arm_b x lambda]
+      const Eigen::Vector3d l = lambda.segment<3>(b.row);
+      if (b.body_a != kWorldBody && bodies[b.body_a].isDynamic()) {
+        out[b.body_a].head<3>() += l;
+        out[b.body_a].tail<3>() += b.arm_a.cross(l);
+      }
+      if (b.body_b != kWorldBody && bodies[b.body_b].isDynamic()) {
+        out[b.body_b].head<3>() -= l;
+        out[b.body_b].tail<3>() -= b.arm_b.cross(l);
+      }
+      continue;
+    }
     if (b.rows == 3) {
       const auto l = lambda.segment<3>(b.row);
       if (b.body_a != kWorldBody && bodies[b.body_a].isDynamic()) out[b.body_a] += fixed3(b.ja).transpose() * l;

@@ -35,6 +35,13 @@ struct ConstraintRows {
   JacobianBlock ja;
   JacobianBlock jb;
   ConstraintVector bias;  // J' q'
+  // A point joint (3 rows, a point of a on a point of b) may say so: then J_a = [I, -arm_a~] and
+  // J_b = [-I, arm_b~] with the world-frame arms from each centre, and the solvers use that
+  // structure (J x = v_a + w_a x arm_a - ..., J M^-1 J^T by cross products) instead of the
+  // general 3 x 6 blocks. ConstraintSystem::evaluate clears it before each evaluate().
+  bool point = false;
+  Eigen::Vector3d arm_a = Eigen::Vector3d::Zero();
+  Eigen::Vector3d arm_b = Eigen::Vector3d::Zero();
 };
 
 class Constraint {
@@ -77,13 +84,14 @@ const RigidBody& worldBody();
 // (J itself is never stored: each row block touches at most two bodies).
 class ConstraintSystem {
  public:
-  struct Block {
+  // A joint's rows as its evaluate() wrote them (C, J_a, J_b, J'q' and, for a point joint, its
+  // arms: ja = [I, -arm_a~], jb = [-I, arm_b~]), where they sit in the stacked system, and
+  // between which bodies.
+  struct Block : ConstraintRows {
     int body_a = kWorldBody;
     int body_b = kWorldBody;
     int row = 0;   // first row in the stacked system
     int rows = 0;  // the constraint's dimension
-    JacobianBlock ja;
-    JacobianBlock jb;
   };
 
   void evaluate(const std::vector<RigidBody>& bodies, const Constraints& constraints);

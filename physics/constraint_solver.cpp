@@ -6,18 +6,27 @@ std::string ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, c
                                                const BaumgarteGains& gains) {
   // Known accelerations: unconstrained M^-1 F_ext (with w x I w) for dynamic bodies, the
   // prescribed ones for kinematic bodies; and every body's velocity, for C' = J q'.
+  // Each dynamic body's rotation and R I^-1 R^T once, shared by the free acceleration, the
+  // factorization and M^-1 J^T lambda below.
   std::vector<Vector6d>& acc = acc_;
   std::vector<Vector6d>& vel = vel_;
   acc.resize(bodies.size());
-  vel.resize(bodies.size());
+  inverse_inertia_.resize(bodies.size());
   for (size_t i = 0; i < bodies.size(); ++i) {
     const RigidBody& b = bodies[i];
     if (b.isDynamic()) {
-      acc[i] = b.freeAcceleration();
+      const Eigen::Matrix3d r = b.rotation();
+      const Eigen::Matrix3d& inertia_inv = inverse_inertia_[i] = rotateDiagonal(r, b.inertia.cwiseInverse());
+      const Eigen::Vector3d angular_momentum = r * b.inertia.cwiseProduct(r.transpose() * b.w);
+      acc[i].head<3>() = b.force / b.mass;
+      acc[i].tail<3>().noalias() = inertia_inv * (b.torque - b.w.cross(angular_momentum));
     } else {
       acc[i] << b.a, b.alpha;
     }
-    vel[i] << b.v, b.w;
+  }
+  if (gains.alpha != 0.0) {  // velocities only for C' = J q'
+    vel.resize(bodies.size());
+    for (size_t i = 0; i < bodies.size(); ++i) vel[i] << bodies[i].v, bodies[i].w;
   }
 
   lambda_.setZero(system.rows());
@@ -30,7 +39,7 @@ std::string ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, c
       rhs_ -= 2.0 * gains.alpha * jx_;
     }
     if (gains.beta != 0.0) rhs_ -= gains.beta * gains.beta * system.C();
-    if (!factor(bodies, system)) return "the constraint matrix J M^-1 J^T is singular";
+    if (!factorWith(bodies, system, inverse_inertia_)) return "the constraint matrix J M^-1 J^T is singular";
     solveInto(rhs_, lambda_);
     if (!lambda_.allFinite()) return "non-finite multipliers lambda";
   }
@@ -44,9 +53,8 @@ std::string ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, c
     if (!b.isDynamic()) continue;
     b.constraint_force = fc[i].head<3>();
     b.constraint_torque = fc[i].tail<3>();
-    const Vector6d total = acc[i] + applyInverseMass(b, fc[i]);
-    b.a = total.head<3>();
-    b.alpha = total.tail<3>();
+    b.a = acc[i].head<3>() + fc[i].head<3>() / b.mass;
+    b.alpha = acc[i].tail<3>() + inverse_inertia_[i] * fc[i].tail<3>();
   }
   return "";
 }

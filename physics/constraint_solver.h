@@ -35,6 +35,14 @@ class ConstraintSolver {
   // Factor A = J M^-1 J^T for the evaluated system and the bodies' current mass matrices.
   // Returns false when A is singular (redundant rows, a joint with no dynamic body).
   virtual bool factor(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) = 0;
+  // The same with each dynamic body's world inverse inertia R I^-1 R^T already computed (by
+  // solveJointForces, which needs it for the free accelerations too): a solver that uses it does
+  // not build it again. The default ignores it.
+  virtual bool factorWith(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
+                          const std::vector<Eigen::Matrix3d>& world_inverse_inertia) {
+    (void)world_inverse_inertia;
+    return factor(bodies, system);
+  }
   // y with A y = rhs, after factor().
   virtual Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const = 0;
   // The same into `out` (resized when needed): a solver that keeps its work space allocates
@@ -62,6 +70,7 @@ class ConstraintSolver {
   Eigen::VectorXd lambda_;
   // Work space of solveJointForces (kept between calls: a steady step allocates nothing).
   std::vector<Vector6d> acc_, vel_, fc_;
+  std::vector<Eigen::Matrix3d> inverse_inertia_;  // R I^-1 R^T per dynamic body, this step
   Eigen::VectorXd rhs_, jx_;
 };
 

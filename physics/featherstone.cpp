@@ -47,6 +47,43 @@ Matrix6 shiftInertia(const Eigen::Vector3d& d, const Matrix6& m) {
   out.bottomRightCorner<3, 3>() = m.bottomRightCorner<3, 3>() + kb + kb.transpose() - k * ak;
   return out;
 }
+// M skew(r) for an N x 3 M: row i is (row i of M) x r (no products with K's zeros).
+template <int N, class Derived>
+Eigen::Matrix<double, N, 3> timesSkew(const Eigen::MatrixBase<Derived>& m, const Eigen::Vector3d& r) {
+  Eigen::Matrix<double, N, 3> out;
+  for (int i = 0; i < N; ++i) {
+    const double m0 = m(i, 0), m1 = m(i, 1), m2 = m(i, 2);
+    out(i, 0) = m1 * r(2) - m2 * r(1);
+    out(i, 1) = m2 * r(0) - m0 * r(2);
+    out(i, 2) = m0 * r(1) - m1 * r(0);
+  }
+  return out;
+}
+// skew(r) M for a 3 x 3 M: column j is r x (column j of M).
+template <class Derived>
+Eigen::Matrix3d skewTimes(const Eigen::Vector3d& r, const Eigen::MatrixBase<Derived>& m) {
+  Eigen::Matrix3d out;
+  for (int j = 0; j < 3; ++j) out.col(j) = r.cross(Eigen::Vector3d(m.col(j)));
+  return out;
+}
+
+// out += X^T M X for M = [a b; b^T e] given by its blocks (a, e symmetric), the same formulas
+// with the symmetric blocks by their upper triangles.
+void addShiftedInertia(const Eigen::Vector3d& d, const Eigen::Matrix3d& a, const Eigen::Matrix3d& b,
+                       const Eigen::Matrix3d& e, Matrix6& out) {
+  const Eigen::Matrix3d ak = timesSkew<3>(a, d);
+  const Eigen::Matrix3d top_right = b - ak;
+  const Eigen::Matrix3d kb = skewTimes(d, b);
+  const Eigen::Matrix3d kak = skewTimes(d, ak);
+  Eigen::Matrix3d br;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = i; j < 3; ++j) br(i, j) = br(j, i) = e(i, j) + kb(i, j) + kb(j, i) - kak(i, j);
+  }
+  out.topLeftCorner<3, 3>() += a;
+  out.topRightCorner<3, 3>() += top_right;
+  out.bottomLeftCorner<3, 3>() += top_right.transpose();
+  out.bottomRightCorner<3, 3>() += br;
+}
 Vector6d shiftMotion(const Eigen::Vector3d& d, const Vector6d& a) {
   Vector6d out = a;
   out.head<3>() += a.tail<3>().cross(d);
@@ -234,6 +271,7 @@ std::string ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const
   coords_.s.assign(nodes_.size(), 0.0);
   u_.setZero(dofs_);
   kin_.resize(nodes_.size());
+  frames_.resize(nodes_.size());
   pass_.resize(nodes_.size());
   for (Coordinates* c : {&c0_, &y_, &r_[0], &r_[1], &r_[2], &r_[3]}) *c = coords_;
   for (Eigen::VectorXd* v : {&u0_, &us_, &k_[0], &k_[1], &k_[2], &k_[3]}) v->setZero(dofs_);
@@ -287,18 +325,25 @@ void ArticulatedSystem::writeState(std::vector<RigidBody>& bodies) const {
         b.q = coords_.q[i].normalized();
         b.v = u_.segment<3>(nd.dof);
         b.w = u_.segment<3>(nd.dof + 3);
+        frames_[i].R = b.q.toRotationMatrix();
         break;
       case Type::Spherical: {
+        // Rotation matrices, each built once (parents first: a dynamic parent's is in frames_)
+        // and kept for jointKinematics.
+        Frame& f = frames_[i];
         b.q = (p.q * coords_.q[i]).normalized();  // one normalization: RK4 stages are not unit
-        const Eigen::Vector3d r_p = p.q * nd.point_parent;
-        const Eigen::Vector3d r_i = b.q * nd.point_child;
-        b.x = p.x + r_p - r_i;
-        b.w = p.w + p.q * Eigen::Vector3d(u_.segment<3>(nd.dof));
-        b.v = p.v + p.w.cross(r_p) - b.w.cross(r_i);
+        f.R = b.q.toRotationMatrix();
+        const Eigen::Matrix3d rp = nd.parent_node >= 0 ? frames_[nd.parent_node].R : p.rotation();
+        f.r_p.noalias() = rp * nd.point_parent;
+        f.r_i.noalias() = f.R * nd.point_child;
+        b.x = p.x + f.r_p - f.r_i;
+        b.w = p.w + rp * u_.segment<3>(nd.dof);
+        b.v = p.v + p.w.cross(f.r_p) - b.w.cross(f.r_i);
         break;
       }
       case Type::Prismatic: {
         b.q = (p.q * nd.rest).normalized();
+        frames_[i].R = b.q.toRotationMatrix();
         const Eigen::Vector3d d = p.q * (nd.offset + coords_.s[i] * nd.axis);
         b.x = p.x + d;
         b.w = p.w;
@@ -326,14 +371,15 @@ void ArticulatedSystem::writeState(std::vector<RigidBody>& bodies) const {
 //   a_i = a_p + alpha_p x d + w_p x (w_p x d) + 2 s' w_p x z + s'' z
 //   c = [w_p x (w_p x d) + 2 s' w_p x z; 0]
 // Free root: S = I (u = [v; w]), c = 0.
-void ArticulatedSystem::jointKinematics(const std::vector<RigidBody>& bodies, std::vector<Kinematics>& out) const {
+void ArticulatedSystem::jointKinematics(const std::vector<RigidBody>& bodies, std::vector<Kinematics>& out,
+                                        bool written) const {
   out.resize(nodes_.size());
   for (size_t i = 0; i < nodes_.size(); ++i) {
     const Node& nd = nodes_[i];
     const RigidBody& p = bodyOf(bodies, nd.parent);
     const RigidBody& b = bodies[nd.body];
     Kinematics& k = out[i];
-    k.R = b.rotation();
+    k.R = written ? frames_[i].R : b.rotation();  // writeState()'s, from the q it has just normalized
     k.c.setZero();
     k.a_base.setZero();
     k.d = b.x - p.x;
@@ -346,12 +392,14 @@ void ArticulatedSystem::jointKinematics(const std::vector<RigidBody>& bodies, st
         // Parents come first: a dynamic parent's rotation is already in out.
         k.Rp = nd.parent_node >= 0 ? out[nd.parent_node].R : p.rotation();
         const Eigen::Matrix3d& rp = k.Rp;
-        const Eigen::Vector3d r_p = rp * nd.point_parent;
-        const Eigen::Vector3d r_i = k.R * nd.point_child;
+        const Eigen::Vector3d r_p = written ? frames_[i].r_p : Eigen::Vector3d(rp * nd.point_parent);
+        const Eigen::Vector3d r_i = written ? frames_[i].r_i : Eigen::Vector3d(k.R * nd.point_child);
         k.r_i = r_i;
         const Eigen::Vector3d w_rel = rp * u_.segment<3>(nd.dof);
-        k.S.topLeftCorner<3, 3>() = skew(r_i) * rp;
-        k.S.bottomLeftCorner<3, 3>() = rp;
+        if (!written) {
+          k.S.topLeftCorner<3, 3>() = skew(r_i) * rp;
+          k.S.bottomLeftCorner<3, 3>() = rp;
+        }
         const Eigen::Vector3d c_ang = p.w.cross(w_rel);
         k.c.head<3>() = p.w.cross(p.w.cross(r_p)) - b.w.cross(b.w.cross(r_i)) - c_ang.cross(r_i);
         k.c.tail<3>() = c_ang;
@@ -403,12 +451,10 @@ void ArticulatedSystem::abaInward(size_t r, const Eigen::VectorXd* tau) {
     // from U D^-1 U^T and U D^-1 u, so the pass runs on S_w: U_w = I^A S_w = I^A_left r_i~ +
     // I^A_right, D_w = S_w^T U_w = U_w,bottom - r_i~ U_w,top, u_w = R_p u = R_p tau - S_w^T p^A.
     // Half the products of the 6 x 3 S, and R_p only where u' leaves (abaOutward).
-    const Eigen::Matrix3d K = skew(k.r_i);
-    U.noalias() = p.ia.template leftCols<3>() * K;
-    U += p.ia.template rightCols<3>();
-    d = U.template bottomRows<3>();
-    d.noalias() -= K * U.template topRows<3>();
-    u = K * p.pa.template head<3>() - p.pa.template tail<3>();
+    // Products with K = r_i~ as cross products (timesSkew, skewTimes).
+    U = timesSkew<6>(p.ia.template leftCols<3>(), k.r_i) + p.ia.template rightCols<3>();
+    d = U.template bottomRows<3>() - skewTimes(k.r_i, U.template topRows<3>());
+    u = k.r_i.cross(Eigen::Vector3d(p.pa.template head<3>())) - p.pa.template tail<3>();
     if (tau) u.noalias() += k.Rp * tau->segment<3>(nd.dof);
   } else {
     const auto S = k.S.leftCols<D>();
@@ -428,11 +474,33 @@ void ArticulatedSystem::abaInward(size_t r, const Eigen::VectorXd* tau) {
   p.u.head<D>() = u;
   if (nd.parent_node < 0) return;
   const Eigen::Matrix<double, 6, D> ud = U * dinv;
-  const Matrix6 ia_a = p.ia - ud * U.transpose();
-  const Vector6d pa_a = p.pa + ia_a * k.c + ud * u;
   Pass& parent = pass_[nd.parent_node];
-  parent.ia += shiftInertia(k.d, ia_a);
-  parent.pa += shiftForce(k.d, pa_a);
+  if constexpr (D == 3) {
+    // I^a = I^A - U D^-1 U^T is symmetric: its blocks A (top left), B (top right), E (bottom
+    // right) are all that c, the force and shiftInertia need, A and E by their upper triangles.
+    const auto ud_top = ud.template topRows<3>(), ud_bottom = ud.template bottomRows<3>();
+    const auto u_top = U.template topRows<3>(), u_bottom = U.template bottomRows<3>();
+    Eigen::Matrix3d a, e;
+    for (int i = 0; i < 3; ++i) {
+      for (int j = i; j < 3; ++j) {
+        a(i, j) = a(j, i) = p.ia(i, j) - ud_top.row(i).dot(u_top.row(j));
+        e(i, j) = e(j, i) = p.ia(3 + i, 3 + j) - ud_bottom.row(i).dot(u_bottom.row(j));
+      }
+    }
+    Eigen::Matrix3d b = p.ia.template topRightCorner<3, 3>();
+    b.noalias() -= ud_top * u_bottom.transpose();
+    const auto c_lin = k.c.template head<3>(), c_ang = k.c.template tail<3>();
+    Vector6d pa_a = p.pa + ud * u;
+    pa_a.template head<3>() += a * c_lin + b * c_ang;
+    pa_a.template tail<3>() += b.transpose() * c_lin + e * c_ang;
+    addShiftedInertia(k.d, a, b, e, parent.ia);
+    parent.pa += shiftForce(k.d, pa_a);
+  } else {
+    const Matrix6 ia_a = p.ia - ud * U.transpose();
+    const Vector6d pa_a = p.pa + ia_a * k.c + ud * u;
+    parent.ia += shiftInertia(k.d, ia_a);
+    parent.pa += shiftForce(k.d, pa_a);
+  }
 }
 
 // Pass 3 for one node with D dofs.
@@ -454,13 +522,13 @@ void ArticulatedSystem::abaOutward(size_t i, Eigen::VectorXd& udot) {
   }
 }
 
-void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorXd* tau, Eigen::VectorXd& udot) {
+void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorXd* tau, Eigen::VectorXd& udot,
+                            bool written) {
   const size_t n = nodes_.size();
-  jointKinematics(bodies, kin_);
+  jointKinematics(bodies, kin_, written);
   for (size_t i = 0; i < n; ++i) {
     const RigidBody& b = bodies[nodes_[i].body];
-    const Eigen::Matrix3d& r = kin_[i].R;
-    const Eigen::Matrix3d inertia_world = r * b.inertia.asDiagonal() * r.transpose();
+    const Eigen::Matrix3d inertia_world = rotateDiagonal(kin_[i].R, b.inertia);
     pass_[i].ia = spatialInertia(b, inertia_world);
     pass_[i].pa = biasForce(b, inertia_world);
   }
@@ -564,8 +632,8 @@ std::string ArticulatedSystem::derivative(double t, const Coordinates& c, const 
     writeState(bodies);
   }
   stopped_ = !hooks.forces();
-  if (stopped_) return "";  // the world stopped itself with its own message
-  aba(bodies, nullptr, udot);
+  if (stopped_) return "";           // the world stopped itself with its own message
+  aba(bodies, nullptr, udot, true);  // the bodies are writeState()'s, here or at the end of the last step
   if (!udot.allFinite()) return "non-finite joint accelerations";
   return "";
 }

@@ -136,9 +136,11 @@ class ArticulatedSystem {
   };
 
   bool sameSignature(const std::vector<RigidBody>& bodies, const Constraints& joints) const;
-  void jointKinematics(const std::vector<RigidBody>& bodies, std::vector<Kinematics>& out) const;
-  // ABA into udot (sized dofs); tau may be null.
-  void aba(std::vector<RigidBody>& bodies, const Eigen::VectorXd* tau, Eigen::VectorXd& udot);
+  // written: the bodies are as writeState() left them (unit quaternions, used as they are) and
+  // only what ABA reads is needed (a spherical joint's S is left out: ABA runs on r_i and R_p).
+  void jointKinematics(const std::vector<RigidBody>& bodies, std::vector<Kinematics>& out, bool written = false) const;
+  // ABA into udot (sized dofs); tau may be null. written: as for jointKinematics.
+  void aba(std::vector<RigidBody>& bodies, const Eigen::VectorXd* tau, Eigen::VectorXd& udot, bool written = false);
   template <int D>
   void abaInward(size_t r, const Eigen::VectorXd* tau);
   template <int D>
@@ -161,6 +163,15 @@ class ArticulatedSystem {
   std::vector<Eigen::Matrix<double, 13, 1>> written_;  // x, q, v, w of each node's body as last written
   // Work space of a step (sized by build()).
   std::vector<Kinematics> kin_;
+  // What writeState() computed on the way, for jointKinematics(written): each body's rotation
+  // (from its just normalized quaternion) and a spherical joint's arms from the parent's and
+  // the child's centres (world). Sized by build().
+  struct Frame {
+    Eigen::Matrix3d R;
+    Eigen::Vector3d r_p;
+    Eigen::Vector3d r_i;
+  };
+  mutable std::vector<Frame> frames_;
   std::vector<Pass> pass_;
   Coordinates c0_, y_, r_[4];
   Eigen::VectorXd u0_, us_, k_[4];

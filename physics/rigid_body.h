@@ -23,13 +23,34 @@ inline Eigen::Matrix3d skew(const Eigen::Vector3d& a) {
   return m;
 }
 
+// R diag(d) R^T (a principal inertia or its inverse turned to the world frame), symmetric by
+// construction: the six upper entries, mirrored.
+inline Eigen::Matrix3d rotateDiagonal(const Eigen::Matrix3d& r, const Eigen::Vector3d& d) {
+  const Eigen::Matrix3d rd = r * d.asDiagonal();
+  Eigen::Matrix3d out;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = i; j < 3; ++j) out(i, j) = out(j, i) = rd.row(i).dot(r.row(j));
+  }
+  return out;
+}
+
 // The unit quaternion of the rotation vector phi (axis * angle), exact for any angle.
 inline Eigen::Quaterniond quaternionFromRotationVector(const Eigen::Vector3d& phi) {
-  const double angle = phi.norm();
-  if (angle < 1e-12) {  // second-order series avoids 0/0
+  const double angle2 = phi.squaredNorm();
+  if (angle2 < 1e-24) {  // angle < 1e-12: second-order series avoids 0/0
     Eigen::Quaterniond q(1.0, 0.5 * phi.x(), 0.5 * phi.y(), 0.5 * phi.z());
     return q.normalized();
   }
+  if (angle2 < 1e-4) {
+    // A step's turn (angle < 1e-2): cos(angle / 2) and sin(angle / 2) / angle by their Taylor
+    // series in x^2 = angle^2 / 4 (x < 5e-3: the first term left out is below 1e-22); no sqrt,
+    // sin, cos or division by the angle.
+    const double x2 = 0.25 * angle2;
+    const double c = 1.0 - 0.5 * x2 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0));
+    const double s = 0.5 * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0)));
+    return Eigen::Quaterniond(c, s * phi.x(), s * phi.y(), s * phi.z());
+  }
+  const double angle = std::sqrt(angle2);
   return Eigen::Quaterniond(Eigen::AngleAxisd(angle, phi / angle));
 }
 

@@ -21,11 +21,20 @@ void SphericalJoint::evaluate(const RigidBody& a, const RigidBody& b, Constraint
   const Eigen::Vector3d r_a = a.q * point_a_;
   const Eigen::Vector3d r_b = b.q * point_b_;
   out.C = (a.x + r_a) - (b.x + r_b);
-  out.ja.leftCols<3>() = Eigen::Matrix3d::Identity();
-  out.ja.rightCols<3>() = -skew(r_a);
-  out.jb.leftCols<3>() = -Eigen::Matrix3d::Identity();
-  out.jb.rightCols<3>() = skew(r_b);
+  // Written as 3 x 6 through fixed-size maps (the resizes cost nothing: fixed storage).
+  out.ja.resize(3, 6);
+  out.jb.resize(3, 6);
+  Eigen::Map<Eigen::Matrix<double, 3, 6>> ja(out.ja.data()), jb(out.jb.data());
+  ja << 1.0, 0.0, 0.0, 0.0, r_a.z(), -r_a.y(),  //
+      0.0, 1.0, 0.0, -r_a.z(), 0.0, r_a.x(),    //
+      0.0, 0.0, 1.0, r_a.y(), -r_a.x(), 0.0;
+  jb << -1.0, 0.0, 0.0, 0.0, -r_b.z(), r_b.y(),  //
+      0.0, -1.0, 0.0, r_b.z(), 0.0, -r_b.x(),    //
+      0.0, 0.0, -1.0, -r_b.y(), r_b.x(), 0.0;
   out.bias = a.w.cross(a.w.cross(r_a)) - b.w.cross(b.w.cross(r_b));
+  out.point = true;
+  out.arm_a = r_a;
+  out.arm_b = r_b;
 }
 
 }  // namespace ponyhop

@@ -6,6 +6,24 @@
 
 namespace ponyhop {
 
+namespace {
+// |phi|^2 for the turn from q0 to q1 (unit quaternions): phi = 2 atan2(|v|, |w|) of q1 q0^-1 (the
+// shortest rotation; atan2 does not need the product normalized). A step's turn is small: then
+// atan(t) = t (1 - t^2 / 3 + t^4 / 5), whose error t^7 / 7 is below 1.5e-13 t for t < 0.01.
+double turnSquared(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q0) {
+  const Eigen::Quaterniond dq = q1 * q0.conjugate();
+  const double s = dq.vec().norm(), c = std::abs(dq.w());
+  double angle;
+  if (s < 0.01 * c) {
+    const double t = s / c, t2 = t * t;
+    angle = 2.0 * t * (1.0 - t2 * (1.0 / 3.0 - 0.2 * t2));
+  } else {
+    angle = 2.0 * std::atan2(s, c);
+  }
+  return angle * angle;
+}
+}  // namespace
+
 bool StabilityMonitor::observe(double h, const State& y, const Accelerations& f, double limit) {
   if (!has_previous_ || y.size() != y_.size()) {
     y_ = y;
@@ -17,8 +35,8 @@ bool StabilityMonitor::observe(double h, const State& y, const Accelerations& f,
   }
   double dy2 = 0.0, df2 = 0.0;
   for (size_t i = 0; i < y.size(); ++i) {
-    dy2 += (y[i].x - y_[i].x).squaredNorm() + rotationVector(y[i].q * y_[i].q.conjugate()).squaredNorm() +
-           (y[i].v - y_[i].v).squaredNorm() + (y[i].w - y_[i].w).squaredNorm();
+    dy2 += (y[i].x - y_[i].x).squaredNorm() + turnSquared(y[i].q, y_[i].q) + (y[i].v - y_[i].v).squaredNorm() +
+           (y[i].w - y_[i].w).squaredNorm();
     df2 += (y[i].v - y_[i].v).squaredNorm() + (y[i].w - y_[i].w).squaredNorm() + (f[i].a - f_[i].a).squaredNorm() +
            (f[i].alpha - f_[i].alpha).squaredNorm();
   }

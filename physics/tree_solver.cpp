@@ -151,6 +151,9 @@ bool TreeSolver::buildStructure(const std::vector<RigidBody>& bodies, const Cons
       n.l[i].resize(nodes_[cliques_[n.clique].members[n.near[i]]].size, n.size);
   }
   jm_.resize(widest);
+  arm_inertia_.resize(widest);
+  arm_.resize(widest);
+  sign_.resize(widest);
   order_.assign(bfs.rbegin(), bfs.rend());
   return true;
 }
@@ -195,7 +198,8 @@ auto segment(Eigen::VectorXd& y, int row, int size) {
 // children first: D_j = A_jj (what is left of it), L_xj = A_xj D_j^-1, A_xy -= L_xj A_jy for the
 // joints x, y still to come in j's parent clique. Every block is written in place: no allocation.
 template <int R>
-bool TreeSolver::factorTree(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) {
+bool TreeSolver::factorTree(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
+                            const std::vector<Eigen::Matrix3d>& inverse_inertia) {
   using M = typename Sizes<R>::M;
   const auto& blocks = system.blocks();
   const auto jacobianOf = [&](int block, int body) -> const JacobianBlock& {
@@ -203,10 +207,54 @@ bool TreeSolver::factorTree(const std::vector<RigidBody>& bodies, const Constrai
   };
   for (Clique& cl : cliques_) {
     const RigidBody& body = bodies[cl.body];
-    const Eigen::Matrix3d r = body.rotation();
-    const Eigen::Matrix3d inertia_inv = r * body.inertia.cwiseInverse().asDiagonal() * r.transpose();
+    const Eigen::Matrix3d& inertia_inv = inverse_inertia[cl.body];
     const double mass_inv = 1.0 / body.mass;
     const size_t k = cl.members.size();
+    bool points = true;
+    for (size_t x = 0; x < k && points; ++x) points = blocks[nodes_[cl.members[x]].block].point;
+    if (points) {
+      // Point joints: J_x = s_x [I, -r_x~] (s = +1 on body a, -1 on body b), so
+      //   A_xy = s_x s_y (I / m - r_x~ I^-1 r_y~) = s_x s_y (I / m - W_x r_y~),  W_x = r_x~ I^-1,
+      // whose row i is r_y x (row i of W_x) plus 1/m on the diagonal: cross products only.
+      for (size_t x = 0; x < k; ++x) {
+        const ConstraintSystem::Block& b = blocks[nodes_[cl.members[x]].block];
+        const bool on_a = b.body_a == cl.body;
+        const Eigen::Vector3d arm = on_a ? b.arm_a : b.arm_b;
+        Eigen::Matrix3d w;
+        for (int c = 0; c < 3; ++c) w.col(c) = arm.cross(inertia_inv.col(c));
+        arm_[x] = arm;
+        arm_inertia_[x] = w;
+        sign_[x] = on_a ? 1.0 : -1.0;
+      }
+      // Written entry by entry from scalars (a 3 x 3 temporary mirrored in place stalls on
+      // store forwarding).
+      for (size_t x = 0; x < k; ++x) {
+        const Eigen::Matrix3d& w = arm_inertia_[x];
+        for (size_t y = x; y < k; ++y) {
+          const double r0 = arm_[y](0), r1 = arm_[y](1), r2 = arm_[y](2);
+          const double s = sign_[x] * sign_[y];
+          double e[3][3];
+          for (int i = 0; i < 3; ++i) {
+            e[i][0] = s * (r1 * w(i, 2) - r2 * w(i, 1));
+            e[i][1] = s * (r2 * w(i, 0) - r0 * w(i, 2));
+            e[i][2] = s * (r0 * w(i, 1) - r1 * w(i, 0));
+            e[i][i] += s * mass_inv;
+          }
+          auto a = view<R>(cl.a[x * k + y]);
+          if (y == x) {  // symmetric: the upper triangle, mirrored
+            for (int i = 0; i < 3; ++i) {
+              for (int j = i; j < 3; ++j) a(i, j) = a(j, i) = e[i][j];
+            }
+          } else {
+            auto at = view<R>(cl.a[y * k + x]);
+            for (int i = 0; i < 3; ++i) {
+              for (int j = 0; j < 3; ++j) a(i, j) = at(j, i) = e[i][j];
+            }
+          }
+        }
+      }
+      continue;
+    }
     for (size_t x = 0; x < k; ++x) {
       const JacobianBlock& j = jacobianOf(nodes_[cl.members[x]].block, cl.body);
       jm_[x].resize(j.rows(), 6);
@@ -261,11 +309,23 @@ bool TreeSolver::factorTree(const std::vector<RigidBody>& bodies, const Constrai
 }
 
 bool TreeSolver::factor(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) {
+  inverse_inertia_.resize(bodies.size());
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    if (bodies[i].isDynamic())
+      inverse_inertia_[i] = rotateDiagonal(bodies[i].rotation(), bodies[i].inertia.cwiseInverse());
+  }
+  return factorWith(bodies, system, inverse_inertia_);
+}
+
+bool TreeSolver::factorWith(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
+                            const std::vector<Eigen::Matrix3d>& inverse_inertia) {
   if (structureChanged(bodies, system) && !buildStructure(bodies, system)) {
     signature_.clear();
     return false;
   }
-  if (!(all_three_ ? factorTree<3>(bodies, system) : factorTree<Eigen::Dynamic>(bodies, system))) return false;
+  if (!(all_three_ ? factorTree<3>(bodies, system, inverse_inertia)
+                   : factorTree<Eigen::Dynamic>(bodies, system, inverse_inertia)))
+    return false;
   const auto& blocks = system.blocks();
   const auto jacobianOf = [&](int block, int body) -> const JacobianBlock& {
     return blocks[block].body_a == body ? blocks[block].ja : blocks[block].jb;
@@ -273,7 +333,7 @@ bool TreeSolver::factor(const std::vector<RigidBody>& bodies, const ConstraintSy
   const auto inverseMass = [&](int body) {
     Eigen::Matrix<double, 6, 6> minv = Eigen::Matrix<double, 6, 6>::Zero();
     minv.topLeftCorner<3, 3>().diagonal().setConstant(1.0 / bodies[body].mass);
-    minv.bottomRightCorner<3, 3>() = bodies[body].worldInverseInertia();
+    minv.bottomRightCorner<3, 3>() = inverse_inertia[body];
     return minv;
   };
 

@@ -39,6 +39,8 @@ namespace ponyhop {
 class TreeSolver final : public ConstraintSolver {
  public:
   bool factor(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) override;
+  bool factorWith(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
+                  const std::vector<Eigen::Matrix3d>& world_inverse_inertia) override;
   Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const override;
   void solveInto(const Eigen::VectorXd& rhs, Eigen::VectorXd& out) const override;
 
@@ -74,7 +76,8 @@ class TreeSolver final : public ConstraintSolver {
   // The numbers of the elimination with every block R x R (R = 3: every joint has 3 rows, all
   // blocks fixed 3 x 3; R = Eigen::Dynamic: any sizes up to 6). Same arithmetic either way.
   template <int R>
-  bool factorTree(const std::vector<RigidBody>& bodies, const ConstraintSystem& system);
+  bool factorTree(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
+                  const std::vector<Eigen::Matrix3d>& inverse_inertia);
   template <int R>
   void treeSolveInPlace(Eigen::VectorXd& y) const;
   // A_tt^-1 r for a vector over the tree rows (tree_row numbering).
@@ -93,6 +96,11 @@ class TreeSolver final : public ConstraintSolver {
   int loop_rows_ = 0;
   bool all_three_ = false;         // every tree joint has 3 rows (chains of spherical joints): fixed 3 x 3 blocks
   std::vector<JacobianBlock> jm_;  // step 1 work space: J_xb M_b^-1 per clique member
+  // Step 1 for a clique of point joints (J = s [I, -r~]): per member r~ I^-1, r and s.
+  std::vector<Eigen::Matrix3d> arm_inertia_;
+  std::vector<Eigen::Vector3d> arm_;
+  std::vector<double> sign_;
+  std::vector<Eigen::Matrix3d> inverse_inertia_;  // factor()'s own R I^-1 R^T per dynamic body
 
   // Numbers (refreshed by every factor()).
   Eigen::MatrixXd a_tl_;  // tree rows x loop rows: J_t M^-1 J_l^T

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 #include <numbers>
+#include <utility>
 
 #include "physics/dense_solver.h"
 #include "physics/implicit_euler.h"
@@ -272,6 +273,7 @@ void World::snapshotInto(Snapshot& s) const {
 }
 
 void World::restore(const Snapshot& s) {
+  gathered_ = false;
   scatterState(s.state);
   time_ = s.time;
   stage_time_ = s.time;
@@ -338,6 +340,7 @@ void World::watchStability(double h) {
   const double limit = params_.integrator == Integrator::RK4 ? 2.83 : 2.0;
   gatherStateInto(state_scratch_);
   gatherAccelerationsInto(acc_scratch_);
+  gathered_ = true;  // integrate() steps from these (nothing moves the bodies in between)
   if (!monitor_.observe(h, state_scratch_, acc_scratch_, limit)) return;
   char what[160];
   std::snprintf(what, sizeof what,
@@ -409,6 +412,7 @@ void World::solveJointForces() {
 
 void World::integrate(double h) {
   const auto timed = clock_.time(Stage::Integrate);
+  const bool gathered = std::exchange(gathered_, false);
   if (!ok()) return;
   if (params_.integrator == Integrator::Rattle || params_.integrator == Integrator::ImplicitEuler) {
     ConstrainedStep cs{bodies_,
@@ -449,8 +453,10 @@ void World::integrate(double h) {
     return;
   }
   State& state = state_scratch_;
-  gatherStateInto(state);
-  gatherAccelerationsInto(acc_scratch_);
+  if (!gathered) {
+    gatherStateInto(state);
+    gatherAccelerationsInto(acc_scratch_);
+  }
   switch (params_.integrator) {
     case Integrator::SymplecticEuler:
       symplecticEulerStep(h, acc_scratch_, state);
@@ -584,6 +590,7 @@ World::SavedState World::saveState() const {
 }
 
 void World::restoreState(const SavedState& s) {
+  gathered_ = false;
   for (size_t i = 0; i < bodies_.size() && i < s.bodies.size(); ++i) bodies_[i].state() = s.bodies[i];
   time_ = stage_time_ = s.time;
   for (size_t i = 0; i < controllers_.size() && i < s.controllers.size(); ++i)

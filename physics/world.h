@@ -206,6 +206,7 @@ class World {
   bool forces_stale_ = false;
   State state_scratch_;  // watchStability() and integrate()
   Accelerations acc_scratch_;
+  bool gathered_ = false;  // watchStability() filled the scratch just before integrate()
 };
 
 }  // namespace ponyhop
