@@ -23,6 +23,9 @@ constexpr int kGroundShadowDivisor = 4;
 
 // Angular radius of the key light (rad) for the penumbra of the soft shadows.
 constexpr double kKeyLightAngularRadius = 1.5 * 3.14159265358979 / 180.0;
+// Widest penumbra (and blocker search radius) of the soft shadows, m; at least 2 texels, at most
+// 48 (setCommonUniforms).
+constexpr double kMaxPenumbraMetres = 0.03;
 
 float srgbToLinear(float c) {
   c = std::clamp(c, 0.0f, 1.0f);
@@ -204,6 +207,7 @@ struct Renderer::Impl {
 
   void ensureTargets(int w, int h, int samples, bool post);
   bool screenBox(const Eigen::Matrix4f& view_proj, int w, int h, int box[4]) const;
+  bool casterTexelBox(const Eigen::Matrix4d& light_vp, double margin_m, int size, int box[4]) const;
   void ensureShadowMap(int size);
   void ensureGroundShadow(int size);
   void bindShadowTextures(bool ground_shadow);  // units 0, 1: the shadow map; 2: the ground's
@@ -703,7 +707,7 @@ void Renderer::Impl::setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_
   // The sun is 0.27 deg in radius; a softer 1.5 deg reads better at the scale of a head.
   glUniform1f(loc(prog, "u_penumbraSlope"), float(std::tan(kKeyLightAngularRadius)));
   glUniform1f(loc(prog, "u_maxPenumbraTexels"),
-              float(std::clamp(0.03 / std::max(frustum.texel_world, 1e-9), 2.0, 48.0)));
+              float(std::clamp(kMaxPenumbraMetres / std::max(frustum.texel_world, 1e-9), 2.0, 48.0)));
   const Eigen::Vector3f top = params.background.cast<float>().cwiseMax(0.0f).cwiseMin(1.0f);
   // Brighter, slightly warm towards the horizon: reads as sky haze; the ground fades into it.
   const Eigen::Vector3f bottom = top + (Eigen::Vector3f(0.97f, 0.96f, 0.94f) - top) * 0.55f;
@@ -847,6 +851,46 @@ bool Renderer::Impl::screenBox(const Eigen::Matrix4f& view_proj, int w, int h, i
   return (box[2] - box[0]) * int64_t(box[3] - box[1]) < int64_t(w) * h * 9 / 10;  // else: no gain
 }
 
+// The texel box [x0, x1) x [y0, y1) of a size x size texture over the light's square that holds
+// everything drawn into the shadow map, seen along the light, grown by `margin_m` metres: meshes
+// by their transformed bounding boxes, hulls by their spheres, hair by its vertices and ribbon
+// half widths. False when nothing casts.
+bool Renderer::Impl::casterTexelBox(const Eigen::Matrix4d& light_vp, double margin_m, int size, int box[4]) const {
+  // For the orthographic light, light-space x and y are affine in the point and metres map to
+  // the same number of texels on both axes.
+  const Eigen::Matrix<double, 2, 4> A = light_vp.topRows<2>() * (0.5 * size);
+  const double per_m = A.block<1, 3>(0, 0).norm();
+  double x0 = 1e30, y0 = 1e30, x1 = -1e30, y1 = -1e30;
+  const auto add = [&](const Eigen::Vector3d& p, double r) {
+    const Eigen::Vector2d t = A.leftCols<3>() * p + A.col(3) + Eigen::Vector2d::Constant(0.5 * size);
+    const double rt = r * per_m;
+    x0 = std::min(x0, t.x() - rt);
+    x1 = std::max(x1, t.x() + rt);
+    y0 = std::min(y0, t.y() - rt);
+    y1 = std::max(y1, t.y() + rt);
+  };
+  for (const MeshDraw& d : mesh_draws) {
+    const Eigen::AlignedBox3d& b = meshes[size_t(d.mesh)].bbox;
+    if (b.isEmpty()) continue;
+    const Eigen::Matrix4d M = d.model.cast<double>();
+    for (int i = 0; i < 8; ++i) add((M * b.corner(Eigen::AlignedBox3d::CornerType(i)).homogeneous()).head<3>(), 0.0);
+  }
+  for (const HullInstance& h : hulls) {
+    add(Eigen::Vector3d(h.p0r0[0], h.p0r0[1], h.p0r0[2]), std::abs(double(h.p0r0[3])));
+    add(Eigen::Vector3d(h.p1r1[0], h.p1r1[1], h.p1r1[2]), std::abs(double(h.p1r1[3])));
+  }
+  const double min_half = 0.5 * frustum.texel_world;  // drawHairs' minimum half width in this pass
+  for (const HairVertex& v : hair_vertices)
+    add(Eigen::Vector3d(v.pos[0], v.pos[1], v.pos[2]), std::max(std::abs(double(v.half_width)), min_half));
+  if (x0 > x1) return false;
+  const double m = margin_m * per_m;
+  box[0] = std::clamp(int(std::floor(x0 - m)), 0, size);
+  box[1] = std::clamp(int(std::floor(y0 - m)), 0, size);
+  box[2] = std::clamp(int(std::ceil(x1 + m)), 0, size);
+  box[3] = std::clamp(int(std::ceil(y1 + m)), 0, size);
+  return box[2] > box[0] && box[3] > box[1];
+}
+
 void Renderer::endFrame() {
   Impl& I = *impl_;
   const auto t0 = Clock::now();
@@ -922,14 +966,28 @@ void Renderer::endFrame() {
       glDisable(GL_DEPTH_TEST);
       glDepthMask(GL_FALSE);
       I.bindShadowTextures(false);  // the ground texture is the target here
-      const Eigen::Matrix4f lvp = lf.view_proj.cast<float>();
-      I.setCommonUniforms(I.prog_ground_shadow, lvp, lvp, float(1.5 * lf.texel_world), true);
-      setMat4(I.prog_ground_shadow, "u_invLightViewProj", lf.view_proj.inverse().cast<float>());
-      glUniform1f(loc(I.prog_ground_shadow, "u_groundZ"), float(I.params.ground_height));
-      glUniform2f(loc(I.prog_ground_shadow, "u_groundShadowSize"), float(gs), float(gs));
-      glBindVertexArray(I.empty_vao);
-      glDrawArrays(GL_TRIANGLES, 0, 3);
-      glBindVertexArray(0);
+      // Only the texels near a caster are shaded: a texel whose taps find no blocker is fully lit
+      // (1), as the cleared texture is. The box holds the casters seen along the light, grown by
+      // the widest reach of the taps (the blocker search's kMaxPenumbraMetres, at least 2 texels;
+      // draft's 8 texels at most), a texel of bilinear footprint, the normal offset (2.25
+      // texels) and two ground texels: the texture is the same as with every texel shaded.
+      glClearColor(1.0f, 0.0f, 0.0f, 1.0f);
+      glClear(GL_COLOR_BUFFER_BIT);
+      const double ground_texel = lf.texel_world * double(I.shadow_size) / double(gs);
+      int box[4];
+      if (I.casterTexelBox(lf.view_proj, kMaxPenumbraMetres + 12.0 * lf.texel_world + 2.0 * ground_texel, gs, box)) {
+        const Eigen::Matrix4f lvp = lf.view_proj.cast<float>();
+        I.setCommonUniforms(I.prog_ground_shadow, lvp, lvp, float(1.5 * lf.texel_world), true);
+        setMat4(I.prog_ground_shadow, "u_invLightViewProj", lf.view_proj.inverse().cast<float>());
+        glUniform1f(loc(I.prog_ground_shadow, "u_groundZ"), float(I.params.ground_height));
+        glUniform2f(loc(I.prog_ground_shadow, "u_groundShadowSize"), float(gs), float(gs));
+        glEnable(GL_SCISSOR_TEST);
+        glScissor(box[0], box[1], box[2] - box[0], box[3] - box[1]);
+        glBindVertexArray(I.empty_vao);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        glBindVertexArray(0);
+        glDisable(GL_SCISSOR_TEST);
+      }
       glDepthMask(GL_TRUE);
     }
     I.endPass(Impl::kShadowPass, stats_);
