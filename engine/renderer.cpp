@@ -155,6 +155,10 @@ struct Renderer::Impl {
   GLuint prog_mesh_depth = 0, prog_hull_depth = 0, prog_post = 0, prog_bg = 0;
   GLuint prog_hair = 0, prog_hair_depth = 0;
   GLuint prog_mesh_mat = 0;
+  // Deferred shadows (single-sample targets): the visible surface, its shadow once per pixel, and
+  // the lit programs that read that mask instead of searching the shadow map per fragment.
+  GLuint prog_mesh_surf = 0, prog_hull_surf = 0, prog_hair_surf = 0, prog_shadow_mask = 0;
+  GLuint prog_mesh_dm = 0, prog_mesh_mat_dm = 0, prog_hull_dm = 0, prog_hair_dm = 0;
   // Static geometry.
   GLuint hull_vao = 0, hull_vbo = 0, hull_ebo = 0, hull_instances = 0;
   GLsizei hull_index_count = 0;
@@ -171,6 +175,9 @@ struct Renderer::Impl {
   GLuint resolve_fbo = 0, resolve_color = 0;
   GLuint output_fbo = 0;  // where the finished frame is: resolve_fbo, or msaa_fbo without AA
   bool target_post = false;
+  // With a single-sample target: position + normal of the visible surface and the shadow mask,
+  // sharing the main depth buffer.
+  GLuint surf_fbo = 0, surf_tex = 0, mask_fbo = 0, mask_tex = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0;
   GLuint raw_depth_sampler = 0;                         // reads shadow_tex without comparison (blocker search)
   GLuint ground_shadow_fbo = 0, ground_shadow_tex = 0;  // R8, shadowFactor on the ground plane
@@ -214,8 +221,9 @@ struct Renderer::Impl {
   void setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_proj, const Eigen::Matrix4f& light_vp,
                          float normal_offset, bool shadows_on);
   void drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj, bool depth_only);
-  void drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only, const Eigen::Vector3d& light_dir);
-  void drawMaterialMeshes();
+  // prog: the program for the main pass's camera-facing ribbons (0: prog_hair).
+  void drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only, const Eigen::Vector3d& light_dir, GLuint prog = 0);
+  void drawMaterialMeshes(GLuint prog);
 };
 
 void Renderer::Impl::beginPass(Pass p) {
@@ -272,19 +280,23 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
 Renderer::~Renderer() {
   if (!glDeleteProgram) return;  // GL never loaded: nothing was created
   Impl& I = *impl_;
-  for (GLuint p : {I.prog_mesh, I.prog_mesh_mat, I.prog_hull, I.prog_ground, I.prog_ground_shadow, I.prog_lines,
-                   I.prog_mesh_depth, I.prog_hull_depth, I.prog_post, I.prog_bg, I.prog_hair, I.prog_hair_depth})
+  for (GLuint p : {I.prog_mesh,        I.prog_mesh_mat,   I.prog_hull,        I.prog_ground,    I.prog_ground_shadow,
+                   I.prog_lines,       I.prog_mesh_depth, I.prog_hull_depth,  I.prog_post,      I.prog_bg,
+                   I.prog_hair,        I.prog_hair_depth, I.prog_mesh_surf,   I.prog_hull_surf, I.prog_hair_surf,
+                   I.prog_shadow_mask, I.prog_mesh_dm,    I.prog_mesh_mat_dm, I.prog_hull_dm,   I.prog_hair_dm})
     if (p) glDeleteProgram(p);
   for (int i = 0; i < int(I.meshes.size()); ++i) release(MeshHandle{i});
   GLuint vaos[] = {I.hull_vao, I.empty_vao, I.lines_vao, I.hair_vao};
   glDeleteVertexArrays(4, vaos);
   GLuint bufs[] = {I.hull_vbo, I.hull_ebo, I.hull_instances, I.lines_vbo, I.hair_vbo, I.hair_ebo};
   glDeleteBuffers(6, bufs);
-  GLuint fbos[] = {I.msaa_fbo, I.resolve_fbo, I.shadow_fbo, I.ground_shadow_fbo};
-  glDeleteFramebuffers(4, fbos);
+  GLuint fbos[] = {I.msaa_fbo, I.resolve_fbo, I.shadow_fbo, I.ground_shadow_fbo, I.surf_fbo, I.mask_fbo};
+  glDeleteFramebuffers(6, fbos);
   GLuint rbs[] = {I.msaa_color, I.msaa_depth, I.resolve_color};
   glDeleteRenderbuffers(3, rbs);
   if (I.main_color_tex) glDeleteTextures(1, &I.main_color_tex);
+  for (GLuint t : {I.surf_tex, I.mask_tex})
+    if (t) glDeleteTextures(1, &t);
   if (I.shadow_tex) glDeleteTextures(1, &I.shadow_tex);
   if (I.ground_shadow_tex) glDeleteTextures(1, &I.ground_shadow_tex);
   if (I.raw_depth_sampler) glDeleteSamplers(1, &I.raw_depth_sampler);
@@ -303,21 +315,31 @@ bool Renderer::init(std::string* err) {
     const char* name;
     const char* vs;
     const char* fs;
+    const char* defines = nullptr;
   };
-  const P progs[] = {{&I.prog_mesh, "mesh", kMeshVS, kLitFS},
-                     {&I.prog_mesh_mat, "mesh with materials", kMeshMatVS, kMeshMatFS},
-                     {&I.prog_hull, "hull", kCapsuleVS, kLitFS},
-                     {&I.prog_ground, "ground", kGroundVS, kGroundFS},
-                     {&I.prog_ground_shadow, "ground shadow", kFullscreenVS, kGroundShadowFS},
-                     {&I.prog_lines, "lines", kLinesVS, kLinesFS},
-                     {&I.prog_mesh_depth, "mesh depth", kMeshVS, kDepthFS},
-                     {&I.prog_hull_depth, "hull depth", kCapsuleVS, kDepthFS},
-                     {&I.prog_post, "post AA", kFullscreenVS, kPostAaFS},
-                     {&I.prog_bg, "background", kFullscreenVS, kBackgroundFS},
-                     {&I.prog_hair, "hair", kHairVS, kHairFS},
-                     {&I.prog_hair_depth, "hair depth", kHairVS, kDepthFS}};
+  const P progs[] = {
+      {&I.prog_mesh, "mesh", kMeshVS, kLitFS},
+      {&I.prog_mesh_mat, "mesh with materials", kMeshMatVS, kMeshMatFS},
+      {&I.prog_hull, "hull", kCapsuleVS, kLitFS},
+      {&I.prog_ground, "ground", kGroundVS, kGroundFS},
+      {&I.prog_ground_shadow, "ground shadow", kFullscreenVS, kGroundShadowFS},
+      {&I.prog_lines, "lines", kLinesVS, kLinesFS},
+      {&I.prog_mesh_depth, "mesh depth", kMeshVS, kDepthFS},
+      {&I.prog_hull_depth, "hull depth", kCapsuleVS, kDepthFS},
+      {&I.prog_post, "post AA", kFullscreenVS, kPostAaFS},
+      {&I.prog_bg, "background", kFullscreenVS, kBackgroundFS},
+      {&I.prog_hair, "hair", kHairVS, kHairFS},
+      {&I.prog_hair_depth, "hair depth", kHairVS, kDepthFS},
+      {&I.prog_mesh_surf, "mesh surface", kMeshVS, kSurfaceFS},
+      {&I.prog_hull_surf, "hull surface", kCapsuleVS, kSurfaceFS},
+      {&I.prog_hair_surf, "hair surface", kHairVS, kHairSurfaceFS},
+      {&I.prog_shadow_mask, "shadow mask", kFullscreenVS, kShadowMaskFS},
+      {&I.prog_mesh_dm, "mesh (shadow mask)", kMeshVS, kLitFS, kShadowMaskDefine},
+      {&I.prog_mesh_mat_dm, "mesh with materials (shadow mask)", kMeshMatVS, kMeshMatFS, kShadowMaskDefine},
+      {&I.prog_hull_dm, "hull (shadow mask)", kCapsuleVS, kLitFS, kShadowMaskDefine},
+      {&I.prog_hair_dm, "hair (shadow mask)", kHairVS, kHairFS, kShadowMaskDefine}};
   for (const P& p : progs)
-    if (!(*p.out = buildProgram(p.name, p.vs, p.fs, err))) return false;
+    if (!(*p.out = buildProgram(p.name, p.vs, p.fs, err, p.defines))) return false;
 
   // Hull template: 24 slices x 8 rings per cap (768 triangles); instanced. Smooth at the sizes
   // links have on screen (tens of pixels); the normals are exact, only the outline is polygonal.
@@ -616,6 +638,30 @@ void Renderer::Impl::ensureTargets(int w, int h, int samples, bool post) {
   glBindFramebuffer(GL_FRAMEBUFFER, resolve_fbo);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, resolve_color);
   output_fbo = (samples > 1 || post) ? resolve_fbo : msaa_fbo;
+  if (samples == 1) {
+    if (!surf_fbo) {
+      glGenFramebuffers(1, &surf_fbo);
+      glGenFramebuffers(1, &mask_fbo);
+      glGenTextures(1, &surf_tex);
+      glGenTextures(1, &mask_tex);
+    }
+    // Full float: the shadow search sees exactly the position the lit shader has (kSurfaceFS).
+    for (GLuint t : {surf_tex, mask_tex}) {
+      glBindTexture(GL_TEXTURE_2D, t);
+      if (t == mask_tex)
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, w, h, 0, GL_RED, GL_FLOAT, nullptr);
+      else
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, surf_fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, surf_tex, 0);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, msaa_depth);
+    glBindFramebuffer(GL_FRAMEBUFFER, mask_fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, mask_tex, 0);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, msaa_depth);
+  }
   target_w = w;
   target_h = h;
   target_samples = samples;
@@ -730,8 +776,7 @@ static void cullFor(const GpuMesh& g, const Eigen::Matrix4f& model) {
 }
 
 // Meshes with their file's materials (main pass): one draw per part, its texture on unit 2.
-void Renderer::Impl::drawMaterialMeshes() {
-  const GLuint p = prog_mesh_mat;
+void Renderer::Impl::drawMaterialMeshes(GLuint p) {
   bool used = false;
   for (const MeshDraw& d : mesh_draws) {
     const GpuMesh& g = meshes[size_t(d.mesh)];
@@ -784,7 +829,7 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
     glDisable(GL_CULL_FACE);
     glCullFace(GL_BACK);
   }
-  if (!depth_only) drawMaterialMeshes();
+  if (!depth_only) drawMaterialMeshes(mesh_prog == prog_mesh_dm ? prog_mesh_mat_dm : prog_mesh_mat);
   if (!hulls.empty()) {
     glUseProgram(hull_prog);
     if (depth_only) setMat4(hull_prog, "u_viewProj", view_proj);
@@ -801,9 +846,10 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
 // Hair ribbons face the camera in the main pass and the light in the shadow pass; a strand is
 // drawn at least about one pixel (or one shadow texel) wide so that it neither breaks up nor
 // flickers.
-void Renderer::Impl::drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only, const Eigen::Vector3d& light_dir) {
+void Renderer::Impl::drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only, const Eigen::Vector3d& light_dir,
+                               GLuint prog) {
   if (hair_draws.empty()) return;
-  const GLuint p = depth_only ? prog_hair_depth : prog_hair;
+  const GLuint p = depth_only ? prog_hair_depth : prog ? prog : prog_hair;
   glUseProgram(p);
   setMat4(p, "u_viewProj", view_proj);
   if (depth_only) {
@@ -1017,23 +1063,70 @@ void Renderer::endFrame() {
   const float normal_offset = float(1.5 * lf.texel_world);
 
   I.beginPass(Impl::kMainPass);
-  glBindFramebuffer(GL_FRAMEBUFFER, I.msaa_fbo);
+  stats_.draw_calls = 0;
   glViewport(0, 0, w, h);
   glDepthMask(GL_TRUE);
-  glClearColor(0, 0, 0, I.params.transparent ? 0 : 1);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  I.bindShadowTextures(true);
-
-  stats_.draw_calls = 0;
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
+  const bool has_objects = !I.mesh_draws.empty() || !I.hulls.empty() || !I.hair_draws.empty();
+  // Deferred shadows on a single-sample target: llvmpipe shades whole blocks of pixels, so on a
+  // mesh of small triangles a shadow search per fragment runs several times per covered pixel
+  // (and again for every hidden layer drawn first). Instead: 1) the objects' visible surface
+  // (position, normal) with the main depth buffer; 2) shadowFactor() once per pixel of it;
+  // 3) the objects lit with that mask, over the finished depth (only the visible fragment passes).
+  const bool deferred = shadows_on && has_objects && samples == 1 && I.surf_fbo != 0;
+  if (deferred) {
+    glBindFramebuffer(GL_FRAMEBUFFER, I.surf_fbo);
+    glClear(GL_DEPTH_BUFFER_BIT);  // the colours are read only where an object is
+    for (GLuint p : {I.prog_mesh_surf, I.prog_hull_surf, I.prog_hair_surf})  // u_eye orients the ribbons
+      I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
+    I.drawGeometry(I.prog_mesh_surf, I.prog_hull_surf, view_proj, true);
+    I.drawHairs(view_proj, false, ld, I.prog_hair_surf);
+    stats_.draw_calls += int(I.hair_draws.size()) + int(I.mesh_draws.size()) + (I.hulls.empty() ? 0 : 1);
 
-  I.setCommonUniforms(I.prog_mesh, view_proj, light_vp, normal_offset, shadows_on);
-  I.setCommonUniforms(I.prog_mesh_mat, view_proj, light_vp, normal_offset, shadows_on);
-  I.setCommonUniforms(I.prog_hull, view_proj, light_vp, normal_offset, shadows_on);
-  I.drawGeometry(I.prog_mesh, I.prog_hull, view_proj, false);
-  I.setCommonUniforms(I.prog_hair, view_proj, light_vp, normal_offset, shadows_on);
-  I.drawHairs(view_proj, false, ld);
+    glBindFramebuffer(GL_FRAMEBUFFER, I.mask_fbo);
+    I.bindShadowTextures(false);
+    I.setCommonUniforms(I.prog_shadow_mask, view_proj, light_vp, normal_offset, shadows_on);
+    glActiveTexture(GL_TEXTURE5);
+    glBindTexture(GL_TEXTURE_2D, I.surf_tex);
+    glActiveTexture(GL_TEXTURE0);
+    glUniform1i(loc(I.prog_shadow_mask, "u_surface"), 5);
+    int box[4] = {0, 0, w, h};
+    if (I.screenBox(view_proj, w, h, box)) {
+      glEnable(GL_SCISSOR_TEST);
+      glScissor(box[0], box[1], box[2] - box[0], box[3] - box[1]);
+    }
+    glDepthFunc(GL_GREATER);  // the triangle is at the far plane: passes where an object is
+    glDepthMask(GL_FALSE);
+    glBindVertexArray(I.empty_vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBindVertexArray(0);
+    glDisable(GL_SCISSOR_TEST);
+    glDepthMask(GL_TRUE);
+    glDepthFunc(GL_LEQUAL);  // 3): the fragment whose depth is in the buffer
+    ++stats_.draw_calls;
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, I.msaa_fbo);
+  glClearColor(0, 0, 0, I.params.transparent ? 0 : 1);
+  glClear(deferred ? GL_COLOR_BUFFER_BIT : GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  I.bindShadowTextures(true);
+  if (deferred) {
+    glActiveTexture(GL_TEXTURE4);
+    glBindTexture(GL_TEXTURE_2D, I.mask_tex);
+    glActiveTexture(GL_TEXTURE0);
+  }
+
+  const GLuint mesh_prog = deferred ? I.prog_mesh_dm : I.prog_mesh;
+  const GLuint mesh_mat_prog = deferred ? I.prog_mesh_mat_dm : I.prog_mesh_mat;
+  const GLuint hull_prog = deferred ? I.prog_hull_dm : I.prog_hull;
+  const GLuint hair_prog = deferred ? I.prog_hair_dm : I.prog_hair;
+  for (GLuint p : {mesh_prog, mesh_mat_prog, hull_prog, hair_prog}) {
+    I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
+    if (deferred) glUniform1i(loc(p, "u_shadowMask"), 4);
+  }
+  I.drawGeometry(mesh_prog, hull_prog, view_proj, false);
+  I.drawHairs(view_proj, false, ld, hair_prog);
+  glDepthFunc(GL_LESS);
   stats_.draw_calls += int(I.hair_draws.size());
   stats_.triangles += I.hair_indices.size() / 3;
   stats_.draw_calls += int(I.mesh_draws.size()) + (I.hulls.empty() ? 0 : 1);

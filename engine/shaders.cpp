@@ -59,6 +59,12 @@ const vec2 kPoisson[12] = vec2[](
   vec2(0.962, -0.195), vec2(0.473, -0.480), vec2(0.519, 0.767), vec2(0.185, -0.893),
   vec2(0.507, 0.064), vec2(0.896, 0.412), vec2(-0.322, -0.933), vec2(-0.792, -0.598));
 
+#ifdef SHADOW_MASK
+// The objects' shadow was computed once per pixel for the visible surface (kShadowMaskFS) and is
+// read back here: the same value shadowFactor() gives, without its taps per fragment.
+uniform sampler2D u_shadowMask;
+float shadowFactor(vec3 P, vec3 N) { return texelFetch(u_shadowMask, ivec2(gl_FragCoord.xy), 0).r; }
+#else
 // Soft shadows with contact hardening (percentage-closer soft shadows, Fernando 2005, for a
 // directional light of angular radius theta): 1) blocker search: the mean depth d_b of the
 // occluders around the lookup; 2) penumbra radius w = (d_r - d_b) * tan(theta) in metres, at
@@ -101,6 +107,7 @@ float shadowFactor(vec3 P, vec3 N) {
   for (int i = 0; i < 12; i += 3) sum += texture(u_shadowMap, vec3(c.xy - kPoisson[i].yx * (0.5 * r), c.z));
   return sum / 17.0;
 }
+#endif
 
 // Linear radiance of a surface point (before tone mapping).
 vec3 shade(vec3 P, vec3 N, vec3 albedo, float specular, float shininess, float rim) {
@@ -414,6 +421,59 @@ void main() {
 }
 )GLSL";
 
+// The visible surface of the objects, before they are shaded (llvmpipe shades in blocks of pixels,
+// and a 44,000-triangle head has triangles of a few pixels: a shadow search per fragment would run
+// several times per pixel). One RGBA32F texel: the position exactly as kLitFS / kMeshMatFS /
+// kHairFS pass it to shadowFactor(), and their normal in octahedral form, 12 bits a coordinate,
+// packed into one exactly representable float (within 1e-3 rad; it only sets the normal offset).
+// kShadowMaskFS then searches once per pixel.
+#define PONYHOP_PACK_NORMAL                                              \
+  "float packNormal(vec3 n) {\n"                                         \
+  "  n /= abs(n.x) + abs(n.y) + abs(n.z);\n"                             \
+  "  vec2 s = vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);\n" \
+  "  vec2 p = n.z >= 0.0 ? n.xy : (1.0 - abs(n.yx)) * s;\n"              \
+  "  vec2 q = floor((p * 0.5 + 0.5) * 4095.0 + 0.5);\n"                  \
+  "  return q.x + q.y * 4096.0;\n"                                       \
+  "}\n"
+const char* const kSurfaceFS = PONYHOP_PACK_NORMAL R"GLSL(
+in vec3 v_pos;
+in vec3 v_normal;
+out vec4 o_surface;
+void main() {
+  vec3 N = normalize(v_normal);
+  if (!gl_FrontFacing) N = -N;
+  o_surface = vec4(v_pos, packNormal(N));
+}
+)GLSL";
+
+// kSurfaceFS for hair: kHairFS passes its clump normal as it is, whichever side is seen.
+const char* const kHairSurfaceFS = PONYHOP_PACK_NORMAL R"GLSL(
+in vec3 v_pos;
+in vec3 v_normal;
+out vec4 o_surface;
+void main() { o_surface = vec4(v_pos, packNormal(normalize(v_normal))); }
+)GLSL";
+#undef PONYHOP_PACK_NORMAL
+
+// shadowFactor() of the visible surface, once per pixel where an object is (the depth test
+// passes only there).
+const char* const kShadowMaskFS = R"GLSL(
+uniform sampler2D u_surface;
+out vec4 o_color;
+vec3 unpackNormal(float v) {
+  float b = floor(v / 4096.0);
+  vec2 p = vec2(v - b * 4096.0, b) / 4095.0 * 2.0 - 1.0;
+  vec3 n = vec3(p, 1.0 - abs(p.x) - abs(p.y));
+  float t = max(-n.z, 0.0);
+  n.xy += vec2(n.x >= 0.0 ? -t : t, n.y >= 0.0 ? -t : t);
+  return normalize(n);
+}
+void main() {
+  vec4 s = texelFetch(u_surface, ivec2(gl_FragCoord.xy), 0);
+  o_color = vec4(shadowFactor(s.xyz, unpackNormal(s.w)), 0.0, 0.0, 1.0);
+}
+)GLSL";
+
 // The background gradient, at the far plane after everything else: where nothing was drawn.
 const char* const kBackgroundFS = R"GLSL(
 out vec4 o_color;
@@ -530,13 +590,13 @@ static GLuint compile(GLenum stage, const char* const* parts, int count, const c
   return s;
 }
 
-unsigned buildProgram(const char* name, const char* vs, const char* fs, std::string* err) {
+unsigned buildProgram(const char* name, const char* vs, const char* fs, std::string* err, const char* defines) {
   static const char* const kHeader = "#version 330 core\n";
   const char* vparts[] = {kHeader, vs};
-  const char* fparts[] = {kHeader, "precision highp float;\n", kCommonFS, fs};
+  const char* fparts[] = {kHeader, defines ? defines : "", "precision highp float;\n", kCommonFS, fs};
   GLuint v = compile(GL_VERTEX_SHADER, vparts, 2, name, err);
   if (!v) return 0;
-  GLuint f = compile(GL_FRAGMENT_SHADER, fparts, 4, name, err);
+  GLuint f = compile(GL_FRAGMENT_SHADER, fparts, 5, name, err);
   if (!f) {
     glDeleteShader(v);
     return 0;

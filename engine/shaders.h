@@ -21,11 +21,20 @@ extern const char* const kBackgroundFS;    // the background gradient (where not
 extern const char* const kGroundShadowFS;  // the ground's soft shadow into a small texture
 extern const char* const kPostAaFS;        // post-process anti-aliasing of the finished frame
 extern const char* const kLinesFS;
-extern const char* const kHairFS;   // Kajiya-Kay two-lobe hair, shadowed key light, fill, ambient
-extern const char* const kDepthFS;  // shadow pass (depth only)
+extern const char* const kHairFS;         // Kajiya-Kay two-lobe hair, shadowed key light, fill, ambient
+extern const char* const kDepthFS;        // shadow pass (depth only)
+extern const char* const kSurfaceFS;      // position and packed normal of the visible surface (deferred shadows)
+extern const char* const kHairSurfaceFS;  // the same for hair
+extern const char* const kShadowMaskFS;   // shadowFactor() once per pixel of that surface
+
+// Compiled into a program's fragment shader by `defines`: shadowFactor() reads the per-pixel mask
+// (unit u_shadowMask) instead of searching the shadow map.
+inline constexpr const char* kShadowMaskDefine = "#define SHADOW_MASK 1\n";
 
 // Compiles and links "#version 330 core" + the given sources. Returns 0 and fills `err` (with the
 // driver's log and the stage's name) on failure. Needs a current context with GL loaded.
-unsigned buildProgram(const char* name, const char* vs, const char* fs, std::string* err);
+// `defines`: lines placed before the fragment shader's sources (e.g. kShadowMaskDefine).
+unsigned buildProgram(const char* name, const char* vs, const char* fs, std::string* err,
+                      const char* defines = nullptr);
 
 }  // namespace ponyhop::shaders
