@@ -155,10 +155,12 @@ struct Renderer::Impl {
   GLuint prog_mesh_depth = 0, prog_hull_depth = 0, prog_post = 0, prog_bg = 0;
   GLuint prog_hair = 0, prog_hair_depth = 0;
   GLuint prog_mesh_mat = 0;
+  std::vector<GLuint> programs;  // every program above, for the destructor
   // Deferred shadows (single-sample targets): the visible surface, its shadow once per pixel, and
   // the lit programs that read that mask instead of searching the shadow map per fragment.
   GLuint prog_mesh_surf = 0, prog_hull_surf = 0, prog_hair_surf = 0, prog_shadow_mask = 0;
   GLuint prog_mesh_dm = 0, prog_mesh_mat_dm = 0, prog_hull_dm = 0, prog_hair_dm = 0;
+  GLuint prog_ground_shadow_class = 0;  // the ground shadow's first pass (shadowClass)
   // Static geometry.
   GLuint hull_vao = 0, hull_vbo = 0, hull_ebo = 0, hull_instances = 0;
   GLsizei hull_index_count = 0;
@@ -181,6 +183,7 @@ struct Renderer::Impl {
   GLuint shadow_fbo = 0, shadow_tex = 0;
   GLuint raw_depth_sampler = 0;                         // reads shadow_tex without comparison (blocker search)
   GLuint ground_shadow_fbo = 0, ground_shadow_tex = 0;  // R8, shadowFactor on the ground plane
+  GLuint ground_shadow_depth = 0;                       // marks the texels that need the filter
   int ground_shadow_size = 0;
   LightFrustum frustum;
   int target_w = 0, target_h = 0, target_samples = -1, shadow_size = 0;
@@ -280,10 +283,7 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
 Renderer::~Renderer() {
   if (!glDeleteProgram) return;  // GL never loaded: nothing was created
   Impl& I = *impl_;
-  for (GLuint p : {I.prog_mesh,        I.prog_mesh_mat,   I.prog_hull,        I.prog_ground,    I.prog_ground_shadow,
-                   I.prog_lines,       I.prog_mesh_depth, I.prog_hull_depth,  I.prog_post,      I.prog_bg,
-                   I.prog_hair,        I.prog_hair_depth, I.prog_mesh_surf,   I.prog_hull_surf, I.prog_hair_surf,
-                   I.prog_shadow_mask, I.prog_mesh_dm,    I.prog_mesh_mat_dm, I.prog_hull_dm,   I.prog_hair_dm})
+  for (GLuint p : I.programs)
     if (p) glDeleteProgram(p);
   for (int i = 0; i < int(I.meshes.size()); ++i) release(MeshHandle{i});
   GLuint vaos[] = {I.hull_vao, I.empty_vao, I.lines_vao, I.hair_vao};
@@ -292,8 +292,8 @@ Renderer::~Renderer() {
   glDeleteBuffers(6, bufs);
   GLuint fbos[] = {I.msaa_fbo, I.resolve_fbo, I.shadow_fbo, I.ground_shadow_fbo, I.surf_fbo, I.mask_fbo};
   glDeleteFramebuffers(6, fbos);
-  GLuint rbs[] = {I.msaa_color, I.msaa_depth, I.resolve_color};
-  glDeleteRenderbuffers(3, rbs);
+  GLuint rbs[] = {I.msaa_color, I.msaa_depth, I.resolve_color, I.ground_shadow_depth};
+  glDeleteRenderbuffers(4, rbs);
   if (I.main_color_tex) glDeleteTextures(1, &I.main_color_tex);
   for (GLuint t : {I.surf_tex, I.mask_tex})
     if (t) glDeleteTextures(1, &t);
@@ -337,9 +337,12 @@ bool Renderer::init(std::string* err) {
       {&I.prog_mesh_dm, "mesh (shadow mask)", kMeshVS, kLitFS, kShadowMaskDefine},
       {&I.prog_mesh_mat_dm, "mesh with materials (shadow mask)", kMeshMatVS, kMeshMatFS, kShadowMaskDefine},
       {&I.prog_hull_dm, "hull (shadow mask)", kCapsuleVS, kLitFS, kShadowMaskDefine},
-      {&I.prog_hair_dm, "hair (shadow mask)", kHairVS, kHairFS, kShadowMaskDefine}};
-  for (const P& p : progs)
+      {&I.prog_hair_dm, "hair (shadow mask)", kHairVS, kHairFS, kShadowMaskDefine},
+      {&I.prog_ground_shadow_class, "ground shadow (classify)", kFullscreenVS, kGroundShadowFS, kShadowClassifyDefine}};
+  for (const P& p : progs) {
     if (!(*p.out = buildProgram(p.name, p.vs, p.fs, err, p.defines))) return false;
+    I.programs.push_back(*p.out);
+  }
 
   // Hull template: 24 slices x 8 rings per cap (768 triangles); instanced. Smooth at the sizes
   // links have on screen (tens of pixels); the normals are exact, only the outline is polygonal.
@@ -692,12 +695,16 @@ void Renderer::Impl::ensureGroundShadow(int size) {
   if (!ground_shadow_fbo) {
     glGenFramebuffers(1, &ground_shadow_fbo);
     glGenTextures(1, &ground_shadow_tex);
+    glGenRenderbuffers(1, &ground_shadow_depth);
   }
+  glBindRenderbuffer(GL_RENDERBUFFER, ground_shadow_depth);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT16, size, size);
   glBindTexture(GL_TEXTURE_2D, ground_shadow_tex);
   glTexImage2D(GL_TEXTURE_2D, 0, GL_R8, size, size, 0, GL_RED, GL_UNSIGNED_BYTE, nullptr);
   linearClampToEdge();
   glBindFramebuffer(GL_FRAMEBUFFER, ground_shadow_fbo);
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, ground_shadow_tex, 0);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, ground_shadow_depth);
   ground_shadow_size = size;
 }
 
@@ -1009,8 +1016,6 @@ void Renderer::endFrame() {
       I.ensureGroundShadow(gs);
       glBindFramebuffer(GL_FRAMEBUFFER, I.ground_shadow_fbo);
       glViewport(0, 0, gs, gs);
-      glDisable(GL_DEPTH_TEST);
-      glDepthMask(GL_FALSE);
       I.bindShadowTextures(false);  // the ground texture is the target here
       // Only the texels near a caster are shaded: a texel whose taps find no blocker is fully lit
       // (1), as the cleared texture is. The box holds the casters seen along the light, grown by
@@ -1018,21 +1023,37 @@ void Renderer::endFrame() {
       // draft's 8 texels at most), a texel of bilinear footprint, the normal offset (2.25
       // texels) and two ground texels: the texture is the same as with every texel shaded.
       glClearColor(1.0f, 0.0f, 0.0f, 1.0f);
-      glClear(GL_COLOR_BUFFER_BIT);
+      glDepthMask(GL_TRUE);
+      glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
       const double ground_texel = lf.texel_world * double(I.shadow_size) / double(gs);
       int box[4];
       if (I.casterTexelBox(lf.view_proj, kMaxPenumbraMetres + 12.0 * lf.texel_world + 2.0 * ground_texel, gs, box)) {
         const Eigen::Matrix4f lvp = lf.view_proj.cast<float>();
-        I.setCommonUniforms(I.prog_ground_shadow, lvp, lvp, float(1.5 * lf.texel_world), true);
-        setMat4(I.prog_ground_shadow, "u_invLightViewProj", lf.view_proj.inverse().cast<float>());
-        glUniform1f(loc(I.prog_ground_shadow, "u_groundZ"), float(I.params.ground_height));
-        glUniform2f(loc(I.prog_ground_shadow, "u_groundShadowSize"), float(gs), float(gs));
+        for (GLuint p : {I.prog_ground_shadow_class, I.prog_ground_shadow}) {
+          I.setCommonUniforms(p, lvp, lvp, float(1.5 * lf.texel_world), true);
+          setMat4(p, "u_invLightViewProj", lf.view_proj.inverse().cast<float>());
+          glUniform1f(loc(p, "u_groundZ"), float(I.params.ground_height));
+          glUniform2f(loc(p, "u_groundShadowSize"), float(gs), float(gs));
+        }
         glEnable(GL_SCISSOR_TEST);
         glScissor(box[0], box[1], box[2] - box[0], box[3] - box[1]);
         glBindVertexArray(I.empty_vao);
+        glEnable(GL_DEPTH_TEST);
+        glDepthFunc(GL_ALWAYS);
+        if (!draft) {
+          // Two passes (llvmpipe would run the filter on every texel, lit or not): the blocker
+          // search writes the fully lit and umbra texels and marks the others with depth 0; the
+          // whole shadowFactor() then runs where the far-plane triangle passes GREATER, there only.
+          glUseProgram(I.prog_ground_shadow_class);
+          glDrawArrays(GL_TRIANGLES, 0, 3);
+          glDepthFunc(GL_GREATER);
+        }
+        glDepthMask(GL_FALSE);
+        glUseProgram(I.prog_ground_shadow);
         glDrawArrays(GL_TRIANGLES, 0, 3);
         glBindVertexArray(0);
         glDisable(GL_SCISSOR_TEST);
+        glDepthFunc(GL_LESS);
       }
       glDepthMask(GL_TRUE);
     }

@@ -70,23 +70,20 @@ float shadowFactor(vec3 P, vec3 N) { return texelFetch(u_shadowMask, ivec2(gl_Fr
 // occluders around the lookup; 2) penumbra radius w = (d_r - d_b) * tan(theta) in metres, at
 // least `shadow_softness` texels; 3) PCF over that radius. Shadows are crisp where an object
 // touches the ground and widen with the distance to the caster, like a real sky-lit sun.
-float shadowFactor(vec3 P, vec3 N) {
-  if (u_shadowsOn == 0) return 1.0;
-  // Normal offset: move the lookup off the surface by ~1.5 texels, more at grazing light, so a
-  // lit surface never compares against its own depth (acne) while contact stays tight.
+// The lookup point of a receiver at P with normal N: shadow-map xy and depth. Normal offset: the
+// lookup moves off the surface by ~1.5 texels, more at grazing light, so a lit surface never
+// compares against its own depth (acne) while contact stays tight.
+vec3 shadowCoord(vec3 P, vec3 N) {
   float ndl = clamp(dot(N, -u_lightDir), 0.0, 1.0);
   vec3 Po = P + N * u_normalOffset * (0.5 + (1.0 - ndl));
   vec4 s = u_lightViewProj * vec4(Po, 1.0);
-  vec3 c = s.xyz / s.w * 0.5 + 0.5;
-  if (c.x <= 0.0 || c.x >= 1.0 || c.y <= 0.0 || c.y >= 1.0 || c.z >= 1.0) return 1.0;
-  if (u_shadowDraft != 0) {  // draft quality: 5 bilinear compares over the minimum radius
-    float rd = max(u_shadowSoftness, 1.0) * u_shadowTexel;
-    return 0.2 * (texture(u_shadowMap, c) + texture(u_shadowMap, vec3(c.xy + vec2(rd, rd), c.z)) +
-                  texture(u_shadowMap, vec3(c.xy + vec2(-rd, rd), c.z)) +
-                  texture(u_shadowMap, vec3(c.xy + vec2(rd, -rd), c.z)) +
-                  texture(u_shadowMap, vec3(c.xy - vec2(rd, rd), c.z)));
-  }
-  // 1) Blockers within the largest penumbra we allow.
+  return s.xyz / s.w * 0.5 + 0.5;
+}
+bool outsideShadowMap(vec3 c) { return c.x <= 0.0 || c.x >= 1.0 || c.y <= 0.0 || c.y >= 1.0 || c.z >= 1.0; }
+
+// 1) Blockers within the largest penumbra we allow: how many of the 7 taps (x) and their depths'
+// sum (y).
+vec2 shadowBlockers(vec3 c) {
   float searchR = u_maxPenumbraTexels * u_shadowTexel;
   float sumB = 0.0, nB = 0.0;
   for (int i = 0; i < 12; i += 2) {  // 6 of the 12 directions + the centre: cheap, and enough
@@ -95,10 +92,26 @@ float shadowFactor(vec3 P, vec3 N) {
   }
   float dCentre = texture(u_shadowDepth, c.xy).r;
   if (dCentre < c.z) { sumB += dCentre; nB += 1.0; }
+  return vec2(nB, sumB);
+}
+
+float shadowFactor(vec3 P, vec3 N) {
+  if (u_shadowsOn == 0) return 1.0;
+  vec3 c = shadowCoord(P, N);
+  if (outsideShadowMap(c)) return 1.0;
+  if (u_shadowDraft != 0) {  // draft quality: 5 bilinear compares over the minimum radius
+    float rd = max(u_shadowSoftness, 1.0) * u_shadowTexel;
+    return 0.2 * (texture(u_shadowMap, c) + texture(u_shadowMap, vec3(c.xy + vec2(rd, rd), c.z)) +
+                  texture(u_shadowMap, vec3(c.xy + vec2(-rd, rd), c.z)) +
+                  texture(u_shadowMap, vec3(c.xy + vec2(rd, -rd), c.z)) +
+                  texture(u_shadowMap, vec3(c.xy - vec2(rd, rd), c.z)));
+  }
+  vec2 b = shadowBlockers(c);
+  float nB = b.x;
   if (nB == 0.0) return 1.0;  // nothing between this point and the light: fully lit, no PCF
   if (nB == 7.0) return 0.0;  // blockers all over the widest penumbra: deep in the umbra, no PCF
   // 2) Penumbra (depths are linear for an orthographic light: metres = depth * range).
-  float dBlocker = sumB / nB;
+  float dBlocker = b.y / nB;
   float wTexels = (c.z - dBlocker) * u_lightDepthRange * u_penumbraSlope / u_texelWorld;
   float r = clamp(max(u_shadowSoftness, wTexels), 0.0, u_maxPenumbraTexels) * u_shadowTexel;
   // 3) PCF: each tap is a hardware 2x2 bilinear depth compare.
@@ -106,6 +119,19 @@ float shadowFactor(vec3 P, vec3 N) {
   for (int i = 0; i < 12; ++i) sum += texture(u_shadowMap, vec3(c.xy + kPoisson[i] * r, c.z));
   for (int i = 0; i < 12; i += 3) sum += texture(u_shadowMap, vec3(c.xy - kPoisson[i].yx * (0.5 * r), c.z));
   return sum / 17.0;
+}
+
+// What shadowFactor() knows before its filter: 1 fully lit, 0 deep in the umbra, 0.5 when the
+// filter is needed (always in draft). llvmpipe runs both sides of every branch, so the early
+// returns above save nothing per fragment; the deferred passes instead run this first and the
+// whole of shadowFactor() only where it says 0.5, selected by the depth or stencil test.
+float shadowClass(vec3 P, vec3 N) {
+  if (u_shadowsOn == 0) return 1.0;
+  vec3 c = shadowCoord(P, N);
+  if (outsideShadowMap(c)) return 1.0;
+  if (u_shadowDraft != 0) return 0.5;
+  float nB = shadowBlockers(c).x;
+  return nB == 0.0 ? 1.0 : (nB == 7.0 ? 0.0 : 0.5);
 }
 #endif
 
@@ -484,6 +510,9 @@ void main() {
 
 // The ground's shadow, once per frame, into a small texture laid over the shadow map's square:
 // the texel at light-space (x, y) holds shadowFactor() of the ground point on that light ray.
+// With SHADOW_CLASSIFY: the first of two passes, shadowClass() only; it writes the fully lit and
+// umbra texels and marks the others (depth 0) for the second, the whole shadowFactor(), which the
+// depth test lets through only there.
 const char* const kGroundShadowFS = R"GLSL(
 out vec4 o_color;
 uniform mat4 u_invLightViewProj;
@@ -496,7 +525,13 @@ void main() {
   b.xyz /= b.w;
   float t = abs(b.z - a.z) > 1e-12 ? (u_groundZ - a.z) / (b.z - a.z) : 0.0;
   vec3 P = mix(a.xyz, b.xyz, t);
+#ifdef SHADOW_CLASSIFY
+  float v = shadowClass(P, vec3(0.0, 0.0, 1.0));
+  o_color = vec4(v, 0.0, 0.0, 1.0);
+  gl_FragDepth = v == 0.5 ? 0.0 : 1.0;
+#else
   o_color = vec4(shadowFactor(P, vec3(0.0, 0.0, 1.0)), 0.0, 0.0, 1.0);
+#endif
 }
 )GLSL";
 

@@ -30,6 +30,8 @@ extern const char* const kShadowMaskFS;   // shadowFactor() once per pixel of th
 // Compiled into a program's fragment shader by `defines`: shadowFactor() reads the per-pixel mask
 // (unit u_shadowMask) instead of searching the shadow map.
 inline constexpr const char* kShadowMaskDefine = "#define SHADOW_MASK 1\n";
+// Compiled into kGroundShadowFS / kShadowMaskFS: the classifying first pass (shadowClass()).
+inline constexpr const char* kShadowClassifyDefine = "#define SHADOW_CLASSIFY 1\n";
 
 // Compiles and links "#version 330 core" + the given sources. Returns 0 and fills `err` (with the
 // driver's log and the stage's name) on failure. Needs a current context with GL loaded.
