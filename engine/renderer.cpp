@@ -161,6 +161,7 @@ struct Renderer::Impl {
   GLuint prog_mesh_surf = 0, prog_hull_surf = 0, prog_hair_surf = 0, prog_shadow_mask = 0;
   GLuint prog_mesh_dm = 0, prog_mesh_mat_dm = 0, prog_hull_dm = 0, prog_hair_dm = 0;
   GLuint prog_ground_shadow_class = 0;  // the ground shadow's first pass (shadowClass)
+  GLuint prog_post_class = 0;           // the post filter's first pass (edge or not)
   // Static geometry.
   GLuint hull_vao = 0, hull_vbo = 0, hull_ebo = 0, hull_instances = 0;
   GLsizei hull_index_count = 0;
@@ -175,7 +176,8 @@ struct Renderer::Impl {
   // texture (read by the post-process filter, or directly without anti-aliasing).
   GLuint msaa_fbo = 0, msaa_color = 0, msaa_depth = 0, main_color_tex = 0;
   GLuint resolve_fbo = 0, resolve_color = 0;
-  GLuint output_fbo = 0;  // where the finished frame is: resolve_fbo, or msaa_fbo without AA
+  GLuint resolve_depth = 0;  // marks the pixels the post filter has an edge at
+  GLuint output_fbo = 0;     // where the finished frame is: resolve_fbo, or msaa_fbo without AA
   bool target_post = false;
   // With a single-sample target: position + normal of the visible surface and the shadow mask,
   // sharing the main depth buffer.
@@ -292,8 +294,8 @@ Renderer::~Renderer() {
   glDeleteBuffers(6, bufs);
   GLuint fbos[] = {I.msaa_fbo, I.resolve_fbo, I.shadow_fbo, I.ground_shadow_fbo, I.surf_fbo, I.mask_fbo};
   glDeleteFramebuffers(6, fbos);
-  GLuint rbs[] = {I.msaa_color, I.msaa_depth, I.resolve_color, I.ground_shadow_depth};
-  glDeleteRenderbuffers(4, rbs);
+  GLuint rbs[] = {I.msaa_color, I.msaa_depth, I.resolve_color, I.ground_shadow_depth, I.resolve_depth};
+  glDeleteRenderbuffers(5, rbs);
   if (I.main_color_tex) glDeleteTextures(1, &I.main_color_tex);
   for (GLuint t : {I.surf_tex, I.mask_tex})
     if (t) glDeleteTextures(1, &t);
@@ -338,7 +340,8 @@ bool Renderer::init(std::string* err) {
       {&I.prog_mesh_mat_dm, "mesh with materials (shadow mask)", kMeshMatVS, kMeshMatFS, kShadowMaskDefine},
       {&I.prog_hull_dm, "hull (shadow mask)", kCapsuleVS, kLitFS, kShadowMaskDefine},
       {&I.prog_hair_dm, "hair (shadow mask)", kHairVS, kHairFS, kShadowMaskDefine},
-      {&I.prog_ground_shadow_class, "ground shadow (classify)", kFullscreenVS, kGroundShadowFS, kShadowClassifyDefine}};
+      {&I.prog_ground_shadow_class, "ground shadow (classify)", kFullscreenVS, kGroundShadowFS, kShadowClassifyDefine},
+      {&I.prog_post_class, "post AA (edges)", kFullscreenVS, kPostAaFS, kPostEdgesDefine}};
   for (const P& p : progs) {
     if (!(*p.out = buildProgram(p.name, p.vs, p.fs, err, p.defines))) return false;
     I.programs.push_back(*p.out);
@@ -618,6 +621,7 @@ void Renderer::Impl::ensureTargets(int w, int h, int samples, bool post) {
     glGenTextures(1, &main_color_tex);
     glGenFramebuffers(1, &resolve_fbo);
     glGenRenderbuffers(1, &resolve_color);
+    glGenRenderbuffers(1, &resolve_depth);
   }
   glBindFramebuffer(GL_FRAMEBUFFER, msaa_fbo);
   if (samples > 1) {
@@ -638,8 +642,11 @@ void Renderer::Impl::ensureTargets(int w, int h, int samples, bool post) {
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, msaa_depth);
   glBindRenderbuffer(GL_RENDERBUFFER, resolve_color);
   glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+  glBindRenderbuffer(GL_RENDERBUFFER, resolve_depth);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT16, w, h);
   glBindFramebuffer(GL_FRAMEBUFFER, resolve_fbo);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, resolve_color);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, resolve_depth);
   output_fbo = (samples > 1 || post) ? resolve_fbo : msaa_fbo;
   if (samples == 1) {
     if (!surf_fbo) {
@@ -1219,15 +1226,29 @@ void Renderer::endFrame() {
         glScissor(box[0], box[1], box[2] - box[0], box[3] - box[1]);
       }
       glBindFramebuffer(GL_FRAMEBUFFER, I.resolve_fbo);
-      glDisable(GL_DEPTH_TEST);
-      glUseProgram(I.prog_post);
       glActiveTexture(GL_TEXTURE3);
       glBindTexture(GL_TEXTURE_2D, I.main_color_tex);
       glActiveTexture(GL_TEXTURE0);
-      glUniform1i(loc(I.prog_post, "u_frame"), 3);
-      glUniform2f(loc(I.prog_post, "u_texel"), 1.0f / float(w), 1.0f / float(h));
+      for (GLuint p : {I.prog_post_class, I.prog_post}) {
+        glUseProgram(p);
+        glUniform1i(loc(p, "u_frame"), 3);
+        glUniform2f(loc(p, "u_texel"), 1.0f / float(w), 1.0f / float(h));
+      }
+      // Two passes (llvmpipe runs both sides of the filter's branch): the first copies the pixels
+      // without an edge and marks the others with depth 0; the filter then runs under a far-plane
+      // triangle with depth test GREATER, on the marked pixels only.
       glBindVertexArray(I.empty_vao);
+      glEnable(GL_DEPTH_TEST);
+      glDepthMask(GL_TRUE);
+      glDepthFunc(GL_ALWAYS);
+      glUseProgram(I.prog_post_class);
       glDrawArrays(GL_TRIANGLES, 0, 3);
+      glDepthFunc(GL_GREATER);
+      glDepthMask(GL_FALSE);
+      glUseProgram(I.prog_post);
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+      glDepthMask(GL_TRUE);
+      glDepthFunc(GL_LESS);
       glBindVertexArray(0);
       glActiveTexture(GL_TEXTURE3);
       glBindTexture(GL_TEXTURE_2D, 0);  // the main pass renders into it next frame

@@ -540,7 +540,8 @@ void main() {
 // FXAA: where the local luma contrast is high, the edge's direction is estimated from the 2x2
 // corner lumas and the pixel is replaced by bilinear taps along that edge; a 4-tap average is
 // kept when it stays inside the local luma range, a 2-tap one otherwise (so thin features are
-// not washed out). Flat pixels pass through unchanged.
+// not washed out). Flat pixels pass through unchanged. With POST_EDGES: the first of two passes,
+// which copies the flat pixels and marks the others (depth 0) for the second, the filter.
 const char* const kPostAaFS = R"GLSL(
 out vec4 o_color;
 uniform sampler2D u_frame;
@@ -559,6 +560,13 @@ void main() {
   float lSE = luma(texelFetch(u_frame, clamp(p + ivec2(1, -1), ivec2(0), hi), 0).rgb);
   float lMin = min(lM, min(min(lNW, lNE), min(lSW, lSE)));
   float lMax = max(lM, max(max(lNW, lNE), max(lSW, lSE)));
+#ifdef POST_EDGES
+  // First pass: the pixels without an edge are final; the others are marked for the filter.
+  bool edge = !(lMax - lMin < max(1.0 / 24.0, lMax * 0.125));
+  o_color = cM;
+  gl_FragDepth = edge ? 0.0 : 1.0;
+  return;
+#endif
   if (lMax - lMin < max(1.0 / 24.0, lMax * 0.125)) {  // no edge here
     o_color = cM;
     return;

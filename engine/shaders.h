@@ -32,6 +32,8 @@ extern const char* const kShadowMaskFS;   // shadowFactor() once per pixel of th
 inline constexpr const char* kShadowMaskDefine = "#define SHADOW_MASK 1\n";
 // Compiled into kGroundShadowFS / kShadowMaskFS: the classifying first pass (shadowClass()).
 inline constexpr const char* kShadowClassifyDefine = "#define SHADOW_CLASSIFY 1\n";
+// Compiled into kPostAaFS: its first pass (flat pixels copied, edges marked).
+inline constexpr const char* kPostEdgesDefine = "#define POST_EDGES 1\n";
 
 // Compiles and links "#version 330 core" + the given sources. Returns 0 and fills `err` (with the
 // driver's log and the stage's name) on failure. Needs a current context with GL loaded.
