@@ -1,5 +1,7 @@
 #include "physics/spherical_joint.h"
 
+#include "physics/small_matrix.h"
+
 namespace ponyhop {
 
 // Hecker, "How to Simulate a Ponytail" (seed 002, Eq. 1-3, 12-14) and seed 000:
@@ -18,8 +20,8 @@ namespace ponyhop {
 // J_a^T lambda = [lambda; r_a x lambda]: Hecker's f_ca = f_c, t_ca = r_a x f_c, with
 // lambda = f_c, and -f_c, -r_b x f_c on b (Newton's third law).
 void SphericalJoint::evaluate(const RigidBody& a, const RigidBody& b, ConstraintRows& out) const {
-  const Eigen::Vector3d r_a = a.q * point_a_;
-  const Eigen::Vector3d r_b = b.q * point_b_;
+  const Eigen::Vector3d r_a = rotate(a.q, point_a_);
+  const Eigen::Vector3d r_b = rotate(b.q, point_b_);
   out.C = (a.x + r_a) - (b.x + r_b);
   // Written as 3 x 6 through fixed-size maps (the resizes cost nothing: fixed storage).
   out.ja.resize(3, 6);
