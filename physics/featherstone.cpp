@@ -84,14 +84,20 @@ void addShiftedInertia(const Eigen::Vector3d& d, const Eigen::Matrix3d& a, const
   out.bottomLeftCorner<3, 3>() += top_right.transpose();
   out.bottomRightCorner<3, 3>() += br;
 }
+// The cross products in scalars (the same operations): Eigen's cross() goes through a stack
+// temporary read back in 16-byte halves of 8-byte stores (failed store forwarding).
 Vector6d shiftMotion(const Eigen::Vector3d& d, const Vector6d& a) {
   Vector6d out = a;
-  out.head<3>() += a.tail<3>().cross(d);
+  out(0) += a(4) * d(2) - a(5) * d(1);
+  out(1) += a(5) * d(0) - a(3) * d(2);
+  out(2) += a(3) * d(1) - a(4) * d(0);
   return out;
 }
 Vector6d shiftForce(const Eigen::Vector3d& d, const Vector6d& f) {
   Vector6d out = f;
-  out.tail<3>() += d.cross(f.head<3>());
+  out(3) += d(1) * f(2) - d(2) * f(1);
+  out(4) += d(2) * f(0) - d(0) * f(2);
+  out(5) += d(0) * f(1) - d(1) * f(0);
   return out;
 }
 
@@ -110,6 +116,25 @@ Vector6d biasForce(const RigidBody& b, const Eigen::Matrix3d& inertia_world) {
   return out;
 }
 Vector6d biasForce(const RigidBody& b) { return biasForce(b, b.worldInertia()); }
+// The same two, written into ABA's pass from the body's rotation r: no 6 x 6 temporary (its copy
+// was a `rep movs` and a failed store forwarding per body), I_world = r I r^T by its upper
+// triangle in registers.
+void writeInertiaAndBias(const RigidBody& b, const Eigen::Matrix3d& r, Matrix6& ia, Vector6d& pa) {
+  const Eigen::Matrix3d rd = r * b.inertia.asDiagonal();
+  double m[3][3];
+  for (int i = 0; i < 3; ++i) {
+    for (int j = i; j < 3; ++j) m[i][j] = m[j][i] = rd.row(i).dot(r.row(j));
+  }
+  ia.setZero();
+  for (int i = 0; i < 3; ++i) {
+    ia(i, i) = b.mass;
+    for (int j = 0; j < 3; ++j) ia(3 + i, 3 + j) = m[i][j];
+  }
+  Eigen::Vector3d iw;
+  for (int i = 0; i < 3; ++i) iw(i) = m[i][0] * b.w(0) + m[i][1] * b.w(1) + m[i][2] * b.w(2);
+  pa.head<3>() = -b.force;
+  pa.tail<3>() = b.w.cross(iw) - b.torque;
+}
 
 }  // namespace
 
@@ -322,7 +347,7 @@ void ArticulatedSystem::writeState(std::vector<RigidBody>& bodies) const {
     switch (nd.type) {
       case Type::Free:
         b.x = coords_.x[i];
-        b.q = coords_.q[i].normalized();
+        b.q = renormalized(coords_.q[i]);
         b.v = u_.segment<3>(nd.dof);
         b.w = u_.segment<3>(nd.dof + 3);
         frames_[i].R = b.q.toRotationMatrix();
@@ -331,7 +356,7 @@ void ArticulatedSystem::writeState(std::vector<RigidBody>& bodies) const {
         // Rotation matrices, each built once (parents first: a dynamic parent's is in frames_)
         // and kept for jointKinematics.
         Frame& f = frames_[i];
-        b.q = (p.q * coords_.q[i]).normalized();  // one normalization: RK4 stages are not unit
+        b.q = renormalized(p.q * coords_.q[i]);  // one normalization: RK4 stages are not unit
         f.R = b.q.toRotationMatrix();
         const Eigen::Matrix3d rp = nd.parent_node >= 0 ? frames_[nd.parent_node].R : p.rotation();
         f.r_p.noalias() = rp * nd.point_parent;
@@ -342,7 +367,7 @@ void ArticulatedSystem::writeState(std::vector<RigidBody>& bodies) const {
         break;
       }
       case Type::Prismatic: {
-        b.q = (p.q * nd.rest).normalized();
+        b.q = renormalized(p.q * nd.rest);
         frames_[i].R = b.q.toRotationMatrix();
         const Eigen::Vector3d d = p.q * (nd.offset + coords_.s[i] * nd.axis);
         b.x = p.x + d;
@@ -526,12 +551,7 @@ void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorX
                             bool written) {
   const size_t n = nodes_.size();
   jointKinematics(bodies, kin_, written);
-  for (size_t i = 0; i < n; ++i) {
-    const RigidBody& b = bodies[nodes_[i].body];
-    const Eigen::Matrix3d inertia_world = rotateDiagonal(kin_[i].R, b.inertia);
-    pass_[i].ia = spatialInertia(b, inertia_world);
-    pass_[i].pa = biasForce(b, inertia_world);
-  }
+  for (size_t i = 0; i < n; ++i) writeInertiaAndBias(bodies[nodes_[i].body], kin_[i].R, pass_[i].ia, pass_[i].pa);
   const auto dispatch = [](int dofs, auto&& f1, auto&& f3, auto&& f6) {
     if (dofs == 3)
       f3();
@@ -626,8 +646,8 @@ std::string ArticulatedSystem::derivative(double t, const Coordinates& c, const 
                                           std::vector<RigidBody>& bodies, const ReducedHooks& hooks,
                                           Eigen::VectorXd& udot, bool written) {
   if (!written) {
-    coords_ = c;
-    u_ = u;
+    if (&c != &coords_) coords_ = c;
+    if (&u != &u_) u_ = u;
     hooks.kinematics(t);
     writeState(bodies);
   }
@@ -667,8 +687,6 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
   // kinematics at t + h, which is this step's t): the first stage skips forward kinematics.
   const bool written = have_state_ && t == written_time_ && !bodiesChanged(bodies);
   if (!written) readState(bodies);
-  c0_ = coords_;
-  u0_ = u_;
   const auto axpy = [&](const Coordinates& base, double s, const Coordinates& rate, Coordinates& out) {
     out = base;
     for (size_t i = 0; i < nodes_.size(); ++i) {
@@ -681,18 +699,18 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
   switch (integrator) {
     case Integrator::SymplecticEuler: {
       // u += h u'(t, y); positions with the new speeds (exact exponential map for rotations).
-      if (std::string e = derivative(t, c0_, u0_, bodies, hooks, k[0], written); !e.empty() || stopped_) return e;
-      u_ = u0_ + h * k[0];
-      coords_ = c0_;
+      // In place: the step needs the coordinates at t only through u'(t, y).
+      if (std::string e = derivative(t, coords_, u_, bodies, hooks, k[0], written); !e.empty() || stopped_) return e;
+      u_ += h * k[0];
       for (size_t i = 0; i < nodes_.size(); ++i) {
         const Node& nd = nodes_[i];
         switch (nd.type) {
           case Type::Free:
             coords_.x[i] += h * u_.segment<3>(nd.dof);
-            coords_.q[i] = (quaternionFromRotationVector(h * u_.segment<3>(nd.dof + 3)) * c0_.q[i]).normalized();
+            coords_.q[i] = renormalized(quaternionFromRotationVector(h * u_.segment<3>(nd.dof + 3)) * coords_.q[i]);
             break;
           case Type::Spherical:
-            coords_.q[i] = (quaternionFromRotationVector(h * u_.segment<3>(nd.dof)) * c0_.q[i]).normalized();
+            coords_.q[i] = renormalized(quaternionFromRotationVector(h * u_.segment<3>(nd.dof)) * coords_.q[i]);
             break;
           case Type::Prismatic:
             coords_.s[i] += h * u_(nd.dof);
@@ -704,6 +722,8 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
     case Integrator::RK4: {
       // Classical RK4 on (coordinates, u), as physics/rk4.cpp does for bodies: stage quaternions
       // used as they are (normalized when written to bodies), the result renormalized.
+      c0_ = coords_;
+      u0_ = u_;
       Coordinates* r = r_;
       rates(c0_, u0_, r[0]);
       if (std::string e = derivative(t, c0_, u0_, bodies, hooks, k[0], written); !e.empty() || stopped_) return e;
