@@ -367,21 +367,32 @@ void World::updateKinematicBodies(double t) {
 void World::applyExternalForces() {
   const auto timed = clock_.time(Stage::ExternalForces);
   if (!ok()) return;
+  // Without force elements the accumulators are set and checked in one pass over the bodies.
+  const bool elements = !forces_.empty();
   for (RigidBody& b : bodies_) {
     b.force = b.isDynamic() ? Eigen::Vector3d(b.mass * params_.gravity) : Eigen::Vector3d::Zero();
     b.torque.setZero();
+    if (!elements && !checkForces(b)) return;
   }
+  if (!elements) return;
   for (const auto& f : forces_) f->apply(bodies_);
   for (const RigidBody& b : bodies_) {
-    if (!b.x.allFinite() || !b.q.coeffs().allFinite() || !b.v.allFinite() || !b.w.allFinite()) {
-      return stop("external forces", "non-finite state of '" + b.name + "'",
-                  "a prescribed motion returned NaN/inf, or the state was set to NaN from outside");
-    }
-    if (b.isDynamic() && (!b.force.allFinite() || !b.torque.allFinite())) {
-      return stop("external forces", "non-finite force on '" + b.name + "'",
-                  "a NaN/inf parameter (gravity, damping, stiffness, drag)");
-    }
+    if (!checkForces(b)) return;
   }
+}
+
+bool World::checkForces(const RigidBody& b) {
+  if (!b.x.allFinite() || !b.q.coeffs().allFinite() || !b.v.allFinite() || !b.w.allFinite()) {
+    stop("external forces", "non-finite state of '" + b.name + "'",
+         "a prescribed motion returned NaN/inf, or the state was set to NaN from outside");
+    return false;
+  }
+  if (b.isDynamic() && (!b.force.allFinite() || !b.torque.allFinite())) {
+    stop("external forces", "non-finite force on '" + b.name + "'",
+         "a NaN/inf parameter (gravity, damping, stiffness, drag)");
+    return false;
+  }
+  return true;
 }
 
 void World::applyControllerForces() {
@@ -471,8 +482,21 @@ void World::integrate(double h) {
   }
   if (!ok()) return;  // a stage evaluation stopped the world
   time_ += h;
-  scatterState(state);
   stage_time_ = time_;
+  if (params_.integrator == Integrator::SymplecticEuler) {
+    // Its quaternions are unit already (normalized by the step): copied back as they are, and
+    // the state checked in the same pass (checkBodies only to say which body and stop).
+    bool fine = true;
+    for (size_t k = 0; k < dynamic_.size(); ++k) {
+      BodyState& b = bodies_[dynamic_[k]].state();
+      b = state[k];
+      fine =
+          fine && finiteAndBounded(b.x) && b.q.coeffs().allFinite() && finiteAndBounded(b.v) && finiteAndBounded(b.w);
+    }
+    if (!fine) checkBodies("integrate", false);
+    return;
+  }
+  scatterState(state);
   checkBodies("integrate", false);
 }
 
