@@ -63,7 +63,13 @@ Eigen::Matrix<double, N, 3> timesSkew(const Eigen::MatrixBase<Derived>& m, const
 template <class Derived>
 Eigen::Matrix3d skewTimes(const Eigen::Vector3d& r, const Eigen::MatrixBase<Derived>& m) {
   Eigen::Matrix3d out;
-  for (int j = 0; j < 3; ++j) out.col(j) = r.cross(Eigen::Vector3d(m.col(j)));
+  const double r0 = r(0), r1 = r(1), r2 = r(2);
+  for (int j = 0; j < 3; ++j) {  // in scalars: no Vector3d of the column through the stack
+    const double m0 = m(0, j), m1 = m(1, j), m2 = m(2, j);
+    out(0, j) = r1 * m2 - r2 * m1;
+    out(1, j) = r2 * m0 - r0 * m2;
+    out(2, j) = r0 * m1 - r1 * m0;
+  }
   return out;
 }
 
@@ -87,10 +93,13 @@ void addShiftedInertia(const Eigen::Vector3d& d, const Eigen::Matrix3d& a, const
 // The cross products in scalars (the same operations): Eigen's cross() goes through a stack
 // temporary read back in 16-byte halves of 8-byte stores (failed store forwarding).
 Vector6d shiftMotion(const Eigen::Vector3d& d, const Vector6d& a) {
-  Vector6d out = a;
-  out(0) += a(4) * d(2) - a(5) * d(1);
-  out(1) += a(5) * d(0) - a(3) * d(2);
-  out(2) += a(3) * d(1) - a(4) * d(0);
+  Vector6d out;
+  out(0) = a(0) + (a(4) * d(2) - a(5) * d(1));
+  out(1) = a(1) + (a(5) * d(0) - a(3) * d(2));
+  out(2) = a(2) + (a(3) * d(1) - a(4) * d(0));
+  out(3) = a(3);
+  out(4) = a(4);
+  out(5) = a(5);
   return out;
 }
 Vector6d shiftForce(const Eigen::Vector3d& d, const Vector6d& f) {
@@ -99,6 +108,15 @@ Vector6d shiftForce(const Eigen::Vector3d& d, const Vector6d& f) {
   out(4) += d(2) * f(0) - d(0) * f(2);
   out(5) += d(0) * f(1) - d(1) * f(0);
   return out;
+}
+// out += shiftForce(d, f), the same operations in scalars.
+void addShiftedForce(const Eigen::Vector3d& d, const Vector6d& f, Vector6d& out) {
+  out(0) += f(0);
+  out(1) += f(1);
+  out(2) += f(2);
+  out(3) += f(3) + (d(1) * f(2) - d(2) * f(1));
+  out(4) += f(4) + (d(2) * f(0) - d(0) * f(2));
+  out(5) += f(5) + (d(0) * f(1) - d(1) * f(0));
 }
 
 // Newton-Euler at the centre: F = M A + b, M = diag(m I, I_world), b = [-f; w x I w - t].
@@ -519,7 +537,7 @@ void ArticulatedSystem::abaInward(size_t r, const Eigen::VectorXd* tau) {
     pa_a.template head<3>() += a * c_lin + b * c_ang;
     pa_a.template tail<3>() += b.transpose() * c_lin + e * c_ang;
     addShiftedInertia(k.d, a, b, e, parent.ia);
-    parent.pa += shiftForce(k.d, pa_a);
+    addShiftedForce(k.d, pa_a, parent.pa);
   } else {
     const Matrix6 ia_a = p.ia - ud * U.transpose();
     const Vector6d pa_a = p.pa + ia_a * k.c + ud * u;
@@ -539,8 +557,15 @@ void ArticulatedSystem::abaOutward(size_t i, Eigen::VectorXd& udot) {
       p.dinv.topLeftCorner<D, D>() * (p.u.head<D>() - p.U.leftCols<D>().transpose() * a_prime);
   if constexpr (D == 3) {  // spherical, world axes (abaInward): u' = R_p^T u'_w, A = A' + [r_i x u'_w; u'_w]
     udot.segment<3>(nd.dof).noalias() = k.Rp.transpose() * ud;
-    p.acc.head<3>() = a_prime.head<3>() + k.r_i.cross(ud);
-    p.acc.tail<3>() = a_prime.tail<3>() + ud;
+    // Entry by entry (the child reads this A next, entry by entry in shiftMotion: no wide load
+    // of narrow stores).
+    const Eigen::Vector3d& r = k.r_i;
+    p.acc(0) = a_prime(0) + (r(1) * ud(2) - r(2) * ud(1));
+    p.acc(1) = a_prime(1) + (r(2) * ud(0) - r(0) * ud(2));
+    p.acc(2) = a_prime(2) + (r(0) * ud(1) - r(1) * ud(0));
+    p.acc(3) = a_prime(3) + ud(0);
+    p.acc(4) = a_prime(4) + ud(1);
+    p.acc(5) = a_prime(5) + ud(2);
   } else {
     udot.segment<D>(nd.dof) = ud;
     p.acc = a_prime + k.S.leftCols<D>() * ud;
@@ -576,7 +601,16 @@ void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorX
     const Pass& p = pass_[i];
     RigidBody& b = bodies[nodes_[i].body];
     Vector6d fc = p.u;
-    for (int c : nodes_[i].children) fc -= shiftForce(kin_[c].d, pass_[c].u);
+    for (int c : nodes_[i].children) {  // fc -= shiftForce(d, f) in scalars: no Vector6d through the stack
+      const Eigen::Vector3d& d = kin_[c].d;
+      const Vector6d& f = pass_[c].u;
+      fc(0) -= f(0);
+      fc(1) -= f(1);
+      fc(2) -= f(2);
+      fc(3) -= f(3) + (d(1) * f(2) - d(2) * f(1));
+      fc(4) -= f(4) + (d(2) * f(0) - d(0) * f(2));
+      fc(5) -= f(5) + (d(0) * f(1) - d(1) * f(0));
+    }
     b.a = p.acc.head<3>();
     b.alpha = p.acc.tail<3>();
     b.constraint_force = fc.head<3>();
