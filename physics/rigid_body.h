@@ -139,7 +139,10 @@ struct RigidBody : BodyProperties, BodyState, BodyForces {
   }
   // The same from the body's rotation r and world inverse inertia r I^-1 r^T, for a caller that
   // has them already (the joint-force stage builds both once per body and step), into `acc`.
-  void freeAcceleration(const Eigen::Matrix3d& r, const Eigen::Matrix3d& inverse_inertia_world, Vector6d& acc) const {
+  // Always inlined: as a call, the caller's r and R I^-1 R^T must go through memory, written
+  // entry by entry and read back 16 bytes at a time (failed store forwarding).
+  [[gnu::always_inline]] void freeAcceleration(const Eigen::Matrix3d& r, const Eigen::Matrix3d& inverse_inertia_world,
+                                               Vector6d& acc) const {
     const Eigen::Vector3d angular_momentum = r * inertia.cwiseProduct(r.transpose() * w);
     acc.head<3>() = force / mass;
     acc.tail<3>().noalias() = inverse_inertia_world * (torque - w.cross(angular_momentum));

@@ -26,7 +26,17 @@ constexpr double kHuge = 1e10;  // |x|, |v|, |w| beyond this: the run has diverg
 constexpr double kTeleportDistance = 1e-2;  // m
 constexpr double kTeleportAngle = 0.1;      // rad
 
-bool finiteAndBounded(const Eigen::Vector3d& v) { return v.allFinite() && v.lpNorm<Eigen::Infinity>() < kHuge; }
+// Per entry with std::isfinite and |x| < kHuge (NaN fails both): Eigen's allFinite (x - x == x -
+// x) and lpNorm were left as calls in the per-body checks.
+template <class V>
+bool finite(const V& v) {
+  for (int i = 0; i < v.size(); ++i)
+    if (!std::isfinite(v(i))) return false;
+  return true;
+}
+bool finiteAndBounded(const Eigen::Vector3d& v) {
+  return std::abs(v(0)) < kHuge && std::abs(v(1)) < kHuge && std::abs(v(2)) < kHuge;
+}
 
 }  // namespace
 
@@ -382,12 +392,12 @@ void World::applyExternalForces() {
 }
 
 bool World::checkForces(const RigidBody& b) {
-  if (!b.x.allFinite() || !b.q.coeffs().allFinite() || !b.v.allFinite() || !b.w.allFinite()) {
+  if (!finite(b.x) || !finite(b.q.coeffs()) || !finite(b.v) || !finite(b.w)) {
     stop("external forces", "non-finite state of '" + b.name + "'",
          "a prescribed motion returned NaN/inf, or the state was set to NaN from outside");
     return false;
   }
-  if (b.isDynamic() && (!b.force.allFinite() || !b.torque.allFinite())) {
+  if (b.isDynamic() && (!finite(b.force) || !finite(b.torque))) {
     stop("external forces", "non-finite force on '" + b.name + "'",
          "a NaN/inf parameter (gravity, damping, stiffness, drag)");
     return false;
@@ -401,7 +411,7 @@ void World::applyControllerForces() {
   const auto timed = clock_.time(Stage::Controller);
   for (const auto& c : controllers_) c->applyForces(*this, stage_time_);
   for (const RigidBody& b : bodies_) {
-    if (b.isDynamic() && (!b.force.allFinite() || !b.torque.allFinite())) {
+    if (b.isDynamic() && (!finite(b.force) || !finite(b.torque))) {
       return stop("controller forces", "non-finite force on '" + b.name + "'",
                   "the controller produced NaN/inf (division by a vanishing length or time?)");
     }
@@ -490,8 +500,7 @@ void World::integrate(double h) {
     for (size_t k = 0; k < dynamic_.size(); ++k) {
       BodyState& b = bodies_[dynamic_[k]].state();
       b = state[k];
-      fine =
-          fine && finiteAndBounded(b.x) && b.q.coeffs().allFinite() && finiteAndBounded(b.v) && finiteAndBounded(b.w);
+      fine = fine && finiteAndBounded(b.x) && finite(b.q.coeffs()) && finiteAndBounded(b.v) && finiteAndBounded(b.w);
     }
     if (!fine) checkBodies("integrate", false);
     return;
@@ -662,13 +671,12 @@ bool World::checkBodies(const char* stage, bool accelerations) {
   for (int i : dynamic_) {
     const RigidBody& b = bodies_[i];
     if (accelerations) {
-      if (!b.a.allFinite() || !b.alpha.allFinite() || !b.constraint_force.allFinite()) {
+      if (!finite(b.a) || !finite(b.alpha) || !finite(b.constraint_force)) {
         stop(stage, "non-finite acceleration of '" + b.name + "'",
              "an ill-conditioned constraint matrix (tiny masses or inertias next to large ones)");
         return false;
       }
-    } else if (!finiteAndBounded(b.x) || !b.q.coeffs().allFinite() || !finiteAndBounded(b.v) ||
-               !finiteAndBounded(b.w)) {
+    } else if (!finiteAndBounded(b.x) || !finite(b.q.coeffs()) || !finiteAndBounded(b.v) || !finiteAndBounded(b.w)) {
       stop(stage, "non-finite or runaway state of '" + b.name + "'",
            "the time step is too large for the motion (stiff springs or damping, a whipping tip): "
            "reduce dt or raise substeps");
