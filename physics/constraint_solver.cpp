@@ -16,10 +16,8 @@ std::string ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, c
     const RigidBody& b = bodies[i];
     if (b.isDynamic()) {
       const Eigen::Matrix3d r = b.rotation();
-      const Eigen::Matrix3d& inertia_inv = inverse_inertia_[i] = rotateDiagonal(r, b.inertia.cwiseInverse());
-      const Eigen::Vector3d angular_momentum = r * b.inertia.cwiseProduct(r.transpose() * b.w);
-      acc[i].head<3>() = b.force / b.mass;
-      acc[i].tail<3>().noalias() = inertia_inv * (b.torque - b.w.cross(angular_momentum));
+      rotateDiagonalInto(r, b.inertia.cwiseInverse(), inverse_inertia_[i]);
+      b.freeAcceleration(r, inverse_inertia_[i], acc[i]);
     } else {
       acc[i] << b.a, b.alpha;
     }

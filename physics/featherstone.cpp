@@ -63,7 +63,13 @@ Eigen::Matrix<double, N, 3> timesSkew(const Eigen::MatrixBase<Derived>& m, const
 template <class Derived>
 Eigen::Matrix3d skewTimes(const Eigen::Vector3d& r, const Eigen::MatrixBase<Derived>& m) {
   Eigen::Matrix3d out;
-  for (int j = 0; j < 3; ++j) out.col(j) = r.cross(Eigen::Vector3d(m.col(j)));
+  const double r0 = r(0), r1 = r(1), r2 = r(2);
+  for (int j = 0; j < 3; ++j) {  // in scalars: no Vector3d of the column through the stack
+    const double m0 = m(0, j), m1 = m(1, j), m2 = m(2, j);
+    out(0, j) = r1 * m2 - r2 * m1;
+    out(1, j) = r2 * m0 - r0 * m2;
+    out(2, j) = r0 * m1 - r1 * m0;
+  }
   return out;
 }
 
@@ -84,15 +90,33 @@ void addShiftedInertia(const Eigen::Vector3d& d, const Eigen::Matrix3d& a, const
   out.bottomLeftCorner<3, 3>() += top_right.transpose();
   out.bottomRightCorner<3, 3>() += br;
 }
+// The cross products in scalars (the same operations): Eigen's cross() goes through a stack
+// temporary read back in 16-byte halves of 8-byte stores (failed store forwarding).
 Vector6d shiftMotion(const Eigen::Vector3d& d, const Vector6d& a) {
-  Vector6d out = a;
-  out.head<3>() += a.tail<3>().cross(d);
+  Vector6d out;
+  out(0) = a(0) + (a(4) * d(2) - a(5) * d(1));
+  out(1) = a(1) + (a(5) * d(0) - a(3) * d(2));
+  out(2) = a(2) + (a(3) * d(1) - a(4) * d(0));
+  out(3) = a(3);
+  out(4) = a(4);
+  out(5) = a(5);
   return out;
 }
 Vector6d shiftForce(const Eigen::Vector3d& d, const Vector6d& f) {
   Vector6d out = f;
-  out.tail<3>() += d.cross(f.head<3>());
+  out(3) += d(1) * f(2) - d(2) * f(1);
+  out(4) += d(2) * f(0) - d(0) * f(2);
+  out(5) += d(0) * f(1) - d(1) * f(0);
   return out;
+}
+// out += shiftForce(d, f), the same operations in scalars.
+void addShiftedForce(const Eigen::Vector3d& d, const Vector6d& f, Vector6d& out) {
+  out(0) += f(0);
+  out(1) += f(1);
+  out(2) += f(2);
+  out(3) += f(3) + (d(1) * f(2) - d(2) * f(1));
+  out(4) += f(4) + (d(2) * f(0) - d(0) * f(2));
+  out(5) += f(5) + (d(0) * f(1) - d(1) * f(0));
 }
 
 // Newton-Euler at the centre: F = M A + b, M = diag(m I, I_world), b = [-f; w x I w - t].
@@ -110,6 +134,25 @@ Vector6d biasForce(const RigidBody& b, const Eigen::Matrix3d& inertia_world) {
   return out;
 }
 Vector6d biasForce(const RigidBody& b) { return biasForce(b, b.worldInertia()); }
+// The same two, written into ABA's pass from the body's rotation r: no 6 x 6 temporary (its copy
+// was a `rep movs` and a failed store forwarding per body), I_world = r I r^T by its upper
+// triangle in registers.
+void writeInertiaAndBias(const RigidBody& b, const Eigen::Matrix3d& r, Matrix6& ia, Vector6d& pa) {
+  const Eigen::Matrix3d rd = r * b.inertia.asDiagonal();
+  double m[3][3];
+  for (int i = 0; i < 3; ++i) {
+    for (int j = i; j < 3; ++j) m[i][j] = m[j][i] = rd.row(i).dot(r.row(j));
+  }
+  ia.setZero();
+  for (int i = 0; i < 3; ++i) {
+    ia(i, i) = b.mass;
+    for (int j = 0; j < 3; ++j) ia(3 + i, 3 + j) = m[i][j];
+  }
+  Eigen::Vector3d iw;
+  for (int i = 0; i < 3; ++i) iw(i) = m[i][0] * b.w(0) + m[i][1] * b.w(1) + m[i][2] * b.w(2);
+  pa.head<3>() = -b.force;
+  pa.tail<3>() = b.w.cross(iw) - b.torque;
+}
 
 }  // namespace
 
@@ -322,7 +365,7 @@ void ArticulatedSystem::writeState(std::vector<RigidBody>& bodies) const {
     switch (nd.type) {
       case Type::Free:
         b.x = coords_.x[i];
-        b.q = coords_.q[i].normalized();
+        b.q = renormalized(coords_.q[i]);
         b.v = u_.segment<3>(nd.dof);
         b.w = u_.segment<3>(nd.dof + 3);
         frames_[i].R = b.q.toRotationMatrix();
@@ -331,7 +374,7 @@ void ArticulatedSystem::writeState(std::vector<RigidBody>& bodies) const {
         // Rotation matrices, each built once (parents first: a dynamic parent's is in frames_)
         // and kept for jointKinematics.
         Frame& f = frames_[i];
-        b.q = (p.q * coords_.q[i]).normalized();  // one normalization: RK4 stages are not unit
+        b.q = renormalized(p.q * coords_.q[i]);  // one normalization: RK4 stages are not unit
         f.R = b.q.toRotationMatrix();
         const Eigen::Matrix3d rp = nd.parent_node >= 0 ? frames_[nd.parent_node].R : p.rotation();
         f.r_p.noalias() = rp * nd.point_parent;
@@ -342,7 +385,7 @@ void ArticulatedSystem::writeState(std::vector<RigidBody>& bodies) const {
         break;
       }
       case Type::Prismatic: {
-        b.q = (p.q * nd.rest).normalized();
+        b.q = renormalized(p.q * nd.rest);
         frames_[i].R = b.q.toRotationMatrix();
         const Eigen::Vector3d d = p.q * (nd.offset + coords_.s[i] * nd.axis);
         b.x = p.x + d;
@@ -494,7 +537,7 @@ void ArticulatedSystem::abaInward(size_t r, const Eigen::VectorXd* tau) {
     pa_a.template head<3>() += a * c_lin + b * c_ang;
     pa_a.template tail<3>() += b.transpose() * c_lin + e * c_ang;
     addShiftedInertia(k.d, a, b, e, parent.ia);
-    parent.pa += shiftForce(k.d, pa_a);
+    addShiftedForce(k.d, pa_a, parent.pa);
   } else {
     const Matrix6 ia_a = p.ia - ud * U.transpose();
     const Vector6d pa_a = p.pa + ia_a * k.c + ud * u;
@@ -514,8 +557,15 @@ void ArticulatedSystem::abaOutward(size_t i, Eigen::VectorXd& udot) {
       p.dinv.topLeftCorner<D, D>() * (p.u.head<D>() - p.U.leftCols<D>().transpose() * a_prime);
   if constexpr (D == 3) {  // spherical, world axes (abaInward): u' = R_p^T u'_w, A = A' + [r_i x u'_w; u'_w]
     udot.segment<3>(nd.dof).noalias() = k.Rp.transpose() * ud;
-    p.acc.head<3>() = a_prime.head<3>() + k.r_i.cross(ud);
-    p.acc.tail<3>() = a_prime.tail<3>() + ud;
+    // Entry by entry (the child reads this A next, entry by entry in shiftMotion: no wide load
+    // of narrow stores).
+    const Eigen::Vector3d& r = k.r_i;
+    p.acc(0) = a_prime(0) + (r(1) * ud(2) - r(2) * ud(1));
+    p.acc(1) = a_prime(1) + (r(2) * ud(0) - r(0) * ud(2));
+    p.acc(2) = a_prime(2) + (r(0) * ud(1) - r(1) * ud(0));
+    p.acc(3) = a_prime(3) + ud(0);
+    p.acc(4) = a_prime(4) + ud(1);
+    p.acc(5) = a_prime(5) + ud(2);
   } else {
     udot.segment<D>(nd.dof) = ud;
     p.acc = a_prime + k.S.leftCols<D>() * ud;
@@ -526,12 +576,7 @@ void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorX
                             bool written) {
   const size_t n = nodes_.size();
   jointKinematics(bodies, kin_, written);
-  for (size_t i = 0; i < n; ++i) {
-    const RigidBody& b = bodies[nodes_[i].body];
-    const Eigen::Matrix3d inertia_world = rotateDiagonal(kin_[i].R, b.inertia);
-    pass_[i].ia = spatialInertia(b, inertia_world);
-    pass_[i].pa = biasForce(b, inertia_world);
-  }
+  for (size_t i = 0; i < n; ++i) writeInertiaAndBias(bodies[nodes_[i].body], kin_[i].R, pass_[i].ia, pass_[i].pa);
   const auto dispatch = [](int dofs, auto&& f1, auto&& f3, auto&& f6) {
     if (dofs == 3)
       f3();
@@ -556,7 +601,16 @@ void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorX
     const Pass& p = pass_[i];
     RigidBody& b = bodies[nodes_[i].body];
     Vector6d fc = p.u;
-    for (int c : nodes_[i].children) fc -= shiftForce(kin_[c].d, pass_[c].u);
+    for (int c : nodes_[i].children) {  // fc -= shiftForce(d, f) in scalars: no Vector6d through the stack
+      const Eigen::Vector3d& d = kin_[c].d;
+      const Vector6d& f = pass_[c].u;
+      fc(0) -= f(0);
+      fc(1) -= f(1);
+      fc(2) -= f(2);
+      fc(3) -= f(3) + (d(1) * f(2) - d(2) * f(1));
+      fc(4) -= f(4) + (d(2) * f(0) - d(0) * f(2));
+      fc(5) -= f(5) + (d(0) * f(1) - d(1) * f(0));
+    }
     b.a = p.acc.head<3>();
     b.alpha = p.acc.tail<3>();
     b.constraint_force = fc.head<3>();
@@ -626,8 +680,8 @@ std::string ArticulatedSystem::derivative(double t, const Coordinates& c, const 
                                           std::vector<RigidBody>& bodies, const ReducedHooks& hooks,
                                           Eigen::VectorXd& udot, bool written) {
   if (!written) {
-    coords_ = c;
-    u_ = u;
+    if (&c != &coords_) coords_ = c;
+    if (&u != &u_) u_ = u;
     hooks.kinematics(t);
     writeState(bodies);
   }
@@ -667,8 +721,6 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
   // kinematics at t + h, which is this step's t): the first stage skips forward kinematics.
   const bool written = have_state_ && t == written_time_ && !bodiesChanged(bodies);
   if (!written) readState(bodies);
-  c0_ = coords_;
-  u0_ = u_;
   const auto axpy = [&](const Coordinates& base, double s, const Coordinates& rate, Coordinates& out) {
     out = base;
     for (size_t i = 0; i < nodes_.size(); ++i) {
@@ -681,18 +733,18 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
   switch (integrator) {
     case Integrator::SymplecticEuler: {
       // u += h u'(t, y); positions with the new speeds (exact exponential map for rotations).
-      if (std::string e = derivative(t, c0_, u0_, bodies, hooks, k[0], written); !e.empty() || stopped_) return e;
-      u_ = u0_ + h * k[0];
-      coords_ = c0_;
+      // In place: the step needs the coordinates at t only through u'(t, y).
+      if (std::string e = derivative(t, coords_, u_, bodies, hooks, k[0], written); !e.empty() || stopped_) return e;
+      u_ += h * k[0];
       for (size_t i = 0; i < nodes_.size(); ++i) {
         const Node& nd = nodes_[i];
         switch (nd.type) {
           case Type::Free:
             coords_.x[i] += h * u_.segment<3>(nd.dof);
-            coords_.q[i] = (quaternionFromRotationVector(h * u_.segment<3>(nd.dof + 3)) * c0_.q[i]).normalized();
+            coords_.q[i] = renormalized(quaternionFromRotationVector(h * u_.segment<3>(nd.dof + 3)) * coords_.q[i]);
             break;
           case Type::Spherical:
-            coords_.q[i] = (quaternionFromRotationVector(h * u_.segment<3>(nd.dof)) * c0_.q[i]).normalized();
+            coords_.q[i] = renormalized(quaternionFromRotationVector(h * u_.segment<3>(nd.dof)) * coords_.q[i]);
             break;
           case Type::Prismatic:
             coords_.s[i] += h * u_(nd.dof);
@@ -704,6 +756,8 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
     case Integrator::RK4: {
       // Classical RK4 on (coordinates, u), as physics/rk4.cpp does for bodies: stage quaternions
       // used as they are (normalized when written to bodies), the result renormalized.
+      c0_ = coords_;
+      u0_ = u_;
       Coordinates* r = r_;
       rates(c0_, u0_, r[0]);
       if (std::string e = derivative(t, c0_, u0_, bodies, hooks, k[0], written); !e.empty() || stopped_) return e;

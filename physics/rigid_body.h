@@ -25,26 +25,36 @@ inline Eigen::Matrix3d skew(const Eigen::Vector3d& a) {
 
 // R diag(d) R^T (a principal inertia or its inverse turned to the world frame), symmetric by
 // construction: the six upper entries, mirrored.
-inline Eigen::Matrix3d rotateDiagonal(const Eigen::Matrix3d& r, const Eigen::Vector3d& d) {
+// Into `out` directly: a returned 3 x 3 written entry by entry and then copied whole is read
+// back in 16-byte halves of 8-byte stores (failed store forwarding, a stall per copy).
+inline void rotateDiagonalInto(const Eigen::Matrix3d& r, const Eigen::Vector3d& d, Eigen::Matrix3d& out) {
   const Eigen::Matrix3d rd = r * d.asDiagonal();
-  Eigen::Matrix3d out;
   for (int i = 0; i < 3; ++i) {
     for (int j = i; j < 3; ++j) out(i, j) = out(j, i) = rd.row(i).dot(r.row(j));
   }
+}
+inline Eigen::Matrix3d rotateDiagonal(const Eigen::Matrix3d& r, const Eigen::Vector3d& d) {
+  Eigen::Matrix3d out;
+  rotateDiagonalInto(r, d, out);
   return out;
+}
+
+// q / |q| for a quaternion that is unit up to round-off (a product of unit quaternions): when
+// |q|^2 = 1 + e with |e| < 1e-10, 1 / |q| = 1 - e / 2 + O(e^2) (one Newton step from 1; the
+// term left out is below 4e-21), no square root and no division; else q.normalized().
+inline Eigen::Quaterniond renormalized(const Eigen::Quaterniond& q) {
+  const double e = q.squaredNorm() - 1.0;
+  if (std::abs(e) < 1e-10) return Eigen::Quaterniond(q.coeffs() * (1.0 - 0.5 * e));
+  return q.normalized();
 }
 
 // The unit quaternion of the rotation vector phi (axis * angle), exact for any angle.
 inline Eigen::Quaterniond quaternionFromRotationVector(const Eigen::Vector3d& phi) {
   const double angle2 = phi.squaredNorm();
-  if (angle2 < 1e-24) {  // angle < 1e-12: second-order series avoids 0/0
-    Eigen::Quaterniond q(1.0, 0.5 * phi.x(), 0.5 * phi.y(), 0.5 * phi.z());
-    return q.normalized();
-  }
   if (angle2 < 1e-4) {
-    // A step's turn (angle < 1e-2): cos(angle / 2) and sin(angle / 2) / angle by their Taylor
-    // series in x^2 = angle^2 / 4 (x < 5e-3: the first term left out is below 1e-22); no sqrt,
-    // sin, cos or division by the angle.
+    // A step's turn (angle < 1e-2, down to 0: a body at rest): cos(angle / 2) and
+    // sin(angle / 2) / angle by their Taylor series in x^2 = angle^2 / 4 (x < 5e-3: the first
+    // term left out is below 1e-22); no sqrt, sin, cos or division by the angle.
     const double x2 = 0.25 * angle2;
     const double c = 1.0 - 0.5 * x2 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0));
     const double s = 0.5 * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0)));
@@ -104,7 +114,7 @@ struct RigidBody : BodyProperties, BodyState, BodyForces {
 
   bool isDynamic() const { return kind == Kind::Dynamic; }
 
-  Eigen::Matrix3d rotation() const { return q.normalized().toRotationMatrix(); }
+  Eigen::Matrix3d rotation() const { return renormalized(q).toRotationMatrix(); }
   // I_world = R I_body R^T.
   Eigen::Matrix3d worldInertia() const {
     const Eigen::Matrix3d r = rotation();
@@ -122,12 +132,20 @@ struct RigidBody : BodyProperties, BodyState, BodyForces {
   // Acceleration of a free body under the accumulated forces alone (M^-1 F_ext with the
   // gyroscopic term of Euler's equation, t = I alpha + w x (I w)).
   Vector6d freeAcceleration() const {
-    Vector6d acc;
     const Eigen::Matrix3d r = rotation();
+    Vector6d acc;
+    freeAcceleration(r, rotateDiagonal(r, inertia.cwiseInverse()), acc);
+    return acc;
+  }
+  // The same from the body's rotation r and world inverse inertia r I^-1 r^T, for a caller that
+  // has them already (the joint-force stage builds both once per body and step), into `acc`.
+  // Always inlined: as a call, the caller's r and R I^-1 R^T must go through memory, written
+  // entry by entry and read back 16 bytes at a time (failed store forwarding).
+  [[gnu::always_inline]] void freeAcceleration(const Eigen::Matrix3d& r, const Eigen::Matrix3d& inverse_inertia_world,
+                                               Vector6d& acc) const {
     const Eigen::Vector3d angular_momentum = r * inertia.cwiseProduct(r.transpose() * w);
     acc.head<3>() = force / mass;
-    acc.tail<3>() = r * inertia.cwiseInverse().cwiseProduct(r.transpose() * (torque - w.cross(angular_momentum)));
-    return acc;
+    acc.tail<3>().noalias() = inverse_inertia_world * (torque - w.cross(angular_momentum));
   }
 
   double kineticEnergy() const { return 0.5 * mass * v.squaredNorm() + 0.5 * w.dot(worldInertia() * w); }

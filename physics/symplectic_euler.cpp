@@ -11,7 +11,7 @@ void symplecticEulerStep(double h, const Accelerations& acc, State& state) {
     s.w += h * acc[i].alpha;
     s.x += h * s.v;
     // Rotate by the new angular velocity over h (exact exponential map for constant w).
-    s.q = (quaternionFromRotationVector(h * s.w) * s.q).normalized();
+    s.q = renormalized(quaternionFromRotationVector(h * s.w) * s.q);
   }
 }
 

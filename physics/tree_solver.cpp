@@ -82,7 +82,7 @@ bool TreeSolver::buildStructure(const std::vector<RigidBody>& bodies, const Cons
       if (body < 0) continue;
       if (body_clique[body] < 0) {
         body_clique[body] = static_cast<int>(cliques_.size());
-        cliques_.push_back(Clique{body, {}, {}});
+        cliques_.push_back(Clique{body, {}, 0});
         joints_of.emplace_back();
       }
       joints_of[body_clique[body]].push_back(static_cast<int>(nodes_.size()));
@@ -132,23 +132,48 @@ bool TreeSolver::buildStructure(const std::vector<RigidBody>& bodies, const Cons
   }
   // Every block at its size once (the factorization then writes them in place), and the
   // fixed 3 x 3 path when every tree joint has 3 rows.
-  size_t widest = 0;
+  all_three_ = true;
+  for (const Node& n : nodes_) all_three_ = all_three_ && n.size == 3;
+  size_t widest = 0, a_blocks = 0, l_blocks = 0;
   for (Clique& cl : cliques_) {
     const size_t k = cl.members.size();
     widest = std::max(widest, k);
-    cl.a.assign(k * k, Block());
-    for (size_t x = 0; x < k; ++x) {
-      for (size_t y = 0; y < k; ++y) cl.a[x * k + y].resize(nodes_[cl.members[x]].size, nodes_[cl.members[y]].size);
-    }
+    cl.a = static_cast<int>(a_blocks);
+    a_blocks += k * k;
   }
-  all_three_ = true;
+  near_row_.clear();
   for (Node& n : nodes_) {
-    all_three_ = all_three_ && n.size == 3;
-    n.d_inv.resize(n.size, n.size);
-    n.l.resize(n.near.size());
-    if (n.clique < 0) continue;
-    for (size_t i = 0; i < n.near.size(); ++i)
-      n.l[i].resize(nodes_[cliques_[n.clique].members[n.near[i]]].size, n.size);
+    n.l = static_cast<int>(l_blocks);
+    l_blocks += n.near.size();
+    for (int x : n.near) near_row_.push_back(nodes_[cliques_[n.clique].members[x]].row);
+  }
+  a_.clear();
+  d_inv_.clear();
+  l_.clear();
+  a3_.clear();
+  d_inv3_.clear();
+  l3_.clear();
+  if (all_three_) {
+    a3_.assign(a_blocks, Eigen::Matrix3d::Zero());
+    d_inv3_.assign(nodes_.size(), Eigen::Matrix3d::Zero());
+    l3_.assign(l_blocks, Eigen::Matrix3d::Zero());
+  } else {
+    a_.resize(a_blocks);
+    d_inv_.resize(nodes_.size());
+    l_.resize(l_blocks);
+    for (Clique& cl : cliques_) {
+      const size_t k = cl.members.size();
+      for (size_t x = 0; x < k; ++x) {
+        for (size_t y = 0; y < k; ++y)
+          a_[cl.a + x * k + y].resize(nodes_[cl.members[x]].size, nodes_[cl.members[y]].size);
+      }
+    }
+    for (Node& n : nodes_) {
+      d_inv_[&n - nodes_.data()].resize(n.size, n.size);
+      if (n.clique < 0) continue;
+      for (size_t i = 0; i < n.near.size(); ++i)
+        l_[n.l + i].resize(nodes_[cliques_[n.clique].members[n.near[i]]].size, n.size);
+    }
   }
   jm_.resize(widest);
   arm_inertia_.resize(widest);
@@ -205,6 +230,15 @@ bool TreeSolver::factorTree(const std::vector<RigidBody>& bodies, const Constrai
   const auto jacobianOf = [&](int block, int body) -> const JacobianBlock& {
     return blocks[block].body_a == body ? blocks[block].ja : blocks[block].jb;
   };
+  // Block (x, y) of a clique's A: a 3 x 3 matrix of a3_, or a view of a_.
+  const auto blockA = [&](const Clique& cl, size_t x, size_t y) -> decltype(auto) {
+    const size_t i = cl.a + x * cl.members.size() + y;
+    if constexpr (R == 3) {
+      return (a3_[i]);
+    } else {
+      return view<R>(a_[i]);
+    }
+  };
   for (Clique& cl : cliques_) {
     const RigidBody& body = bodies[cl.body];
     const Eigen::Matrix3d& inertia_inv = inverse_inertia[cl.body];
@@ -216,14 +250,24 @@ bool TreeSolver::factorTree(const std::vector<RigidBody>& bodies, const Constrai
       // Point joints: J_x = s_x [I, -r_x~] (s = +1 on body a, -1 on body b), so
       //   A_xy = s_x s_y (I / m - r_x~ I^-1 r_y~) = s_x s_y (I / m - W_x r_y~),  W_x = r_x~ I^-1,
       // whose row i is r_y x (row i of W_x) plus 1/m on the diagonal: cross products only.
+      // From scalars into their destinations: a local Vector3d copy of the arm and a W built
+      // column by column were stored in halves and read back whole (failed store forwarding,
+      // ~40 % of this loop's samples in `perf annotate`).
       for (size_t x = 0; x < k; ++x) {
         const ConstraintSystem::Block& b = blocks[nodes_[cl.members[x]].block];
         const bool on_a = b.body_a == cl.body;
-        const Eigen::Vector3d arm = on_a ? b.arm_a : b.arm_b;
-        Eigen::Matrix3d w;
-        for (int c = 0; c < 3; ++c) w.col(c) = arm.cross(inertia_inv.col(c));
-        arm_[x] = arm;
-        arm_inertia_[x] = w;
+        const Eigen::Vector3d& arm = on_a ? b.arm_a : b.arm_b;
+        const double r0 = arm(0), r1 = arm(1), r2 = arm(2);
+        Eigen::Matrix3d& w = arm_inertia_[x];
+        for (int c = 0; c < 3; ++c) {
+          const double i0 = inertia_inv(0, c), i1 = inertia_inv(1, c), i2 = inertia_inv(2, c);
+          w(0, c) = r1 * i2 - r2 * i1;
+          w(1, c) = r2 * i0 - r0 * i2;
+          w(2, c) = r0 * i1 - r1 * i0;
+        }
+        arm_[x](0) = r0;
+        arm_[x](1) = r1;
+        arm_[x](2) = r2;
         sign_[x] = on_a ? 1.0 : -1.0;
       }
       // Written entry by entry from scalars (a 3 x 3 temporary mirrored in place stalls on
@@ -240,13 +284,13 @@ bool TreeSolver::factorTree(const std::vector<RigidBody>& bodies, const Constrai
             e[i][2] = s * (r0 * w(i, 1) - r1 * w(i, 0));
             e[i][i] += s * mass_inv;
           }
-          auto a = view<R>(cl.a[x * k + y]);
+          auto&& a = blockA(cl, x, y);
           if (y == x) {  // symmetric: the upper triangle, mirrored
             for (int i = 0; i < 3; ++i) {
               for (int j = i; j < 3; ++j) a(i, j) = a(j, i) = e[i][j];
             }
           } else {
-            auto at = view<R>(cl.a[y * k + x]);
+            auto&& at = blockA(cl, y, x);
             for (int i = 0; i < 3; ++i) {
               for (int j = 0; j < 3; ++j) a(i, j) = at(j, i) = e[i][j];
             }
@@ -266,42 +310,76 @@ bool TreeSolver::factorTree(const std::vector<RigidBody>& bodies, const Constrai
     for (size_t x = 0; x < k; ++x) {
       const auto jm = viewJ<R>(std::as_const(jm_[x]));
       for (size_t y = x; y < k; ++y) {
-        auto a = view<R>(cl.a[x * k + y]);
+        auto&& a = blockA(cl, x, y);
         a.noalias() = jm * viewJ<R>(jacobianOf(nodes_[cl.members[y]].block, cl.body)).transpose();
-        if (y != x) view<R>(cl.a[y * k + x]) = a.transpose();
+        if (y != x) blockA(cl, y, x) = a.transpose();
       }
     }
   }
-  M d;
-  for (int j : order_) {
-    Node& n = nodes_[j];
-    d.setZero(n.size, n.size);
-    for (size_t i = 0; i < n.cliques.size(); i += 2) {
-      const Clique& cl = cliques_[n.cliques[i]];
-      const size_t s = n.cliques[i + 1];
-      d += view<R>(std::as_const(cl.a[s * cl.members.size() + s]));
-    }
-    auto d_inv = view<R>(n.d_inv);
-    if constexpr (R == 3) {
-      Eigen::Matrix3d inv;
-      if (!inverseSpd3(d, inv)) return false;  // redundant rows: A is singular
-      d_inv = inv;
-    } else {
+  if constexpr (R == 3) {
+    return eliminate3();
+  } else {
+    M d;
+    for (int j : order_) {
+      Node& n = nodes_[j];
+      d.setZero(n.size, n.size);
+      for (size_t i = 0; i < n.cliques.size(); i += 2) {
+        const Clique& cl = cliques_[n.cliques[i]];
+        const size_t s = n.cliques[i + 1];
+        d += blockA(cl, s, s);
+      }
+      auto d_inv = view<R>(d_inv_[j]);
       Eigen::LLT<M> llt(d);
       if (llt.info() != Eigen::Success) return false;  // redundant rows: A is singular
       d_inv = llt.solve(M::Identity(n.size, n.size));
       if (!d_inv.allFinite()) return false;
+      if (n.clique < 0) continue;
+      const Clique& cl = cliques_[n.clique];
+      const size_t s = n.slot;
+      for (size_t i = 0; i < n.near.size(); ++i) view<R>(l_[n.l + i]).noalias() = blockA(cl, n.near[i], s) * d_inv;
+      for (size_t i = 0; i < n.near.size(); ++i) {
+        const auto l = view<R>(std::as_const(l_[n.l + i]));
+        for (size_t m = 0; m < n.near.size(); ++m)
+          blockA(cl, n.near[i], n.near[m]).noalias() -= l * blockA(cl, s, n.near[m]);
+      }
     }
+  }
+  return true;
+}
+
+// Step 2 on fixed 3 x 3 blocks, with the symmetry of A and D_j: D_j^-1 by its cofactors,
+// L_xj = A_xj D_j^-1, and A_xy -= L_xj A_jy for y >= x only (A_yx is its transpose; A_xx by its
+// upper triangle, since L_xj A_jx = A_xj D_j^-1 A_xj^T is symmetric).
+bool TreeSolver::eliminate3() {
+  for (int j : order_) {
+    const Node& n = nodes_[j];
+    Eigen::Matrix3d d = a3_[cliques_[n.cliques[0]].a + n.cliques[1] * (cliques_[n.cliques[0]].members.size() + 1)];
+    for (size_t i = 2; i < n.cliques.size(); i += 2) {
+      const Clique& cl = cliques_[n.cliques[i]];
+      d += a3_[cl.a + n.cliques[i + 1] * (cl.members.size() + 1)];
+    }
+    Eigen::Matrix3d& d_inv = d_inv3_[j];
+    if (!inverseSpd3(d, d_inv)) return false;  // redundant rows: A is singular
     if (n.clique < 0) continue;
-    Clique& cl = cliques_[n.clique];
+    const Clique& cl = cliques_[n.clique];
     const size_t k = cl.members.size(), s = n.slot;
-    for (size_t i = 0; i < n.near.size(); ++i) {
-      view<R>(n.l[i]).noalias() = view<R>(std::as_const(cl.a[n.near[i] * k + s])) * d_inv;
-    }
-    for (size_t i = 0; i < n.near.size(); ++i) {
-      const auto l = view<R>(std::as_const(n.l[i]));
-      for (size_t m = 0; m < n.near.size(); ++m) {
-        view<R>(cl.a[n.near[i] * k + n.near[m]]).noalias() -= l * view<R>(std::as_const(cl.a[s * k + n.near[m]]));
+    Eigen::Matrix3d* a = a3_.data() + cl.a;
+    Eigen::Matrix3d* l = l3_.data() + n.l;
+    const size_t near = n.near.size();
+    for (size_t i = 0; i < near; ++i) l[i].noalias() = a[n.near[i] * k + s] * d_inv;
+    for (size_t i = 0; i < near; ++i) {
+      const size_t x = n.near[i];
+      // A_xx -= L_xj A_xj^T (upper triangle, mirrored).
+      Eigen::Matrix3d& axx = a[x * k + x];
+      const Eigen::Matrix3d& axj = a[x * k + s];
+      for (int r = 0; r < 3; ++r) {
+        for (int c = r; c < 3; ++c) axx(r, c) = axx(c, r) = axx(r, c) - l[i].row(r).dot(axj.row(c));
+      }
+      for (size_t m = i + 1; m < near; ++m) {
+        const size_t y = n.near[m];
+        Eigen::Matrix3d& axy = a[x * k + y];
+        axy.noalias() -= l[i] * a[s * k + y];
+        a[y * k + x] = axy.transpose();
       }
     }
   }
@@ -380,28 +458,26 @@ bool TreeSolver::factorWith(const std::vector<RigidBody>& bodies, const Constrai
 template <int R>
 void TreeSolver::treeSolveInPlace(Eigen::VectorXd& y) const {
   using V = Eigen::Matrix<double, R, 1, Eigen::ColMajor, Sizes<R>::kMax, 1>;
+  // x's rows from near_row_ and its size from its L block (fixed 3 when R = 3).
+  const auto rowsOf = [&](int l) {
+    if constexpr (R == 3)
+      return 3;
+    else
+      return static_cast<int>(l_[l].rows());
+  };
   for (int j : order_) {
     const Node& n = nodes_[j];
     auto yj = segment<R>(y, n.row, n.size);
-    if (n.clique >= 0) {
-      const Clique& cl = cliques_[n.clique];
-      for (size_t i = 0; i < n.near.size(); ++i) {
-        const Node& x = nodes_[cl.members[n.near[i]]];
-        segment<R>(y, x.row, x.size).noalias() -= view<R>(n.l[i]) * yj;
-      }
-    }
-    const V z = view<R>(n.d_inv) * yj;
+    const int end = n.l + static_cast<int>(n.near.size());
+    for (int l = n.l; l < end; ++l) segment<R>(y, near_row_[l], rowsOf(l)).noalias() -= lBlock<R>(l) * yj;
+    const V z = dInvBlock<R>(j) * yj;
     yj = z;
   }
   for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
     const Node& n = nodes_[*it];
-    if (n.clique < 0) continue;
     auto yj = segment<R>(y, n.row, n.size);
-    const Clique& cl = cliques_[n.clique];
-    for (size_t i = 0; i < n.near.size(); ++i) {
-      const Node& x = nodes_[cl.members[n.near[i]]];
-      yj.noalias() -= view<R>(n.l[i]).transpose() * segment<R>(y, x.row, x.size);
-    }
+    const int end = n.l + static_cast<int>(n.near.size());
+    for (int l = n.l; l < end; ++l) yj.noalias() -= lBlock<R>(l).transpose() * segment<R>(y, near_row_[l], rowsOf(l));
   }
 }
 

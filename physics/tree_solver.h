@@ -61,14 +61,13 @@ class TreeSolver final : public ConstraintSolver {
     int slot = -1;             // its position in that clique
     std::vector<int> near;     // clique positions of the joints it updates (eliminated after it)
     std::vector<int> cliques;  // every clique it belongs to, with its slot there (pairs)
-    Block d_inv;               // D_j^-1
-    std::vector<Block> l;      // L_xj for x in near
+    int l = 0;                 // its first L_xj (x in near, in that order) in l_ or l3_
   };
   // The joints that touch one dynamic body: A's blocks between them (dense, k x k blocks).
   struct Clique {
     int body = -1;
     std::vector<int> members;  // node indices
-    std::vector<Block> a;      // k x k blocks, row-major by slot
+    int a = 0;                 // its first block in a_ or a3_ (k x k blocks, row-major by slot)
   };
 
   bool structureChanged(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) const;
@@ -78,8 +77,26 @@ class TreeSolver final : public ConstraintSolver {
   template <int R>
   bool factorTree(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
                   const std::vector<Eigen::Matrix3d>& inverse_inertia);
+  bool eliminate3();  // factorTree<3>'s step 2
   template <int R>
   void treeSolveInPlace(Eigen::VectorXd& y) const;
+  // L block i and D_j^-1 of node j, as R x R (l3_ and d_inv3_ when R = 3).
+  template <int R>
+  auto lBlock(int i) const {
+    if constexpr (R == 3)
+      return Eigen::Map<const Eigen::Matrix3d>(l3_[i].data());
+    else
+      return Eigen::Map<const Eigen::Matrix<double, R, R, Eigen::ColMajor, 6, 6>>(l_[i].data(), l_[i].rows(),
+                                                                                  l_[i].cols());
+  }
+  template <int R>
+  auto dInvBlock(int j) const {
+    if constexpr (R == 3)
+      return Eigen::Map<const Eigen::Matrix3d>(d_inv3_[j].data());
+    else
+      return Eigen::Map<const Eigen::Matrix<double, R, R, Eigen::ColMajor, 6, 6>>(d_inv_[j].data(), d_inv_[j].rows(),
+                                                                                  d_inv_[j].cols());
+  }
   // A_tt^-1 r for a vector over the tree rows (tree_row numbering).
   void treeSolve(const Eigen::VectorXd& r_tree, Eigen::VectorXd& y_tree) const;
 
@@ -101,6 +118,12 @@ class TreeSolver final : public ConstraintSolver {
   std::vector<Eigen::Vector3d> arm_;
   std::vector<double> sign_;
   std::vector<Eigen::Matrix3d> inverse_inertia_;  // factor()'s own R I^-1 R^T per dynamic body
+  // The numbers of the elimination, each kind in one contiguous array: every clique's A blocks
+  // (clique by clique), D_j^-1 per node, the L_xj (node by node). Fixed 3 x 3 blocks when every
+  // tree joint has 3 rows (a3_, d_inv3_, l3_), else blocks of any size up to 6 (a_, d_inv_, l_).
+  std::vector<Block> a_, d_inv_, l_;
+  std::vector<Eigen::Matrix3d> a3_, d_inv3_, l3_;
+  std::vector<int> near_row_;  // per L_xj: the first row of x (the solve reads no clique or node of x)
 
   // Numbers (refreshed by every factor()).
   Eigen::MatrixXd a_tl_;  // tree rows x loop rows: J_t M^-1 J_l^T

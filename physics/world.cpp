@@ -26,7 +26,17 @@ constexpr double kHuge = 1e10;  // |x|, |v|, |w| beyond this: the run has diverg
 constexpr double kTeleportDistance = 1e-2;  // m
 constexpr double kTeleportAngle = 0.1;      // rad
 
-bool finiteAndBounded(const Eigen::Vector3d& v) { return v.allFinite() && v.lpNorm<Eigen::Infinity>() < kHuge; }
+// Per entry with std::isfinite and |x| < kHuge (NaN fails both): Eigen's allFinite (x - x == x -
+// x) and lpNorm were left as calls in the per-body checks.
+template <class V>
+bool finite(const V& v) {
+  for (int i = 0; i < v.size(); ++i)
+    if (!std::isfinite(v(i))) return false;
+  return true;
+}
+bool finiteAndBounded(const Eigen::Vector3d& v) {
+  return std::abs(v(0)) < kHuge && std::abs(v(1)) < kHuge && std::abs(v(2)) < kHuge;
+}
 
 }  // namespace
 
@@ -367,21 +377,32 @@ void World::updateKinematicBodies(double t) {
 void World::applyExternalForces() {
   const auto timed = clock_.time(Stage::ExternalForces);
   if (!ok()) return;
+  // Without force elements the accumulators are set and checked in one pass over the bodies.
+  const bool elements = !forces_.empty();
   for (RigidBody& b : bodies_) {
     b.force = b.isDynamic() ? Eigen::Vector3d(b.mass * params_.gravity) : Eigen::Vector3d::Zero();
     b.torque.setZero();
+    if (!elements && !checkForces(b)) return;
   }
+  if (!elements) return;
   for (const auto& f : forces_) f->apply(bodies_);
   for (const RigidBody& b : bodies_) {
-    if (!b.x.allFinite() || !b.q.coeffs().allFinite() || !b.v.allFinite() || !b.w.allFinite()) {
-      return stop("external forces", "non-finite state of '" + b.name + "'",
-                  "a prescribed motion returned NaN/inf, or the state was set to NaN from outside");
-    }
-    if (b.isDynamic() && (!b.force.allFinite() || !b.torque.allFinite())) {
-      return stop("external forces", "non-finite force on '" + b.name + "'",
-                  "a NaN/inf parameter (gravity, damping, stiffness, drag)");
-    }
+    if (!checkForces(b)) return;
   }
+}
+
+bool World::checkForces(const RigidBody& b) {
+  if (!finite(b.x) || !finite(b.q.coeffs()) || !finite(b.v) || !finite(b.w)) {
+    stop("external forces", "non-finite state of '" + b.name + "'",
+         "a prescribed motion returned NaN/inf, or the state was set to NaN from outside");
+    return false;
+  }
+  if (b.isDynamic() && (!finite(b.force) || !finite(b.torque))) {
+    stop("external forces", "non-finite force on '" + b.name + "'",
+         "a NaN/inf parameter (gravity, damping, stiffness, drag)");
+    return false;
+  }
+  return true;
 }
 
 void World::applyControllerForces() {
@@ -390,7 +411,7 @@ void World::applyControllerForces() {
   const auto timed = clock_.time(Stage::Controller);
   for (const auto& c : controllers_) c->applyForces(*this, stage_time_);
   for (const RigidBody& b : bodies_) {
-    if (b.isDynamic() && (!b.force.allFinite() || !b.torque.allFinite())) {
+    if (b.isDynamic() && (!finite(b.force) || !finite(b.torque))) {
       return stop("controller forces", "non-finite force on '" + b.name + "'",
                   "the controller produced NaN/inf (division by a vanishing length or time?)");
     }
@@ -471,8 +492,20 @@ void World::integrate(double h) {
   }
   if (!ok()) return;  // a stage evaluation stopped the world
   time_ += h;
-  scatterState(state);
   stage_time_ = time_;
+  if (params_.integrator == Integrator::SymplecticEuler) {
+    // Its quaternions are unit already (normalized by the step): copied back as they are, and
+    // the state checked in the same pass (checkBodies only to say which body and stop).
+    bool fine = true;
+    for (size_t k = 0; k < dynamic_.size(); ++k) {
+      BodyState& b = bodies_[dynamic_[k]].state();
+      b = state[k];
+      fine = fine && finiteAndBounded(b.x) && finite(b.q.coeffs()) && finiteAndBounded(b.v) && finiteAndBounded(b.w);
+    }
+    if (!fine) checkBodies("integrate", false);
+    return;
+  }
+  scatterState(state);
   checkBodies("integrate", false);
 }
 
@@ -638,13 +671,12 @@ bool World::checkBodies(const char* stage, bool accelerations) {
   for (int i : dynamic_) {
     const RigidBody& b = bodies_[i];
     if (accelerations) {
-      if (!b.a.allFinite() || !b.alpha.allFinite() || !b.constraint_force.allFinite()) {
+      if (!finite(b.a) || !finite(b.alpha) || !finite(b.constraint_force)) {
         stop(stage, "non-finite acceleration of '" + b.name + "'",
              "an ill-conditioned constraint matrix (tiny masses or inertias next to large ones)");
         return false;
       }
-    } else if (!finiteAndBounded(b.x) || !b.q.coeffs().allFinite() || !finiteAndBounded(b.v) ||
-               !finiteAndBounded(b.w)) {
+    } else if (!finiteAndBounded(b.x) || !finite(b.q.coeffs()) || !finiteAndBounded(b.v) || !finiteAndBounded(b.w)) {
       stop(stage, "non-finite or runaway state of '" + b.name + "'",
            "the time step is too large for the motion (stiff springs or damping, a whipping tip): "
            "reduce dt or raise substeps");

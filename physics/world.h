@@ -173,6 +173,7 @@ class World {
   void gatherStateInto(State& out) const;
   void gatherAccelerationsInto(Accelerations& out) const;
   bool checkBodies(const char* stage, bool accelerations);
+  bool checkForces(const RigidBody& b);  // applyExternalForces: stops the world when b's state or forces are not finite
   void stop(const char* stage, const std::string& what, const char* cause);
 
   PhysicsParams params_;
