@@ -123,8 +123,8 @@ float shadowFactor(vec3 P, vec3 N) {
 
 // What shadowFactor() knows before its filter: 1 fully lit, 0 deep in the umbra, 0.5 when the
 // filter is needed (always in draft). llvmpipe runs both sides of every branch, so the early
-// returns above save nothing per fragment; the deferred passes instead run this first and the
-// whole of shadowFactor() only where it says 0.5, selected by the depth or stencil test.
+// returns above save nothing per fragment; the ground's shadow texture instead runs this first
+// and the whole of shadowFactor() only where it says 0.5, selected by the depth test.
 float shadowClass(vec3 P, vec3 N) {
   if (u_shadowsOn == 0) return 1.0;
   vec3 c = shadowCoord(P, N);
