@@ -951,6 +951,30 @@ bool Renderer::Impl::casterTexelBox(const Eigen::Matrix4d& light_vp, double marg
   return box[2] > box[0] && box[3] > box[1];
 }
 
+// A full-screen program in two passes over the bound target, whose depth buffer is scratch:
+// `first` writes the pixels it can decide and depth 0 at the others (gl_FragDepth); `second`, the
+// costly one, then runs under the far-plane triangle with depth test GREATER, on those pixels
+// only. llvmpipe runs both sides of a shader's branches, but its early depth test does skip
+// blocks before shading. `first` = 0: `second` alone, everywhere. Leaves the depth test on with
+// LESS and depth writes on.
+static void drawFullscreenTwoPass(GLuint vao, GLuint first, GLuint second) {
+  glBindVertexArray(vao);
+  glEnable(GL_DEPTH_TEST);
+  glDepthMask(GL_TRUE);
+  glDepthFunc(GL_ALWAYS);
+  if (first) {
+    glUseProgram(first);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDepthFunc(GL_GREATER);
+  }
+  glDepthMask(GL_FALSE);
+  glUseProgram(second);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glDepthMask(GL_TRUE);
+  glDepthFunc(GL_LESS);
+  glBindVertexArray(0);
+}
+
 void Renderer::endFrame() {
   Impl& I = *impl_;
   const auto t0 = Clock::now();
@@ -1044,23 +1068,10 @@ void Renderer::endFrame() {
         }
         glEnable(GL_SCISSOR_TEST);
         glScissor(box[0], box[1], box[2] - box[0], box[3] - box[1]);
-        glBindVertexArray(I.empty_vao);
-        glEnable(GL_DEPTH_TEST);
-        glDepthFunc(GL_ALWAYS);
-        if (!draft) {
-          // Two passes (llvmpipe would run the filter on every texel, lit or not): the blocker
-          // search writes the fully lit and umbra texels and marks the others with depth 0; the
-          // whole shadowFactor() then runs where the far-plane triangle passes GREATER, there only.
-          glUseProgram(I.prog_ground_shadow_class);
-          glDrawArrays(GL_TRIANGLES, 0, 3);
-          glDepthFunc(GL_GREATER);
-        }
-        glDepthMask(GL_FALSE);
-        glUseProgram(I.prog_ground_shadow);
-        glDrawArrays(GL_TRIANGLES, 0, 3);
-        glBindVertexArray(0);
+        // The blocker search writes the fully lit and umbra texels, the filter runs on the
+        // others (draft has no search: one pass).
+        drawFullscreenTwoPass(I.empty_vao, draft ? 0 : I.prog_ground_shadow_class, I.prog_ground_shadow);
         glDisable(GL_SCISSOR_TEST);
-        glDepthFunc(GL_LESS);
       }
       glDepthMask(GL_TRUE);
     }
@@ -1234,22 +1245,8 @@ void Renderer::endFrame() {
         glUniform1i(loc(p, "u_frame"), 3);
         glUniform2f(loc(p, "u_texel"), 1.0f / float(w), 1.0f / float(h));
       }
-      // Two passes (llvmpipe runs both sides of the filter's branch): the first copies the pixels
-      // without an edge and marks the others with depth 0; the filter then runs under a far-plane
-      // triangle with depth test GREATER, on the marked pixels only.
-      glBindVertexArray(I.empty_vao);
-      glEnable(GL_DEPTH_TEST);
-      glDepthMask(GL_TRUE);
-      glDepthFunc(GL_ALWAYS);
-      glUseProgram(I.prog_post_class);
-      glDrawArrays(GL_TRIANGLES, 0, 3);
-      glDepthFunc(GL_GREATER);
-      glDepthMask(GL_FALSE);
-      glUseProgram(I.prog_post);
-      glDrawArrays(GL_TRIANGLES, 0, 3);
-      glDepthMask(GL_TRUE);
-      glDepthFunc(GL_LESS);
-      glBindVertexArray(0);
+      // The first pass copies the pixels without an edge, the filter runs on the others.
+      drawFullscreenTwoPass(I.empty_vao, I.prog_post_class, I.prog_post);
       glActiveTexture(GL_TEXTURE3);
       glBindTexture(GL_TEXTURE_2D, 0);  // the main pass renders into it next frame
       glActiveTexture(GL_TEXTURE0);
