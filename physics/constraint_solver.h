@@ -43,6 +43,9 @@ class ConstraintSolver {
     (void)world_inverse_inertia;
     return factor(bodies, system);
   }
+  // Counts factorizations (every factor() and factorWith() call, 1 after the first): a caller
+  // that remembers it can tell whether the factorization it left is still the current one.
+  unsigned long generation() const { return generation_; }
   // y with A y = rhs, after factor().
   virtual Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const = 0;
   // The same into `out` (resized when needed): a solver that keeps its work space allocates
@@ -65,6 +68,9 @@ class ConstraintSolver {
   // The same into `out` (resized to the bodies; no allocation once it has their size).
   void massWeightedTransposeInto(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
                                  const Eigen::VectorXd& y, std::vector<Vector6d>& out) const;
+
+ protected:
+  unsigned long generation_ = 0;  // factorizations so far (subclasses count theirs)
 
  private:
   Eigen::VectorXd lambda_;

@@ -7,6 +7,7 @@ namespace ponyhop {
 // blocks (a chain: 3x3 blocks on the diagonal and next to it). Kinematic bodies and the world
 // have no columns in J (their motion is known), so they add nothing here.
 bool DenseSolver::factor(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) {
+  ++generation_;
   const int m = system.rows();
   const auto& blocks = system.blocks();
   touching_.assign(bodies.size(), {});

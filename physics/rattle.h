@@ -20,12 +20,15 @@
 // h (1/I_i - 1/I_0) Pi_i. Their Strang composition A(h/2) B(h/2) C(h) B(h/2) A(h/2) is symplectic,
 // reversible and second order, keeps |L| and the orientation exactly unit (no renormalization),
 // and is EXACT for a symmetric body (I_0 = I_1: B vanishes and A, C commute): the chain's
-// cylinders, the hopper's body and leg. Fast turning (the whip's last links at hundreds of rad/s)
-// therefore costs no stability, only the accuracy of the coupling through the joints.
+// cylinders, the hopper's body and leg. For any axially symmetric body the two commuting pieces
+// are taken as two rotations. Fast turning (the whip's last links at hundreds of rad/s) therefore
+// costs no stability, only the accuracy of the coupling through the joints.
 //
 // The position solve is a quasi-Newton (chord) iteration: C(mu + dmu) ~ C + (h^2 / 2) A dmu with
-// the symmetric A = J M^-1 J^T at the latest iterate, factored by the World's solver (dense or
-// tree), reused while it contracts well; until max |C| <= tolerance. It starts from the caller's
+// the symmetric A = J M^-1 J^T, first at q_n (the factorization the last step's velocity solve
+// left in the World's solver when nothing has changed since, RattleWork::holds; else factored
+// here), refactored at the latest iterate when an iteration contracts by less than 4x; until
+// max |C| <= tolerance. Only positions are iterated. It starts from the caller's
 // guess: World passes the previous accepted step's mu (warm start: mu is a force, it changes by
 // O(h) per step, so the guess is as close as the acceleration-level lambda of the step's start
 // that was used before, and costs no solve). The velocity solve is exact (linear): the
@@ -66,6 +69,17 @@ struct RattleWork {
   std::vector<Vector6d> fc, v1, f0, dv;
   Eigen::VectorXd rhs, dmu;
   VelocityProjectionWork projection;
+  std::vector<Eigen::Matrix3d> inertia, inverse_inertia;  // world frame, at the step's end
+  // What the solver's factorization is (generation(), rows, positions) after the last step's
+  // velocity solve: A at its end positions, the next step's chord matrix A(q_n) when nothing
+  // has factored, moved, or changed the joints since (a rejected step, a restored state, a
+  // contact).
+  unsigned long held_generation = 0;  // 0: nothing held
+  std::vector<const Constraint*> held_joints;
+  std::vector<Eigen::Vector3d> held_x;
+  std::vector<Eigen::Quaterniond> held_q;
+  bool holds(const ConstraintSolver& solver, const std::vector<RigidBody>& bodies, const Constraints& joints) const;
+  void remember(const ConstraintSolver& solver, const std::vector<RigidBody>& bodies, const Constraints& joints);
 };
 
 struct RattleOptions {

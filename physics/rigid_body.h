@@ -48,20 +48,31 @@ inline Eigen::Quaterniond renormalized(const Eigen::Quaterniond& q) {
   return q.normalized();
 }
 
-// The unit quaternion of the rotation vector phi (axis * angle), exact for any angle.
-inline Eigen::Quaterniond quaternionFromRotationVector(const Eigen::Vector3d& phi) {
-  const double angle2 = phi.squaredNorm();
-  if (angle2 < 1e-4) {
-    // A step's turn (angle < 1e-2, down to 0: a body at rest): cos(angle / 2) and
-    // sin(angle / 2) / angle by their Taylor series in x^2 = angle^2 / 4 (x < 5e-3: the first
-    // term left out is below 1e-22); no sqrt, sin, cos or division by the angle.
+// cos(angle / 2) and sin(angle / 2) / angle for angle^2 = angle2: the unit quaternion of a
+// rotation vector phi is (c, s phi). Exact for any angle.
+inline void halfAngleTerms(double angle2, double& c, double& s) {
+  if (angle2 < 1e-2) {
+    // A step's turn (angle < 0.1 rad, down to 0: a body at rest; RATTLE's substeps turn about
+    // 2 deg): Taylor series in x^2 = angle^2 / 4 (x < 0.05: the first term left out is below
+    // 1e-24 relative); no sqrt, sin, cos or division by the angle. Multiplications by the
+    // reciprocals: a division by a constant stays a division in IEEE arithmetic.
     const double x2 = 0.25 * angle2;
-    const double c = 1.0 - 0.5 * x2 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0));
-    const double s = 0.5 * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0)));
-    return Eigen::Quaterniond(c, s * phi.x(), s * phi.y(), s * phi.z());
+    constexpr double k12 = 1.0 / 12.0, k30 = 1.0 / 30.0, k56 = 1.0 / 56.0, k90 = 1.0 / 90.0;
+    constexpr double k6 = 1.0 / 6.0, k20 = 1.0 / 20.0, k42 = 1.0 / 42.0, k72 = 1.0 / 72.0, k110 = 1.0 / 110.0;
+    c = 1.0 - 0.5 * x2 * (1.0 - x2 * k12 * (1.0 - x2 * k30 * (1.0 - x2 * k56 * (1.0 - x2 * k90))));
+    s = 0.5 * (1.0 - x2 * k6 * (1.0 - x2 * k20 * (1.0 - x2 * k42 * (1.0 - x2 * k72 * (1.0 - x2 * k110)))));
+    return;
   }
   const double angle = std::sqrt(angle2);
-  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, phi / angle));
+  c = std::cos(0.5 * angle);
+  s = std::sin(0.5 * angle) / angle;
+}
+
+// The unit quaternion of the rotation vector phi (axis * angle), exact for any angle.
+inline Eigen::Quaterniond quaternionFromRotationVector(const Eigen::Vector3d& phi) {
+  double c, s;
+  halfAngleTerms(phi.squaredNorm(), c, s);
+  return Eigen::Quaterniond(c, s * phi.x(), s * phi.y(), s * phi.z());
 }
 
 // The rotation vector (axis * angle, angle in [0, pi]) of a unit quaternion.

@@ -397,6 +397,7 @@ bool TreeSolver::factor(const std::vector<RigidBody>& bodies, const ConstraintSy
 
 bool TreeSolver::factorWith(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
                             const std::vector<Eigen::Matrix3d>& inverse_inertia) {
+  ++generation_;
   if (structureChanged(bodies, system) && !buildStructure(bodies, system)) {
     signature_.clear();
     return false;
