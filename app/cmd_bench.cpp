@@ -208,8 +208,8 @@ std::string loadAverage() {
   return a.empty() ? "unknown" : a + " " + b + " " + c;
 }
 
-// The bench's row for ponyhop's default: RATTLE on the dense solver with the 2 deg step rule.
-constexpr const char* kDefaultMethod = "dense/rattle/none+auto";
+// The bench's row for ponyhop's default: RATTLE on the tree solver with the 2 deg step rule.
+constexpr const char* kDefaultMethod = "tree/rattle/none+auto";
 
 // The report's first section: per case, which method to pick for what; then the methods that
 // cannot run, once (they are left out of every table below).

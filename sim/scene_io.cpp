@@ -338,26 +338,19 @@ bool sectionPresent(const json& j, const std::string& name) { return j.contains(
 
 const char* kOptionalSections[] = {"head", "anchor", "chain", "hopper"};
 
-// Dense is O(n^3) per step: 4,096 links would run for days without a word. When the file does
-// not name a solver, long chains get the tree solver (the same equations, O(n), docs/SOLVERS.md);
-// a dense solver the user chose is kept, with its cost said up front.
-void chooseSolver(const json& j, Scene& scene) {
+// Dense is O(n^3) per step: a long chain on it would run for days without a word. The default
+// (tree) is O(n); a dense solver the user chose is kept, with its cost said up front.
+void noteDenseCost(Scene& scene) {
   if (!scene.chain || scene.physics.solver != SolverKind::Dense) return;
   const int n = scene.chain->links;
-  const bool picked = j.contains("physics") && j["physics"].is_object() && j["physics"].contains("solver");
-  if (!picked && n > kDenseSolverMaxLinks) {
-    scene.physics.solver = SolverKind::Tree;
-    scene.notes.push_back("chain.links = " + std::to_string(n) + " > " + std::to_string(kDenseSolverMaxLinks) +
-                          " and no physics.solver given: using \"tree\" (O(n); \"dense\" is O(n^3) per step, "
-                          "same results; set physics.solver to choose)");
-  } else if (picked && n > 4 * kDenseSolverMaxLinks) {
+  if (n > kDenseSolverMaxLinks) {
     // Measured (docs/SOLVERS.md): about 48 ms per step at 128 links, growing as n^3.
     const double ms = 48.0 * std::pow(n / 128.0, 3.0);
     char buf[160];
     std::snprintf(buf, sizeof(buf), "about %.3g s per step (%.3g h per simulated second at dt %.3g s)", ms / 1000.0,
                   ms / 1000.0 / scene.physics.dt / 3600.0, scene.physics.dt);
     scene.notes.push_back("physics.solver = \"dense\" with " + std::to_string(n) + " links: O(n^3), " + buf +
-                          "; \"tree\" gives the same results in O(n)");
+                          "; \"tree\" (the default) gives the same results in O(n)");
   }
 }
 
@@ -431,7 +424,7 @@ Scene parseScene(const json& j_in, const std::string& source, const std::vector<
   }
   scene.path = source;
   validateScene(scene, source);
-  chooseSolver(j, scene);
+  noteDenseCost(scene);
   if (!anchor_note.empty()) scene.notes.push_back(anchor_note);
   return scene;
 }

@@ -29,8 +29,8 @@ Override parseOverride(const std::string& key_equals_value);  // throws SceneErr
 // [ ] and { } is refused with the limit in the message, before the JSON is built.
 inline constexpr size_t kMaxSceneFileBytes = 16u << 20;
 inline constexpr int kMaxJsonDepth = 64;
-// A chain longer than this gets physics.solver = "tree" when the file names no solver (a note in
-// Scene::notes says so); shipped scenes are shorter, so their physics is untouched.
+// A chain longer than this on physics.solver = "dense" (O(n^3) per step) gets a note in
+// Scene::notes with its cost.
 inline constexpr int kDenseSolverMaxLinks = 32;
 
 // Reads a scene file, applies the overrides, validates every field (types, ranges, unknown keys,

@@ -211,12 +211,14 @@ TEST(PanelTest, SaveThenLoadReproducesTheParametersExactly) {
 TEST(PanelTest, ADivergingValueIsCaughtPausedAndResetRecovers) {
   Harness h("assets/scenes/chain.json");
   h.frames(3);
-  // A huge time step with a stiff bending spring and no stabilization: the run blows up.
+  // A huge time step with a stiff bending spring, no stabilization and no step control: the run
+  // blows up.
   Scene& s = h.sim.edited();
   s.physics.dt = 0.1;
   s.physics.integrator = Integrator::SymplecticEuler;
   s.physics.stabilization = Stabilization::None;
   s.chain->stiffness = 100.0;
+  s.physics.max_step_rotation = 0.0;  // no automatic substeps to rescue it
   h.frames(60);
   EXPECT_FALSE(h.sim.ok());
   EXPECT_FALSE(h.sim.running()) << "a stopped run pauses";
@@ -225,7 +227,8 @@ TEST(PanelTest, ADivergingValueIsCaughtPausedAndResetRecovers) {
   // Put the values back (their reset buttons) and press Reset.
   h.panel.setSectionOpen("Physics", true);
   h.frame();
-  for (const char* key : {"physics.dt", "physics.integrator", "physics.stabilization", "chain.stiffness"}) {
+  for (const char* key :
+       {"physics.dt", "physics.integrator", "physics.stabilization", "physics.max_step_rotation", "chain.stiffness"}) {
     h.click(std::string("reset:") + key);
   }
   h.click("reset");

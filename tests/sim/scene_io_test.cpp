@@ -239,14 +239,12 @@ TEST(SceneIoHostile, FilesThatAreNotFilesOrTooLarge) {
       << e;
 }
 
-TEST(SceneIoHostile, LongChainsWithoutASolverGetTheLinearOne) {
-  // Dense is O(n^3) per step: 4,096 links would run for days. Unless the file picks a solver,
-  // a long chain gets tree (same equations, O(n)), and a note says so.
+TEST(SceneIoHostile, LongChainsOnTheDenseSolverSayItsCost) {
+  // The default solver is tree (O(n)): a long chain without a solver gets it, and no note.
   Scene s = parseSceneText(R"({"anchor": {}, "chain": {"links": 4096}})", "long.json");
   EXPECT_EQ(s.physics.solver, SolverKind::Tree);
-  ASSERT_EQ(s.notes.size(), 1u);
-  EXPECT_NE(s.notes[0].find("using \"tree\""), std::string::npos) << s.notes[0];
-  // Picked by the user: kept, with its cost said.
+  EXPECT_TRUE(s.notes.empty());
+  // Dense (O(n^3)) picked by the user: kept, with its cost said.
   s = parseSceneText(R"({"physics": {"solver": "dense"}, "anchor": {}, "chain": {"links": 512}})", "long.json");
   EXPECT_EQ(s.physics.solver, SolverKind::Dense);
   ASSERT_EQ(s.notes.size(), 1u);
@@ -254,11 +252,15 @@ TEST(SceneIoHostile, LongChainsWithoutASolverGetTheLinearOne) {
   s = parseSceneText(R"({"anchor": {}, "chain": {"links": 8}})", "long.json",
                      {parseOverride("chain.links=4096"), parseOverride("physics.solver=dense")});
   EXPECT_EQ(s.physics.solver, SolverKind::Dense);
-  // Short chains (every shipped scene) are untouched.
+  ASSERT_EQ(s.notes.size(), 1u);
+  // A short chain on dense: no note.
+  s = parseSceneText(R"({"physics": {"solver": "dense"}, "anchor": {}, "chain": {"links": 8}})", "short.json");
+  EXPECT_TRUE(s.notes.empty());
+  // The shipped scenes get the default.
   for (const char* f :
        {"assets/scenes/ponytail.json", "assets/scenes/chain.json", "assets/scenes/ponytail_hopper.json"}) {
     const Scene shipped = loadScene(f);
-    EXPECT_EQ(shipped.physics.solver, SolverKind::Dense) << f;
+    EXPECT_EQ(shipped.physics.solver, SolverKind::Tree) << f;
     EXPECT_TRUE(shipped.notes.empty()) << f;
   }
 }

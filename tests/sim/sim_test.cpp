@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -173,6 +174,37 @@ TEST(Sim, LinksNoGlNoImporter) {
   for (const char* lib : {"libOSMesa", "libGL", "libassimp", "libglfw", "libEGL"}) {
     EXPECT_EQ(m.find(lib), std::string::npos) << lib << " is mapped into a sim-only test";
   }
+}
+
+// The default method's energy on the released 8-link chain (docs/STABILITY.md, "Why 1.25x" and
+// "Long runs drift"): max |E - E0| / |E0| over every step (E against the hanging chain, as the
+// bench's energy_drift_rel), at each dt over five starting directions; then 60 s at 1/240. Not
+// run by ctest: build/tests/sim_test --gtest_also_run_disabled_tests --gtest_filter='*EnergyTable*'
+TEST(Sim, DISABLED_DefaultMethodEnergyTable) {
+  const char* directions[] = {"[1,0,0]", "[1,0,0.02]", "[1,0.05,0]", "[1,0,-0.03]", "[1,0.02,0.02]"};
+  const auto drift = [&](int rate, const char* direction, double seconds) {
+    char dt[32];
+    std::snprintf(dt, sizeof dt, "%.17g", 1.0 / rate);
+    Sim sim(loadScene("assets/scenes/chain.json",
+                      {{"physics.integrator", "rattle"}, {"physics.dt", dt}, {"chain.direction", direction}}));
+    const double e0 = sim.chainEnergy();
+    double worst = 0.0;
+    for (long i = 0; i < std::lround(seconds * rate) && sim.ok(); ++i) {
+      sim.step();
+      worst = std::max(worst, std::abs(sim.chainEnergy() - e0));
+    }
+    EXPECT_TRUE(sim.ok()) << sim.status();
+    return 100.0 * worst / std::abs(e0);
+  };
+  std::printf("| dt | max abs(E - E0)/E0 over 10 s, five directions (%%) |\n|---|---|\n");
+  for (int rate : {60, 120, 240, 480, 960, 1920}) {
+    std::printf("| 1/%d |", rate);
+    for (const char* d : directions) std::printf(" %.2f", drift(rate, d, 10.0));
+    std::printf(" |\n");
+  }
+  std::printf("60 s at 1/240:");
+  for (int i = 0; i < 3; ++i) std::printf(" %.2f %%", drift(240, directions[i], 60.0));
+  std::printf("\n");
 }
 
 }  // namespace
