@@ -36,16 +36,10 @@ void ConstraintSystem::evaluate(const std::vector<RigidBody>& bodies, const Cons
     b.body_b = c.bodyB();
     b.row = row;
     b.rows = m;
+    c_.segment(row, m) = b.C;
+    bias_.segment(row, m) = b.bias;
+    max_error_ = std::max(max_error_, c.error(b));
     row += m;
-  }
-  // Gathered in a second pass: each joint writes its rows as single doubles, and a (vectorized)
-  // copy right after would reread them 16 bytes at a time before those stores retire, which
-  // stalls (failed store forwarding); by now they have.
-  for (size_t j = 0; j < constraints.size(); ++j) {
-    const Block& b = blocks_[j];
-    c_.segment(b.row, b.rows) = b.C;
-    bias_.segment(b.row, b.rows) = b.bias;
-    max_error_ = std::max(max_error_, constraints[j]->error(b));
   }
 }
 
