@@ -97,6 +97,9 @@ class World {
     std::string status;  // "" while running; a restore of a running state revives a stopped world
   };
   SavedState saveState() const;
+  // The same into storage `s` already has (step() keeps one per world: no allocation per dt
+  // for the bodies once sized).
+  void saveStateInto(SavedState& s) const;
   void restoreState(const SavedState& s);
 
   double time() const { return time_; }
@@ -199,6 +202,7 @@ class World {
   int tolerance_substeps_ = 0;            // tolerance mode: substeps to start the next dt with
   int tolerance_misses_ = 0;              // substeps accepted above the tolerance at the deepest split
   std::vector<Snapshot> substep_starts_;  // substep()'s snapshot per split depth
+  SavedState dt_start_;                   // step(): the dt's start, for RATTLE's redo at the end's count
   WarmStart warm_start_;                  // RATTLE: the last step's position multipliers
   RattleWork rattle_work_;                // RATTLE: the step's work space (sized once)
   bool rattle_corrector_ = true;
