@@ -132,7 +132,7 @@ void World::step() {
   // RATTLE: the count must also hold at the end of dt, or the dt is taken again with the end's
   // count (once). A count from the start alone is not time-symmetric, and a reversible method
   // with such steps loses its bounded energy error: the whipping chain's energy fell 0.05 % of E0
-  // per simulated second. With both ends, 0.06-0.21 % after 60 s (docs/STABILITY.md).
+  // per simulated second. With both ends, 0.06-0.33 % after 60 s (docs/STABILITY.md).
   const bool symmetric = theta > 0.0 && params_.integrator == Integrator::Rattle && !reduced_;
   if (symmetric) saveStateInto(dt_start_);
   for (bool redone = false;; redone = true) {
