@@ -70,10 +70,7 @@ Eigen::Quaterniond freeRotation(const Eigen::Quaterniond& q_in, const Eigen::Vec
         z = cb * qz + e * qw;
       }
     }
-    // Unit up to round-off: one Newton step of 1 / |q| (renormalized()).
-    const double n2 = w * w + x * x + y * y + z * z;
-    const double f = std::abs(n2 - 1.0) < 1e-10 ? 1.0 - 0.5 * (n2 - 1.0) : 1.0 / std::sqrt(n2);
-    return Eigen::Quaterniond(f * w, f * x, f * y, f * z);
+    return renormalized(Eigen::Quaterniond(w, x, y, z));
   }
   const double c1 = 1.0 / inertia(1) - 1.0 / inertia(0);
   const double c2 = 1.0 / inertia(2) - 1.0 / inertia(0);
@@ -217,9 +214,8 @@ ConstrainedStepResult rattleStep(double t, double h, Eigen::VectorXd& mu, Constr
   for (size_t i = 0; i < n; ++i) {
     RigidBody& b = bodies[i];
     if (!b.isDynamic()) continue;
-    const Eigen::Matrix3d r = b.rotation();
-    iw[i] = r * b.inertia.asDiagonal() * r.transpose();
-    iinv[i] = r * b.inertia.cwiseInverse().asDiagonal() * r.transpose();
+    iw[i] = b.worldInertia();
+    iinv[i] = b.worldInverseInertia();
     b.v = (start[i].p + 0.5 * h * fc[i].head<3>()) / b.mass;
     b.w = iinv[i] * (start[i].l + 0.5 * h * fc[i].tail<3>());
   }
