@@ -156,10 +156,12 @@ struct Renderer::Impl {
   GLuint prog_hair = 0, prog_hair_depth = 0;
   GLuint prog_mesh_mat = 0;
   std::vector<GLuint> programs;  // every program above, for the destructor
-  // Deferred shadows (single-sample targets): the visible surface, its shadow once per pixel, and
-  // the lit programs that read that mask instead of searching the shadow map per fragment.
-  GLuint prog_mesh_surf = 0, prog_hull_surf = 0, prog_hair_surf = 0, prog_shadow_mask = 0;
-  GLuint prog_mesh_dm = 0, prog_mesh_mat_dm = 0, prog_hull_dm = 0, prog_hair_dm = 0;
+  // Deferred shading (single-sample targets with shadows): the lit programs writing the visible
+  // surface and the two parts of its radiance (SPLIT_LIGHT), and the pass that shadows and
+  // finishes each visible pixel once.
+  GLuint prog_mesh_split = 0, prog_mesh_mat_split = 0, prog_hull_split = 0, prog_hair_split = 0;
+  GLuint prog_deferred = 0;
+  GLuint prog_ground_up = 0;            // the half-resolution ground, upsampled (kGroundUpFS)
   GLuint prog_ground_shadow_class = 0;  // the ground shadow's first pass (shadowClass)
   GLuint prog_post_class = 0;           // the post filter's first pass (edge or not)
   // Static geometry.
@@ -179,9 +181,13 @@ struct Renderer::Impl {
   GLuint resolve_depth = 0;  // marks the pixels the post filter has an edge at
   GLuint output_fbo = 0;     // where the finished frame is: resolve_fbo, or msaa_fbo without AA
   bool target_post = false;
-  // With a single-sample target: position + normal of the visible surface and the shadow mask,
-  // sharing the main depth buffer.
-  GLuint surf_fbo = 0, surf_tex = 0, mask_fbo = 0, mask_tex = 0;
+  // With a single-sample target: position + normal of the visible surface, and the key light's
+  // part of its radiance before the shadow and the rest (kDeferredFS), sharing the main depth
+  // buffer.
+  GLuint surf_fbo = 0, surf_tex = 0, key_tex = 0, rest_tex = 0;
+  // With a single-sample target: the ground (over the background) at half resolution.
+  GLuint ground_lo_fbo = 0, ground_lo_tex = 0, ground_lo_depth = 0;
+  int ground_lo_w = 0, ground_lo_h = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0;
   GLuint raw_depth_sampler = 0;                         // reads shadow_tex without comparison (blocker search)
   GLuint ground_shadow_fbo = 0, ground_shadow_tex = 0;  // R8, shadowFactor on the ground plane
@@ -292,12 +298,13 @@ Renderer::~Renderer() {
   glDeleteVertexArrays(4, vaos);
   GLuint bufs[] = {I.hull_vbo, I.hull_ebo, I.hull_instances, I.lines_vbo, I.hair_vbo, I.hair_ebo};
   glDeleteBuffers(6, bufs);
-  GLuint fbos[] = {I.msaa_fbo, I.resolve_fbo, I.shadow_fbo, I.ground_shadow_fbo, I.surf_fbo, I.mask_fbo};
+  GLuint fbos[] = {I.msaa_fbo, I.resolve_fbo, I.shadow_fbo, I.ground_shadow_fbo, I.surf_fbo, I.ground_lo_fbo};
   glDeleteFramebuffers(6, fbos);
-  GLuint rbs[] = {I.msaa_color, I.msaa_depth, I.resolve_color, I.ground_shadow_depth, I.resolve_depth};
-  glDeleteRenderbuffers(5, rbs);
+  GLuint rbs[] = {I.msaa_color,          I.msaa_depth,    I.resolve_color,
+                  I.ground_shadow_depth, I.resolve_depth, I.ground_lo_depth};
+  glDeleteRenderbuffers(6, rbs);
   if (I.main_color_tex) glDeleteTextures(1, &I.main_color_tex);
-  for (GLuint t : {I.surf_tex, I.mask_tex})
+  for (GLuint t : {I.surf_tex, I.key_tex, I.rest_tex, I.ground_lo_tex})
     if (t) glDeleteTextures(1, &t);
   if (I.shadow_tex) glDeleteTextures(1, &I.shadow_tex);
   if (I.ground_shadow_tex) glDeleteTextures(1, &I.ground_shadow_tex);
@@ -332,14 +339,12 @@ bool Renderer::init(std::string* err) {
       {&I.prog_bg, "background", kFullscreenVS, kBackgroundFS},
       {&I.prog_hair, "hair", kHairVS, kHairFS},
       {&I.prog_hair_depth, "hair depth", kHairVS, kDepthFS},
-      {&I.prog_mesh_surf, "mesh surface", kMeshVS, kSurfaceFS},
-      {&I.prog_hull_surf, "hull surface", kCapsuleVS, kSurfaceFS},
-      {&I.prog_hair_surf, "hair surface", kHairVS, kHairSurfaceFS},
-      {&I.prog_shadow_mask, "shadow mask", kFullscreenVS, kShadowMaskFS},
-      {&I.prog_mesh_dm, "mesh (shadow mask)", kMeshVS, kLitFS, kShadowMaskDefine},
-      {&I.prog_mesh_mat_dm, "mesh with materials (shadow mask)", kMeshMatVS, kMeshMatFS, kShadowMaskDefine},
-      {&I.prog_hull_dm, "hull (shadow mask)", kCapsuleVS, kLitFS, kShadowMaskDefine},
-      {&I.prog_hair_dm, "hair (shadow mask)", kHairVS, kHairFS, kShadowMaskDefine},
+      {&I.prog_mesh_split, "mesh (deferred)", kMeshVS, kLitFS, kSplitLightDefine},
+      {&I.prog_mesh_mat_split, "mesh with materials (deferred)", kMeshMatVS, kMeshMatFS, kSplitLightDefine},
+      {&I.prog_hull_split, "hull (deferred)", kCapsuleVS, kLitFS, kSplitLightDefine},
+      {&I.prog_hair_split, "hair (deferred)", kHairVS, kHairFS, kSplitLightDefine},
+      {&I.prog_deferred, "deferred shading", kFullscreenVS, kDeferredFS},
+      {&I.prog_ground_up, "ground (upsampled)", kGroundVS, kGroundUpFS},
       {&I.prog_ground_shadow_class, "ground shadow (classify)", kFullscreenVS, kGroundShadowFS, kShadowClassifyDefine},
       {&I.prog_post_class, "post AA (edges)", kFullscreenVS, kPostAaFS, kPostEdgesDefine}};
   for (const P& p : progs) {
@@ -651,26 +656,40 @@ void Renderer::Impl::ensureTargets(int w, int h, int samples, bool post) {
   if (samples == 1) {
     if (!surf_fbo) {
       glGenFramebuffers(1, &surf_fbo);
-      glGenFramebuffers(1, &mask_fbo);
       glGenTextures(1, &surf_tex);
-      glGenTextures(1, &mask_tex);
+      glGenTextures(1, &key_tex);
+      glGenTextures(1, &rest_tex);
     }
-    // Full float: the shadow search sees exactly the position the lit shader has (kSurfaceFS).
-    for (GLuint t : {surf_tex, mask_tex}) {
+    // Full float: the shadow search sees exactly the position the forward shader has, and the
+    // radiance is combined as the forward shader combines it.
+    for (GLuint t : {surf_tex, key_tex, rest_tex}) {
       glBindTexture(GL_TEXTURE_2D, t);
-      if (t == mask_tex)
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, w, h, 0, GL_RED, GL_FLOAT, nullptr);
-      else
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
       glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
       glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     }
     glBindFramebuffer(GL_FRAMEBUFFER, surf_fbo);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, surf_tex, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, key_tex, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, rest_tex, 0);
+    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+    glDrawBuffers(3, bufs);
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, msaa_depth);
-    glBindFramebuffer(GL_FRAMEBUFFER, mask_fbo);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, mask_tex, 0);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, msaa_depth);
+    if (!ground_lo_fbo) {
+      glGenFramebuffers(1, &ground_lo_fbo);
+      glGenTextures(1, &ground_lo_tex);
+      glGenRenderbuffers(1, &ground_lo_depth);
+    }
+    ground_lo_w = (w + 1) / 2;
+    ground_lo_h = (h + 1) / 2;
+    glBindTexture(GL_TEXTURE_2D, ground_lo_tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, ground_lo_w, ground_lo_h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+    linearClampToEdge();
+    glBindFramebuffer(GL_FRAMEBUFFER, ground_lo_fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, ground_lo_tex, 0);
+    glBindRenderbuffer(GL_RENDERBUFFER, ground_lo_depth);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT16, ground_lo_w, ground_lo_h);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, ground_lo_depth);
   }
   target_w = w;
   target_h = h;
@@ -843,7 +862,7 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
     glDisable(GL_CULL_FACE);
     glCullFace(GL_BACK);
   }
-  if (!depth_only) drawMaterialMeshes(mesh_prog == prog_mesh_dm ? prog_mesh_mat_dm : prog_mesh_mat);
+  if (!depth_only) drawMaterialMeshes(mesh_prog == prog_mesh_split ? prog_mesh_mat_split : prog_mesh_mat);
   if (!hulls.empty()) {
     glUseProgram(hull_prog);
     if (depth_only) setMat4(hull_prog, "u_viewProj", view_proj);
@@ -1108,28 +1127,45 @@ void Renderer::endFrame() {
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   const bool has_objects = !I.mesh_draws.empty() || !I.hulls.empty() || !I.hair_draws.empty();
-  // Deferred shadows on a single-sample target: llvmpipe shades whole blocks of pixels, so on a
+  // Deferred shading on a single-sample target: llvmpipe shades whole blocks of pixels, so on a
   // mesh of small triangles a shadow search per fragment runs several times per covered pixel
-  // (and again for every hidden layer drawn first). Instead: 1) the objects' visible surface
-  // (position, normal) with the main depth buffer; 2) shadowFactor() once per pixel of it;
-  // 3) the objects lit with that mask, over the finished depth (only the visible fragment passes).
+  // (and again for every hidden layer drawn first). Instead: 1) the objects, their lit shaders
+  // writing the visible surface (position, normal) and the two parts of its radiance into three
+  // targets, with the main depth buffer; 2) the shadow and the finished colour once per pixel of
+  // that surface. The objects are rasterized once, as without shadows.
   const bool deferred = shadows_on && has_objects && samples == 1 && I.surf_fbo != 0;
+  const GLuint mesh_prog = deferred ? I.prog_mesh_split : I.prog_mesh;
+  const GLuint mesh_mat_prog = deferred ? I.prog_mesh_mat_split : I.prog_mesh_mat;
+  const GLuint hull_prog = deferred ? I.prog_hull_split : I.prog_hull;
+  const GLuint hair_prog = deferred ? I.prog_hair_split : I.prog_hair;
+  glBindFramebuffer(GL_FRAMEBUFFER, deferred ? I.surf_fbo : I.msaa_fbo);
+  glClearColor(0, 0, 0, I.params.transparent ? 0 : 1);
+  // Deferred: the surface targets are read only where an object is; the colour is cleared below.
+  glClear(deferred ? GL_DEPTH_BUFFER_BIT : GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  I.bindShadowTextures(true);
+  for (GLuint p : {mesh_prog, mesh_mat_prog, hull_prog, hair_prog})
+    I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
+  I.drawGeometry(mesh_prog, hull_prog, view_proj, false);
+  I.drawHairs(view_proj, false, ld, hair_prog);
+  stats_.draw_calls += int(I.hair_draws.size());
+  stats_.triangles += I.hair_indices.size() / 3;
+  stats_.draw_calls += int(I.mesh_draws.size()) + (I.hulls.empty() ? 0 : 1);
+  for (const MeshDraw& d : I.mesh_draws) stats_.triangles += size_t(I.meshes[size_t(d.mesh)].index_count / 3);
+  stats_.triangles += I.hulls.size() * I.hull_triangles;
   if (deferred) {
-    glBindFramebuffer(GL_FRAMEBUFFER, I.surf_fbo);
-    glClear(GL_DEPTH_BUFFER_BIT);  // the colours are read only where an object is
-    for (GLuint p : {I.prog_mesh_surf, I.prog_hull_surf, I.prog_hair_surf})  // u_eye orients the ribbons
-      I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
-    I.drawGeometry(I.prog_mesh_surf, I.prog_hull_surf, view_proj, true);
-    I.drawHairs(view_proj, false, ld, I.prog_hair_surf);
-    stats_.draw_calls += int(I.hair_draws.size()) + int(I.mesh_draws.size()) + (I.hulls.empty() ? 0 : 1);
-
-    glBindFramebuffer(GL_FRAMEBUFFER, I.mask_fbo);
-    I.bindShadowTextures(false);
-    I.setCommonUniforms(I.prog_shadow_mask, view_proj, light_vp, normal_offset, shadows_on);
-    glActiveTexture(GL_TEXTURE5);
-    glBindTexture(GL_TEXTURE_2D, I.surf_tex);
+    glBindFramebuffer(GL_FRAMEBUFFER, I.msaa_fbo);
+    glClear(GL_COLOR_BUFFER_BIT);
+    const GLuint p = I.prog_deferred;
+    I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
+    const GLuint targets[] = {I.surf_tex, I.key_tex, I.rest_tex};
+    for (int i = 0; i < 3; ++i) {
+      glActiveTexture(GLenum(GL_TEXTURE4 + i));
+      glBindTexture(GL_TEXTURE_2D, targets[i]);
+    }
     glActiveTexture(GL_TEXTURE0);
-    glUniform1i(loc(I.prog_shadow_mask, "u_surface"), 5);
+    glUniform1i(loc(p, "u_surface"), 4);
+    glUniform1i(loc(p, "u_key"), 5);
+    glUniform1i(loc(p, "u_rest"), 6);
     int box[4] = {0, 0, w, h};
     if (I.screenBox(view_proj, w, h, box)) {
       glEnable(GL_SCISSOR_TEST);
@@ -1142,41 +1178,26 @@ void Renderer::endFrame() {
     glBindVertexArray(0);
     glDisable(GL_SCISSOR_TEST);
     glDepthMask(GL_TRUE);
-    glDepthFunc(GL_LEQUAL);  // 3): the fragment whose depth is in the buffer
+    for (int i = 0; i < 3; ++i) {  // they are render targets again next frame
+      glActiveTexture(GLenum(GL_TEXTURE4 + i));
+      glBindTexture(GL_TEXTURE_2D, 0);
+    }
+    glActiveTexture(GL_TEXTURE0);
     ++stats_.draw_calls;
   }
-  glBindFramebuffer(GL_FRAMEBUFFER, I.msaa_fbo);
-  glClearColor(0, 0, 0, I.params.transparent ? 0 : 1);
-  glClear(deferred ? GL_COLOR_BUFFER_BIT : GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  I.bindShadowTextures(true);
-  if (deferred) {
-    glActiveTexture(GL_TEXTURE4);
-    glBindTexture(GL_TEXTURE_2D, I.mask_tex);
-    glActiveTexture(GL_TEXTURE0);
-  }
-
-  const GLuint mesh_prog = deferred ? I.prog_mesh_dm : I.prog_mesh;
-  const GLuint mesh_mat_prog = deferred ? I.prog_mesh_mat_dm : I.prog_mesh_mat;
-  const GLuint hull_prog = deferred ? I.prog_hull_dm : I.prog_hull;
-  const GLuint hair_prog = deferred ? I.prog_hair_dm : I.prog_hair;
-  for (GLuint p : {mesh_prog, mesh_mat_prog, hull_prog, hair_prog}) {
-    I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
-    if (deferred) glUniform1i(loc(p, "u_shadowMask"), 4);
-  }
-  I.drawGeometry(mesh_prog, hull_prog, view_proj, false);
-  I.drawHairs(view_proj, false, ld, hair_prog);
   glDepthFunc(GL_LESS);
-  stats_.draw_calls += int(I.hair_draws.size());
-  stats_.triangles += I.hair_indices.size() / 3;
-  stats_.draw_calls += int(I.mesh_draws.size()) + (I.hulls.empty() ? 0 : 1);
-  for (const MeshDraw& d : I.mesh_draws) stats_.triangles += size_t(I.meshes[size_t(d.mesh)].index_count / 3);
-  stats_.triangles += I.hulls.size() * I.hull_triangles;
 
   // The ground after the objects: the early depth test skips the pixels they cover, and its nearer
   // fragments still hide whatever is below it. It writes its depth, so that the background, last,
   // fills only the pixels nothing was drawn on (none when transparent: alpha 0 there).
   glBindVertexArray(I.empty_vao);
   if (I.params.ground) {
+    // Single-sample frames: the ground is shaded at half resolution (a quarter of the pixels)
+    // and upsampled bilinearly. Everything on it is smooth at the pixel scale: the shadow (a soft
+    // texture), the lighting, the fade, the background it fades into; the checker is box-filtered
+    // over the half-resolution pixel, so its edges stay anti-aliased, a pixel softer. It is most of
+    // a final frame's per-pixel shading, and llvmpipe pays for every pixel it shades.
+    const bool half = samples == 1 && I.ground_lo_fbo != 0;
     const GLuint p = I.prog_ground;
     I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
     glUniform3f(loc(p, "u_quadCenter"), float(cam.target.x()), float(cam.target.y()), float(I.params.ground_height));
@@ -1187,7 +1208,46 @@ void Renderer::endFrame() {
     glUniform3f(loc(p, "u_fadeCenter"), float(cam.target.x()), float(cam.target.y()), 0.0f);
     glUniform2f(loc(p, "u_fade"), float(fade_start), float(fade_end));
     glUniform1i(loc(p, "u_groundShadow"), 2);
+    if (half) {
+      // 1) The ground, then the background around it, in a half-size texture with a depth
+      // buffer of its own (no object in it): the texels around the ground's edge hold the
+      // background it fades into (or alpha 0 when transparent), so the upsampled edge blends into
+      // what is drawn beside it.
+      glBindFramebuffer(GL_FRAMEBUFFER, I.ground_lo_fbo);
+      glViewport(0, 0, I.ground_lo_w, I.ground_lo_h);
+      glClearColor(0, 0, 0, 0);
+      glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+      glUniform2f(loc(p, "u_viewport"), float(I.ground_lo_w), float(I.ground_lo_h));
+      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+      if (!I.params.transparent) {
+        I.setCommonUniforms(I.prog_bg, view_proj, light_vp, normal_offset, shadows_on);
+        glUniform2f(loc(I.prog_bg, "u_viewport"), float(I.ground_lo_w), float(I.ground_lo_h));
+        glDepthFunc(GL_LEQUAL);  // the far plane, where the depth is still the cleared 1
+        glDepthMask(GL_FALSE);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        glDepthMask(GL_TRUE);
+        glDepthFunc(GL_LESS);
+      }
+      // 2) The ground square again at full resolution, with the depth test (objects hide it, it
+      // hides what is below it), each pixel a bilinear tap of that texture.
+      glBindFramebuffer(GL_FRAMEBUFFER, I.msaa_fbo);
+      glViewport(0, 0, w, h);
+      const GLuint u = I.prog_ground_up;
+      I.setCommonUniforms(u, view_proj, light_vp, normal_offset, shadows_on);
+      glUniform3f(loc(u, "u_quadCenter"), float(cam.target.x()), float(cam.target.y()), float(I.params.ground_height));
+      glUniform1f(loc(u, "u_quadHalf"), float(ground_half));
+      glActiveTexture(GL_TEXTURE7);
+      glBindTexture(GL_TEXTURE_2D, I.ground_lo_tex);
+      glActiveTexture(GL_TEXTURE0);
+      glUniform1i(loc(u, "u_groundLo"), 7);
+      ++stats_.draw_calls;
+    }
     glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    if (half) {
+      glActiveTexture(GL_TEXTURE7);
+      glBindTexture(GL_TEXTURE_2D, 0);  // a render target again next frame
+      glActiveTexture(GL_TEXTURE0);
+    }
     ++stats_.draw_calls;
   }
   if (!I.params.transparent) {

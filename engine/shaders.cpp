@@ -59,12 +59,6 @@ const vec2 kPoisson[12] = vec2[](
   vec2(0.962, -0.195), vec2(0.473, -0.480), vec2(0.519, 0.767), vec2(0.185, -0.893),
   vec2(0.507, 0.064), vec2(0.896, 0.412), vec2(-0.322, -0.933), vec2(-0.792, -0.598));
 
-#ifdef SHADOW_MASK
-// The objects' shadow was computed once per pixel for the visible surface (kShadowMaskFS) and is
-// read back here: the same value shadowFactor() gives, without its taps per fragment.
-uniform sampler2D u_shadowMask;
-float shadowFactor(vec3 P, vec3 N) { return texelFetch(u_shadowMask, ivec2(gl_FragCoord.xy), 0).r; }
-#else
 // Soft shadows with contact hardening (percentage-closer soft shadows, Fernando 2005, for a
 // directional light of angular radius theta): 1) blocker search: the mean depth d_b of the
 // occluders around the lookup; 2) penumbra radius w = (d_r - d_b) * tan(theta) in metres, at
@@ -133,27 +127,61 @@ float shadowClass(vec3 P, vec3 N) {
   float nB = shadowBlockers(c).x;
   return nB == 0.0 ? 1.0 : (nB == 7.0 ? 0.0 : 0.5);
 }
-#endif
 
-// Linear radiance of a surface point (before tone mapping).
-vec3 shade(vec3 P, vec3 N, vec3 albedo, float specular, float shininess, float rim) {
+// Linear radiance of a surface point (before tone mapping), in two parts: `key`, the key light's
+// share before its shadow, and `rest` (fill, ambient, the rim's sky part). The radiance is
+// key * shadowFactor(P, N) + rest: emit() below, or the deferred shading pass (kDeferredFS).
+void shadeTerms(vec3 P, vec3 N, vec3 albedo, float specular, float shininess, float rim, out vec3 key,
+                out vec3 rest) {
   vec3 V = normalize(u_eye - P);
   vec3 L = -u_lightDir;
   float ndl = max(dot(N, L), 0.0);
-  float sh = ndl > 0.0 ? shadowFactor(P, N) : 0.0;
   vec3 H = normalize(L + V);
   // Normalized Blinn-Phong: (n + 8) / 8 keeps highlight energy steady as shininess changes.
   float spec = specular * (shininess + 8.0) / 8.0 * pow(max(dot(N, H), 0.0), shininess) * ndl;
-  vec3 key = u_lightColor * sh * (albedo * ndl + vec3(spec));
+  // Rim: a thin sky-coloured edge that separates the object from the background.
+  float fr = pow(1.0 - max(dot(N, V), 0.0), 4.0);
+  // A face turned away from the key light gets none of it, shadow or not.
+  key = u_lightColor * (albedo * ndl + vec3(spec) + 0.5 * rim * fr) * step(1e-30, ndl);
   float fdl = max(dot(N, -u_fillDir), 0.0);
   vec3 fill = u_fillColor * albedo * fdl;
   vec3 amb = albedo * mix(u_groundAmbient, u_skyAmbient, 0.5 + 0.5 * N.z);
-  // Rim: a thin sky-coloured edge that separates the object from the background.
-  float fr = pow(1.0 - max(dot(N, V), 0.0), 4.0);
-  vec3 rimc = rim * fr * (u_skyAmbient * 2.0 + 0.5 * u_lightColor * sh);
-  return key + fill + amb + rimc;
+  rest = fill + amb + rim * fr * u_skyAmbient * 2.0;
 }
 )GLSL";
+
+// The end of the lit fragment shaders (kLitFS, kMeshMatFS, kHairFS), given the point and the normal
+// shadowFactor() is to see and the two parts of the radiance (shadeTerms()). Forward: the shadow is
+// looked up here and the pixel finished. With SPLIT_LIGHT (single-sample frames with shadows):
+// the fragment only writes what the deferred shading pass (kDeferredFS) needs, and that pass
+// searches the shadow map once per visible pixel: llvmpipe shades whole blocks of pixels per
+// triangle, so on a mesh of small triangles a search per fragment would run several times per
+// pixel. The position is kept in full float (the search sees the exact point), the normal in
+// octahedral form, 12 bits a coordinate, packed into one exactly representable float (within
+// 1e-3 rad: it only sets the normal offset of the lookup).
+#define PONYHOP_EMIT                                                                 \
+  "#ifdef SPLIT_LIGHT\n"                                                             \
+  "layout(location = 0) out vec4 o_surface;\n"                                       \
+  "layout(location = 1) out vec4 o_key;\n"                                           \
+  "layout(location = 2) out vec4 o_rest;\n"                                          \
+  "float packNormal(vec3 n) {\n"                                                     \
+  "  n /= abs(n.x) + abs(n.y) + abs(n.z);\n"                                         \
+  "  vec2 s = vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);\n"             \
+  "  vec2 p = n.z >= 0.0 ? n.xy : (1.0 - abs(n.yx)) * s;\n"                          \
+  "  vec2 q = floor((p * 0.5 + 0.5) * 4095.0 + 0.5);\n"                              \
+  "  return q.x + q.y * 4096.0;\n"                                                   \
+  "}\n"                                                                              \
+  "void emit(vec3 P, vec3 N, vec3 key, vec3 rest) {\n"                               \
+  "  o_surface = vec4(P, packNormal(N));\n"                                          \
+  "  o_key = vec4(key, 1.0);\n"                                                      \
+  "  o_rest = vec4(rest, 1.0);\n"                                                    \
+  "}\n"                                                                              \
+  "#else\n"                                                                          \
+  "out vec4 o_color;\n"                                                              \
+  "void emit(vec3 P, vec3 N, vec3 key, vec3 rest) {\n"                               \
+  "  o_color = vec4(linearToSrgb(toneMap(key * shadowFactor(P, N) + rest)), 1.0);\n" \
+  "}\n"                                                                              \
+  "#endif\n"
 
 // ---------------------------------------------------------------------------------------------
 const char* const kMeshVS = R"GLSL(
@@ -248,22 +276,22 @@ void main() {
 }
 )GLSL";
 
-const char* const kLitFS = R"GLSL(
+const char* const kLitFS = PONYHOP_EMIT R"GLSL(
 in vec3 v_pos;
 in vec3 v_normal;
 flat in vec4 v_colorSpec;
 flat in vec2 v_shinRim;
-out vec4 o_color;
 void main() {
   vec3 N = normalize(v_normal);
   if (!gl_FrontFacing) N = -N;  // open or inside-out meshes still light correctly
-  vec3 c = shade(v_pos, N, v_colorSpec.rgb, v_colorSpec.a, v_shinRim.x, v_shinRim.y);
-  o_color = vec4(linearToSrgb(toneMap(c)), 1.0);
+  vec3 key, rest;
+  shadeTerms(v_pos, N, v_colorSpec.rgb, v_colorSpec.a, v_shinRim.x, v_shinRim.y, key, rest);
+  emit(v_pos, N, key, rest);
 }
 )GLSL";
 
 // kLitFS with the albedo from the mesh's materials (u_baseTex: sRGB texture, read linear).
-const char* const kMeshMatFS = R"GLSL(
+const char* const kMeshMatFS = PONYHOP_EMIT R"GLSL(
 in vec3 v_pos;
 in vec3 v_normal;
 in vec4 v_color;
@@ -272,14 +300,14 @@ flat in vec4 v_colorSpec;
 flat in vec2 v_shinRim;
 uniform sampler2D u_baseTex;
 uniform int u_hasTex;
-out vec4 o_color;
 void main() {
   vec3 N = normalize(v_normal);
   if (!gl_FrontFacing) N = -N;
   vec3 albedo = v_colorSpec.rgb * v_color.rgb;
   if (u_hasTex != 0) albedo *= texture(u_baseTex, v_uv).rgb;
-  vec3 c = shade(v_pos, N, albedo, v_colorSpec.a, v_shinRim.x, v_shinRim.y);
-  o_color = vec4(linearToSrgb(toneMap(c)), 1.0);
+  vec3 key, rest;
+  shadeTerms(v_pos, N, albedo, v_colorSpec.a, v_shinRim.x, v_shinRim.y, key, rest);
+  emit(v_pos, N, key, rest);
 }
 )GLSL";
 
@@ -328,14 +356,13 @@ void main() {
 // diffuse follows sin(T, L), softened by how much the clump faces the light (wrapped N.L, so the
 // far side of the tail is darker); the primary highlight is white with its tangent shifted one way,
 // the secondary is tinted by the hair colour, broader, shifted the other way.
-const char* const kHairFS = R"GLSL(
+const char* const kHairFS = PONYHOP_EMIT R"GLSL(
 in vec3 v_pos;
 in vec3 v_tangent;
 in vec3 v_normal;
 in vec3 v_color;
 in float v_occlusion;
 uniform vec2 u_hairShading;  // highlight strength, shift
-out vec4 o_color;
 float strandSpec(vec3 T, vec3 H, float e) {
   float th = dot(T, H);
   return pow(sqrt(max(1.0 - th * th, 0.0)), e);
@@ -348,19 +375,17 @@ void main() {
   float tl = dot(T, L);
   float kk = sqrt(max(1.0 - tl * tl, 0.0));
   float wrap = clamp((dot(N, L) + 0.6) / 1.6, 0.0, 1.0);
-  float sh = wrap > 0.0 ? shadowFactor(v_pos, N) : 0.0;
   vec3 H = normalize(L + V);
   float shift = u_hairShading.y;
   vec3 T1 = normalize(T + shift * N);
   vec3 T2 = normalize(T - 1.5 * shift * N);
   float spec = u_hairShading.x * (strandSpec(T1, H, 90.0) * 1.4);
   vec3 spec2 = u_hairShading.x * 0.8 * v_color * 4.0 * strandSpec(T2, H, 24.0);
-  float lit = sh * wrap * v_occlusion;
-  vec3 key = u_lightColor * lit * (v_color * kk * 0.85 + vec3(spec) + spec2);
+  vec3 key = u_lightColor * (wrap * v_occlusion) * (v_color * kk * 0.85 + vec3(spec) + spec2);
   float fdl = clamp((dot(N, -u_fillDir) + 0.5) / 1.5, 0.0, 1.0);
   vec3 fill = u_fillColor * v_color * fdl * v_occlusion;
   vec3 amb = v_color * mix(u_groundAmbient, u_skyAmbient, 0.5 + 0.5 * N.z) * v_occlusion;
-  o_color = vec4(linearToSrgb(toneMap(key + fill + amb)), 1.0);
+  emit(v_pos, N, key, fill + amb);  // the clump normal as it is, whichever side is seen
 }
 )GLSL";
 
@@ -424,7 +449,7 @@ void main() {
   float grid = step(1e-9, u_gridSpacing);
   float k = filteredChecker(P.xy / max(u_gridSpacing, 1e-9));
   vec3 albedo = u_groundAlbedo * mix(1.0, mix(0.93, 1.05, k), grid);  // checker: subtle, about +-6 %
-  // shade() of kCommonFS for the plane (N = +z, specular 0.04, shininess 16, no rim), with the
+  // shadeTerms() of kCommonFS for the plane (N = +z, specular 0.04, shininess 16, no rim), with the
   // shadow read from the per-frame ground shadow texture instead of a search per pixel.
   vec3 V = normalize(u_eye - P);
   vec3 L = -u_lightDir;
@@ -447,44 +472,13 @@ void main() {
 }
 )GLSL";
 
-// The visible surface of the objects, before they are shaded (llvmpipe shades in blocks of pixels,
-// and a 44,000-triangle head has triangles of a few pixels: a shadow search per fragment would run
-// several times per pixel). One RGBA32F texel: the position exactly as kLitFS / kMeshMatFS /
-// kHairFS pass it to shadowFactor(), and their normal in octahedral form, 12 bits a coordinate,
-// packed into one exactly representable float (within 1e-3 rad; it only sets the normal offset).
-// kShadowMaskFS then searches once per pixel.
-#define PONYHOP_PACK_NORMAL                                              \
-  "float packNormal(vec3 n) {\n"                                         \
-  "  n /= abs(n.x) + abs(n.y) + abs(n.z);\n"                             \
-  "  vec2 s = vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);\n" \
-  "  vec2 p = n.z >= 0.0 ? n.xy : (1.0 - abs(n.yx)) * s;\n"              \
-  "  vec2 q = floor((p * 0.5 + 0.5) * 4095.0 + 0.5);\n"                  \
-  "  return q.x + q.y * 4096.0;\n"                                       \
-  "}\n"
-const char* const kSurfaceFS = PONYHOP_PACK_NORMAL R"GLSL(
-in vec3 v_pos;
-in vec3 v_normal;
-out vec4 o_surface;
-void main() {
-  vec3 N = normalize(v_normal);
-  if (!gl_FrontFacing) N = -N;
-  o_surface = vec4(v_pos, packNormal(N));
-}
-)GLSL";
-
-// kSurfaceFS for hair: kHairFS passes its clump normal as it is, whichever side is seen.
-const char* const kHairSurfaceFS = PONYHOP_PACK_NORMAL R"GLSL(
-in vec3 v_pos;
-in vec3 v_normal;
-out vec4 o_surface;
-void main() { o_surface = vec4(v_pos, packNormal(normalize(v_normal))); }
-)GLSL";
-#undef PONYHOP_PACK_NORMAL
-
-// shadowFactor() of the visible surface, once per pixel where an object is (the depth test
-// passes only there).
-const char* const kShadowMaskFS = R"GLSL(
+// The deferred shading pass (single-sample frames with shadows): once per pixel where an object
+// is (the depth test passes only there), the shadow of the visible surface and the finished
+// colour, from what the lit shaders wrote with SPLIT_LIGHT (PONYHOP_EMIT).
+const char* const kDeferredFS = R"GLSL(
 uniform sampler2D u_surface;
+uniform sampler2D u_key;
+uniform sampler2D u_rest;
 out vec4 o_color;
 vec3 unpackNormal(float v) {
   float b = floor(v / 4096.0);
@@ -495,9 +489,19 @@ vec3 unpackNormal(float v) {
   return normalize(n);
 }
 void main() {
-  vec4 s = texelFetch(u_surface, ivec2(gl_FragCoord.xy), 0);
-  o_color = vec4(shadowFactor(s.xyz, unpackNormal(s.w)), 0.0, 0.0, 1.0);
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  vec4 s = texelFetch(u_surface, p, 0);
+  vec3 key = texelFetch(u_key, p, 0).rgb, rest = texelFetch(u_rest, p, 0).rgb;
+  o_color = vec4(linearToSrgb(toneMap(key * shadowFactor(s.xyz, unpackNormal(s.w)) + rest)), 1.0);
 }
+)GLSL";
+
+// The ground square at full resolution over the one shaded at half resolution (renderer.cpp):
+// a bilinear tap of it per pixel, at the same place in the frame.
+const char* const kGroundUpFS = R"GLSL(
+uniform sampler2D u_groundLo;
+out vec4 o_color;
+void main() { o_color = texture(u_groundLo, gl_FragCoord.xy / u_viewport); }
 )GLSL";
 
 // The background gradient, at the far plane after everything else: where nothing was drawn.

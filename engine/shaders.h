@@ -17,27 +17,26 @@ extern const char* const kHairVS;        // hair strands (camera- or light-facin
 extern const char* const kLitFS;           // Blinn-Phong + rim, shadowed key light, fill, hemi ambient
 extern const char* const kMeshMatFS;       // kLitFS with the albedo times vertex colour and base-colour texture
 extern const char* const kGroundFS;        // the checker ground fading into the background
+extern const char* const kGroundUpFS;      // the ground shaded at half resolution, upsampled
 extern const char* const kBackgroundFS;    // the background gradient (where nothing was drawn)
 extern const char* const kGroundShadowFS;  // the ground's soft shadow into a small texture
 extern const char* const kPostAaFS;        // post-process anti-aliasing of the finished frame
 extern const char* const kLinesFS;
-extern const char* const kHairFS;         // Kajiya-Kay two-lobe hair, shadowed key light, fill, ambient
-extern const char* const kDepthFS;        // shadow pass (depth only)
-extern const char* const kSurfaceFS;      // position and packed normal of the visible surface (deferred shadows)
-extern const char* const kHairSurfaceFS;  // the same for hair
-extern const char* const kShadowMaskFS;   // shadowFactor() once per pixel of that surface
+extern const char* const kHairFS;      // Kajiya-Kay two-lobe hair, shadowed key light, fill, ambient
+extern const char* const kDepthFS;     // shadow pass (depth only)
+extern const char* const kDeferredFS;  // the shadow and the colour once per visible pixel (SPLIT_LIGHT targets)
 
-// Compiled into a program's fragment shader by `defines`: shadowFactor() reads the per-pixel mask
-// (unit u_shadowMask) instead of searching the shadow map.
-inline constexpr const char* kShadowMaskDefine = "#define SHADOW_MASK 1\n";
-// Compiled into kGroundShadowFS / kShadowMaskFS: the classifying first pass (shadowClass()).
+// Compiled into kLitFS / kMeshMatFS / kHairFS by `defines`: they write the visible surface and the
+// two parts of its radiance into three targets for kDeferredFS instead of a colour.
+inline constexpr const char* kSplitLightDefine = "#define SPLIT_LIGHT 1\n";
+// Compiled into kGroundShadowFS: the classifying first pass (shadowClass()).
 inline constexpr const char* kShadowClassifyDefine = "#define SHADOW_CLASSIFY 1\n";
 // Compiled into kPostAaFS: its first pass (flat pixels copied, edges marked).
 inline constexpr const char* kPostEdgesDefine = "#define POST_EDGES 1\n";
 
 // Compiles and links "#version 330 core" + the given sources. Returns 0 and fills `err` (with the
 // driver's log and the stage's name) on failure. Needs a current context with GL loaded.
-// `defines`: lines placed before the fragment shader's sources (e.g. kShadowMaskDefine).
+// `defines`: lines placed before the fragment shader's sources (e.g. kSplitLightDefine).
 unsigned buildProgram(const char* name, const char* vs, const char* fs, std::string* err,
                       const char* defines = nullptr);
 
