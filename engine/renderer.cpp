@@ -167,6 +167,9 @@ struct Renderer::Impl {
   // Static geometry.
   GLuint hull_vao = 0, hull_vbo = 0, hull_ebo = 0, hull_instances = 0;
   GLsizei hull_index_count = 0;
+  // The coarser template the shadow pass draws the hulls with (the same instances).
+  GLuint hull_shadow_vao = 0, hull_shadow_vbo = 0, hull_shadow_ebo = 0;
+  GLsizei hull_shadow_index_count = 0;
   size_t hull_triangles = 0;
   GLuint empty_vao = 0;
   GLuint lines_vao = 0, lines_vbo = 0;
@@ -300,10 +303,11 @@ Renderer::~Renderer() {
   for (GLuint p : I.programs)
     if (p) glDeleteProgram(p);
   for (int i = 0; i < int(I.meshes.size()); ++i) release(MeshHandle{i});
-  GLuint vaos[] = {I.hull_vao, I.empty_vao, I.lines_vao, I.hair_vao};
-  glDeleteVertexArrays(4, vaos);
-  GLuint bufs[] = {I.hull_vbo, I.hull_ebo, I.hull_instances, I.lines_vbo, I.hair_vbo, I.hair_ebo};
-  glDeleteBuffers(6, bufs);
+  GLuint vaos[] = {I.hull_vao, I.hull_shadow_vao, I.empty_vao, I.lines_vao, I.hair_vao};
+  glDeleteVertexArrays(5, vaos);
+  GLuint bufs[] = {I.hull_vbo,       I.hull_ebo,  I.hull_shadow_vbo, I.hull_shadow_ebo,
+                   I.hull_instances, I.lines_vbo, I.hair_vbo,        I.hair_ebo};
+  glDeleteBuffers(8, bufs);
   GLuint fbos[] = {I.msaa_fbo, I.resolve_fbo, I.shadow_fbo, I.ground_shadow_fbo, I.surf_fbo, I.ground_lo_fbo};
   glDeleteFramebuffers(6, fbos);
   GLuint rbs[] = {I.msaa_color,          I.msaa_depth,    I.resolve_color,
@@ -360,37 +364,45 @@ bool Renderer::init(std::string* err) {
 
   // Hull template: 24 slices x 8 rings per cap (768 triangles); instanced. Smooth at the sizes
   // links have on screen (tens of pixels); the normals are exact, only the outline is polygonal.
-  const HullTemplate ht = makeHullTemplate(24, 8);
-  I.hull_index_count = GLsizei(ht.indices.size());
-  I.hull_triangles = ht.indices.size() / 3;
-  glGenVertexArrays(1, &I.hull_vao);
-  glBindVertexArray(I.hull_vao);
-  glGenBuffers(1, &I.hull_vbo);
-  glBindBuffer(GL_ARRAY_BUFFER, I.hull_vbo);
-  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(ht.vertices.size() * sizeof(ht.vertices[0])), ht.vertices.data(),
-               GL_STATIC_DRAW);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 4 * sizeof(float), nullptr);
-  glGenBuffers(1, &I.hull_ebo);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, I.hull_ebo);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(ht.indices.size() * sizeof(uint32_t)), ht.indices.data(),
-               GL_STATIC_DRAW);
+  // The shadow pass draws a coarser one, 16 slices x 4 rings (256 triangles): llvmpipe's cost
+  // there is per triangle, and its outline stays within 2 % of the radius of the true one (about
+  // a shadow texel for the hopper's body), inside it, so that no surface shadows itself.
   glGenBuffers(1, &I.hull_instances);
-  glBindBuffer(GL_ARRAY_BUFFER, I.hull_instances);
-  const GLsizei stride = sizeof(HullInstance);
-  const struct {
-    GLuint index;
-    GLint size;
-    size_t offset;
-  } inst[] = {{1, 4, offsetof(HullInstance, p0r0)},
-              {2, 4, offsetof(HullInstance, p1r1)},
-              {3, 4, offsetof(HullInstance, color_spec)},
-              {4, 2, offsetof(HullInstance, shin_rim)}};
-  for (const auto& a : inst) {
-    glEnableVertexAttribArray(a.index);
-    glVertexAttribPointer(a.index, a.size, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<const void*>(a.offset));
-    glVertexAttribDivisor(a.index, 1);
-  }
+  const auto makeHullVao = [&](int slices, int rings, GLuint& vao, GLuint& vbo, GLuint& ebo) {
+    const HullTemplate ht = makeHullTemplate(slices, rings);
+    glGenVertexArrays(1, &vao);
+    glBindVertexArray(vao);
+    glGenBuffers(1, &vbo);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(ht.vertices.size() * sizeof(ht.vertices[0])), ht.vertices.data(),
+                 GL_STATIC_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 4 * sizeof(float), nullptr);
+    glGenBuffers(1, &ebo);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(ht.indices.size() * sizeof(uint32_t)), ht.indices.data(),
+                 GL_STATIC_DRAW);
+    glBindBuffer(GL_ARRAY_BUFFER, I.hull_instances);
+    const GLsizei stride = sizeof(HullInstance);
+    const struct {
+      GLuint index;
+      GLint size;
+      size_t offset;
+    } inst[] = {{1, 4, offsetof(HullInstance, p0r0)},
+                {2, 4, offsetof(HullInstance, p1r1)},
+                {3, 4, offsetof(HullInstance, color_spec)},
+                {4, 2, offsetof(HullInstance, shin_rim)}};
+    for (const auto& a : inst) {
+      glEnableVertexAttribArray(a.index);
+      glVertexAttribPointer(a.index, a.size, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<const void*>(a.offset));
+      glVertexAttribDivisor(a.index, 1);
+    }
+    return ht.indices.size();
+  };
+  const size_t hull_indices = makeHullVao(24, 8, I.hull_vao, I.hull_vbo, I.hull_ebo);
+  I.hull_index_count = GLsizei(hull_indices);
+  I.hull_triangles = hull_indices / 3;
+  I.hull_shadow_index_count = GLsizei(makeHullVao(16, 4, I.hull_shadow_vao, I.hull_shadow_vbo, I.hull_shadow_ebo));
 
   glGenSamplers(1, &I.raw_depth_sampler);
   glSamplerParameteri(I.raw_depth_sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
@@ -878,11 +890,12 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
   if (!hulls.empty()) {
     glUseProgram(hull_prog);
     if (depth_only) setMat4(hull_prog, "u_viewProj", view_proj);
-    glBindVertexArray(hull_vao);
+    glBindVertexArray(depth_only ? hull_shadow_vao : hull_vao);
     // Hulls are closed and wound counter-clockwise: cull their back faces in both passes (half
     // the rasterization; the front faces alone give the nearest depth seen from the light).
     glEnable(GL_CULL_FACE);
-    glDrawElementsInstanced(GL_TRIANGLES, hull_index_count, GL_UNSIGNED_INT, nullptr, GLsizei(hulls.size()));
+    glDrawElementsInstanced(GL_TRIANGLES, depth_only ? hull_shadow_index_count : hull_index_count, GL_UNSIGNED_INT,
+                            nullptr, GLsizei(hulls.size()));
     glDisable(GL_CULL_FACE);
   }
   glBindVertexArray(0);
