@@ -958,7 +958,9 @@ bool Renderer::Impl::screenRects(const Eigen::Matrix4f& view_proj, int w, int h,
   };
   // Many draws (a long chain of links): their union, as one.
   const bool one = part_bounds.size() > 64;
-  for (const Eigen::AlignedBox3d& b : one ? std::vector<Eigen::AlignedBox3d>{draw_bounds} : part_bounds) {
+  const Eigen::AlignedBox3d* parts = one ? &draw_bounds : part_bounds.data();
+  for (size_t k = 0, n = one ? 1 : part_bounds.size(); k < n; ++k) {
+    const Eigen::AlignedBox3d& b = parts[k];
     if (b.isEmpty()) continue;
     for (int i = 0; i < 8; ++i)
       if (!add(b.corner(Eigen::AlignedBox3d::CornerType(i)))) return false;
