@@ -1189,6 +1189,51 @@ void Renderer::endFrame() {
 
   I.beginPass(Impl::kMainPass);
   stats_.draw_calls = 0;
+  const auto setGroundUniforms = [&] {
+    const GLuint p = I.prog_ground;
+    I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
+    glUniform3f(loc(p, "u_quadCenter"), float(cam.target.x()), float(cam.target.y()), float(I.params.ground_height));
+    glUniform1f(loc(p, "u_quadHalf"), float(ground_half));
+    glUniform1i(loc(p, "u_transparent"), I.params.transparent ? 1 : 0);
+    setVec3(p, "u_groundAlbedo", srgbToLinear(I.params.ground_color.cast<float>()));
+    glUniform1f(loc(p, "u_gridSpacing"), float(std::max(I.params.grid_spacing, 0.0)));
+    glUniform3f(loc(p, "u_fadeCenter"), float(cam.target.x()), float(cam.target.y()), 0.0f);
+    glUniform2f(loc(p, "u_fade"), float(fade_start), float(fade_end));
+    glUniform1i(loc(p, "u_groundShadow"), 2);
+  };
+  // Single-sample frames: the ground is shaded at half resolution (a quarter of the pixels) and
+  // upsampled bilinearly after the objects. Everything on it is smooth at the pixel scale: the
+  // shadow (a soft texture), the lighting, the fade, the background it fades into; the checker is
+  // box-filtered over the half-resolution pixel, so its edges stay anti-aliased, a pixel softer.
+  // It is most of a final frame's per-pixel shading, and llvmpipe pays for every pixel it shades.
+  const bool half_ground = I.params.ground && samples == 1 && I.ground_lo_fbo != 0;
+  if (half_ground) {
+    // 1) The ground, then the background around it, in a half-size texture with a depth buffer of
+    // its own (no object in it): the texels around the ground's edge hold the background it fades
+    // into (or alpha 0 when transparent), so the upsampled edge blends into what is drawn beside
+    // it. First, before the objects: llvmpipe finishes a framebuffer's drawing at every switch,
+    // and this order has one switch fewer.
+    I.bindShadowTextures(true);
+    glBindFramebuffer(GL_FRAMEBUFFER, I.ground_lo_fbo);
+    glViewport(0, 0, I.ground_lo_w, I.ground_lo_h);
+    glClearColor(0, 0, 0, 0);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    setGroundUniforms();
+    glUniform2f(loc(I.prog_ground, "u_viewport"), float(I.ground_lo_w), float(I.ground_lo_h));
+    glBindVertexArray(I.empty_vao);
+    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    if (!I.params.transparent) {
+      I.setCommonUniforms(I.prog_bg, view_proj, light_vp, normal_offset, shadows_on);
+      glUniform2f(loc(I.prog_bg, "u_viewport"), float(I.ground_lo_w), float(I.ground_lo_h));
+      glDepthFunc(GL_LEQUAL);  // the far plane, where the depth is still the cleared 1
+      glDepthMask(GL_FALSE);
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+      glDepthMask(GL_TRUE);
+      glDepthFunc(GL_LESS);
+    }
+    glBindVertexArray(0);
+    ++stats_.draw_calls;
+  }
   glViewport(0, 0, w, h);
   glDepthMask(GL_TRUE);
   glEnable(GL_DEPTH_TEST);
@@ -1265,46 +1310,9 @@ void Renderer::endFrame() {
   // fills only the pixels nothing was drawn on (none when transparent: alpha 0 there).
   glBindVertexArray(I.empty_vao);
   if (I.params.ground) {
-    // Single-sample frames: the ground is shaded at half resolution (a quarter of the pixels)
-    // and upsampled bilinearly. Everything on it is smooth at the pixel scale: the shadow (a soft
-    // texture), the lighting, the fade, the background it fades into; the checker is box-filtered
-    // over the half-resolution pixel, so its edges stay anti-aliased, a pixel softer. It is most of
-    // a final frame's per-pixel shading, and llvmpipe pays for every pixel it shades.
-    const bool half = samples == 1 && I.ground_lo_fbo != 0;
-    const GLuint p = I.prog_ground;
-    I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
-    glUniform3f(loc(p, "u_quadCenter"), float(cam.target.x()), float(cam.target.y()), float(I.params.ground_height));
-    glUniform1f(loc(p, "u_quadHalf"), float(ground_half));
-    glUniform1i(loc(p, "u_transparent"), I.params.transparent ? 1 : 0);
-    setVec3(p, "u_groundAlbedo", srgbToLinear(I.params.ground_color.cast<float>()));
-    glUniform1f(loc(p, "u_gridSpacing"), float(std::max(I.params.grid_spacing, 0.0)));
-    glUniform3f(loc(p, "u_fadeCenter"), float(cam.target.x()), float(cam.target.y()), 0.0f);
-    glUniform2f(loc(p, "u_fade"), float(fade_start), float(fade_end));
-    glUniform1i(loc(p, "u_groundShadow"), 2);
-    if (half) {
-      // 1) The ground, then the background around it, in a half-size texture with a depth
-      // buffer of its own (no object in it): the texels around the ground's edge hold the
-      // background it fades into (or alpha 0 when transparent), so the upsampled edge blends into
-      // what is drawn beside it.
-      glBindFramebuffer(GL_FRAMEBUFFER, I.ground_lo_fbo);
-      glViewport(0, 0, I.ground_lo_w, I.ground_lo_h);
-      glClearColor(0, 0, 0, 0);
-      glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-      glUniform2f(loc(p, "u_viewport"), float(I.ground_lo_w), float(I.ground_lo_h));
-      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
-      if (!I.params.transparent) {
-        I.setCommonUniforms(I.prog_bg, view_proj, light_vp, normal_offset, shadows_on);
-        glUniform2f(loc(I.prog_bg, "u_viewport"), float(I.ground_lo_w), float(I.ground_lo_h));
-        glDepthFunc(GL_LEQUAL);  // the far plane, where the depth is still the cleared 1
-        glDepthMask(GL_FALSE);
-        glDrawArrays(GL_TRIANGLES, 0, 3);
-        glDepthMask(GL_TRUE);
-        glDepthFunc(GL_LESS);
-      }
+    if (half_ground) {
       // 2) The ground square again at full resolution, with the depth test (objects hide it, it
-      // hides what is below it), each pixel a bilinear tap of that texture.
-      glBindFramebuffer(GL_FRAMEBUFFER, I.msaa_fbo);
-      glViewport(0, 0, w, h);
+      // hides what is below it), each pixel a bilinear tap of the half-resolution texture.
       const GLuint u = I.prog_ground_up;
       I.setCommonUniforms(u, view_proj, light_vp, normal_offset, shadows_on);
       glUniform3f(loc(u, "u_quadCenter"), float(cam.target.x()), float(cam.target.y()), float(I.params.ground_height));
@@ -1313,13 +1321,13 @@ void Renderer::endFrame() {
       glBindTexture(GL_TEXTURE_2D, I.ground_lo_tex);
       glActiveTexture(GL_TEXTURE0);
       glUniform1i(loc(u, "u_groundLo"), 7);
-      ++stats_.draw_calls;
-    }
-    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
-    if (half) {
+      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
       glActiveTexture(GL_TEXTURE7);
       glBindTexture(GL_TEXTURE_2D, 0);  // a render target again next frame
       glActiveTexture(GL_TEXTURE0);
+    } else {
+      setGroundUniforms();
+      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
     }
     ++stats_.draw_calls;
   }
