@@ -235,5 +235,30 @@ TEST(PhysicsChain, SphericalJointDerivativesMatchFiniteDifferences) {
   }
 }
 
+// The stage clock (physics/stage_times.h) off: the same steps, the stages still counted, no time
+// charged; on again: time charged from then on.
+TEST(PhysicsChain, StageTimingCanBeSwitchedOff) {
+  ChainWorld timed = chainWorld(Integrator::SymplecticEuler, Stabilization::None, 1.0 / 1920.0);
+  ChainWorld untimed = chainWorld(Integrator::SymplecticEuler, Stabilization::None, 1.0 / 1920.0);
+  untimed.world.setStageTiming(false);
+  for (int i = 0; i < 50; ++i) {
+    timed.world.step();
+    untimed.world.step();
+  }
+  ASSERT_TRUE(timed.world.ok() && untimed.world.ok());
+  for (int i = 0; i < untimed.world.bodyCount(); ++i) {
+    EXPECT_EQ(timed.world.body(i).x, untimed.world.body(i).x);
+    EXPECT_EQ(timed.world.body(i).v, untimed.world.body(i).v);
+  }
+  const StageTimes& off = untimed.world.stageTimes();
+  EXPECT_EQ(off.total(), 0.0);
+  EXPECT_EQ(off.calls, timed.world.stageTimes().calls);
+  EXPECT_EQ(off.calls[static_cast<int>(Stage::JointForces)], 50);
+  EXPECT_GT(timed.world.stageTimes()[Stage::JointForces], 0.0);
+  untimed.world.setStageTiming(true);
+  for (int i = 0; i < 50; ++i) untimed.world.step();
+  EXPECT_GT(untimed.world.stageTimes()[Stage::JointForces], 0.0);
+}
+
 }  // namespace
 }  // namespace ponyhop
