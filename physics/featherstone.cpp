@@ -61,7 +61,7 @@ Eigen::Matrix<double, N, 3> timesSkew(const Eigen::MatrixBase<Derived>& m, const
 }
 // skew(r) M for a 3 x 3 M: column j is r x (column j of M).
 template <class Derived>
-Eigen::Matrix3d skewTimes(const Eigen::Vector3d& r, const Eigen::MatrixBase<Derived>& m) {
+[[gnu::always_inline]] inline Eigen::Matrix3d skewTimes(const Eigen::Vector3d& r, const Eigen::MatrixBase<Derived>& m) {
   Eigen::Matrix3d out;
   const double r0 = r(0), r1 = r(1), r2 = r(2);
   for (int j = 0; j < 3; ++j) {  // in scalars: no Vector3d of the column through the stack
