@@ -127,15 +127,23 @@ void writeInertiaAndBias(const RigidBody& b, const Eigen::Matrix3d& r, Matrix6& 
   for (int i = 0; i < 3; ++i) {
     for (int j = i; j < 3; ++j) m[i][j] = m[j][i] = rd.row(i).dot(r.row(j));
   }
-  ia.setZero();
+  // Block by block (ia.setZero() was a `rep stos` of 288 bytes per body, then overwritten).
+  ia.topLeftCorner<3, 3>().setZero();
+  ia.topRightCorner<3, 3>().setZero();
+  ia.bottomLeftCorner<3, 3>().setZero();
   for (int i = 0; i < 3; ++i) {
     ia(i, i) = b.mass;
     for (int j = 0; j < 3; ++j) ia(3 + i, 3 + j) = m[i][j];
   }
-  Eigen::Vector3d iw;
-  for (int i = 0; i < 3; ++i) iw(i) = m[i][0] * b.w(0) + m[i][1] * b.w(1) + m[i][2] * b.w(2);
+  const double w0 = b.w(0), w1 = b.w(1), w2 = b.w(2);
+  double iw[3];
+  for (int i = 0; i < 3; ++i) iw[i] = m[i][0] * w0 + m[i][1] * w1 + m[i][2] * w2;
   pa.head<3>() = -b.force;
-  pa.tail<3>() = b.w.cross(iw) - b.torque;
+  // w x I w - t in scalars (the cross product through a stack temporary, read back as a 16-byte
+  // load of two 8-byte stores, stalled on store forwarding: 15 % of aba's samples).
+  pa(3) = (w1 * iw[2] - w2 * iw[1]) - b.torque(0);
+  pa(4) = (w2 * iw[0] - w0 * iw[2]) - b.torque(1);
+  pa(5) = (w0 * iw[1] - w1 * iw[0]) - b.torque(2);
 }
 
 }  // namespace
@@ -602,21 +610,24 @@ void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorX
   for (size_t i = n; i-- > 0;) {
     const Pass& p = pass_[i];
     RigidBody& b = bodies[nodes_[i].body];
-    Vector6d fc = p.u;
-    for (int c : nodes_[i].children) {  // fc -= shiftForce(d, f) in scalars: no Vector6d through the stack
+    // fc = F^J_i - sum_c shiftForce(d, f) in scalars: no Vector6d through the stack (a copy of
+    // p.u there was read back in 16-byte loads across its 16-byte stores, 11 % of aba's samples).
+    double fc[6];
+    for (int j = 0; j < 6; ++j) fc[j] = p.u(j);
+    for (int c : nodes_[i].children) {
       const Eigen::Vector3d& d = kin_[c].d;
       const Vector6d& f = pass_[c].u;
-      fc(0) -= f(0);
-      fc(1) -= f(1);
-      fc(2) -= f(2);
-      fc(3) -= f(3) + (d(1) * f(2) - d(2) * f(1));
-      fc(4) -= f(4) + (d(2) * f(0) - d(0) * f(2));
-      fc(5) -= f(5) + (d(0) * f(1) - d(1) * f(0));
+      fc[0] -= f(0);
+      fc[1] -= f(1);
+      fc[2] -= f(2);
+      fc[3] -= f(3) + (d(1) * f(2) - d(2) * f(1));
+      fc[4] -= f(4) + (d(2) * f(0) - d(0) * f(2));
+      fc[5] -= f(5) + (d(0) * f(1) - d(1) * f(0));
     }
     b.a = p.acc.head<3>();
     b.alpha = p.acc.tail<3>();
-    b.constraint_force = fc.head<3>();
-    b.constraint_torque = fc.tail<3>();
+    b.constraint_force = Eigen::Vector3d(fc[0], fc[1], fc[2]);
+    b.constraint_torque = Eigen::Vector3d(fc[3], fc[4], fc[5]);
   }
 }
 
