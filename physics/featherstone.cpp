@@ -368,12 +368,18 @@ void ArticulatedSystem::writeState(std::vector<RigidBody>& bodies) const {
         Frame& f = frames_[i];
         b.q = renormalized(p.q * coords_.q[i]);  // one normalization: RK4 stages are not unit
         f.R = b.q.toRotationMatrix();
-        const Eigen::Matrix3d rp = nd.parent_node >= 0 ? frames_[nd.parent_node].R : p.rotation();
+        // The parent's rotation read where it is (a copy of it into a local was read back across
+        // its 16-byte stores: a failed store forwarding, a fifth of this pass's samples), and
+        // w_i kept in a local for v_i (read back from b.w, the same stall).
+        Eigen::Matrix3d rp_prescribed;
+        const Eigen::Matrix3d& rp =
+            nd.parent_node >= 0 ? frames_[nd.parent_node].R : (rp_prescribed = p.rotation(), rp_prescribed);
         f.r_p.noalias() = rp * nd.point_parent;
         f.r_i.noalias() = f.R * nd.point_child;
         b.x = p.x + f.r_p - f.r_i;
-        b.w = p.w + rp * u_.segment<3>(nd.dof);
-        b.v = p.v + p.w.cross(f.r_p) - b.w.cross(f.r_i);
+        const Eigen::Vector3d w = p.w + rp * u_.segment<3>(nd.dof);
+        b.w = w;
+        b.v = p.v + p.w.cross(f.r_p) - w.cross(f.r_i);
         break;
       }
       case Type::Prismatic: {
@@ -426,7 +432,10 @@ void ArticulatedSystem::jointKinematics(const std::vector<RigidBody>& bodies, st
       case Type::Spherical: {
         // Parents come first: a dynamic parent's rotation is already in out.
         k.Rp = nd.parent_node >= 0 ? out[nd.parent_node].R : p.rotation();
-        const Eigen::Matrix3d& rp = k.Rp;
+        // Read from writeState()'s frames when it has just written them: k.Rp, just copied, was
+        // read back across its 16-byte stores (a failed store forwarding, a quarter of this
+        // loop's samples).
+        const Eigen::Matrix3d& rp = written && nd.parent_node >= 0 ? frames_[nd.parent_node].R : k.Rp;
         const Eigen::Vector3d r_p = written ? frames_[i].r_p : Eigen::Vector3d(rp * nd.point_parent);
         const Eigen::Vector3d r_i = written ? frames_[i].r_i : Eigen::Vector3d(k.R * nd.point_child);
         k.r_i = r_i;
