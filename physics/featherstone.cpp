@@ -571,21 +571,42 @@ void ArticulatedSystem::abaOutward(size_t i, Eigen::VectorXd& udot) {
   const Node& nd = nodes_[i];
   const Kinematics& k = kin_[i];
   Pass& p = pass_[i];
-  const Vector6d a_prime = (nd.parent_node >= 0 ? shiftMotion(k.d, pass_[nd.parent_node].acc) : k.a_base) + k.c;
-  const Eigen::Matrix<double, D, 1> ud =
-      p.dinv.topLeftCorner<D, D>() * (p.u.head<D>() - p.U.leftCols<D>().transpose() * a_prime);
-  if constexpr (D == 3) {  // spherical, world axes (abaInward): u' = R_p^T u'_w, A = A' + [r_i x u'_w; u'_w]
-    udot.segment<3>(nd.dof).noalias() = k.Rp.transpose() * ud;
-    // Entry by entry (the child reads this A next, entry by entry in shiftMotion: no wide load
-    // of narrow stores).
+  if constexpr (D == 3) {
+    // Spherical, world axes (abaInward): u'_w = D^-1 (u - U^T A'), u' = R_p^T u'_w,
+    // A = A' + [r_i x u'_w; u'_w]. In scalars, A' included: as a Vector6d, A' was written entry
+    // by entry and read back in 16-byte loads (failed store forwarding, a fifth of this
+    // pass's samples).
+    double a[6];
+    if (nd.parent_node >= 0) {  // A' = X A_p + c
+      const Vector6d& ap = pass_[nd.parent_node].acc;
+      const Eigen::Vector3d& d = k.d;
+      a[0] = (ap(0) + (ap(4) * d(2) - ap(5) * d(1))) + k.c(0);
+      a[1] = (ap(1) + (ap(5) * d(0) - ap(3) * d(2))) + k.c(1);
+      a[2] = (ap(2) + (ap(3) * d(1) - ap(4) * d(0))) + k.c(2);
+      for (int j = 3; j < 6; ++j) a[j] = ap(j) + k.c(j);
+    } else {
+      for (int j = 0; j < 6; ++j) a[j] = k.a_base(j) + k.c(j);
+    }
+    double v[3];
+    for (int j = 0; j < 3; ++j) {
+      double uta = p.U(0, j) * a[0];
+      for (int m = 1; m < 6; ++m) uta += p.U(m, j) * a[m];
+      v[j] = p.u(j) - uta;
+    }
+    double ud[3];
+    for (int m = 0; m < 3; ++m) ud[m] = p.dinv(m, 0) * v[0] + p.dinv(m, 1) * v[1] + p.dinv(m, 2) * v[2];
+    for (int j = 0; j < 3; ++j) udot(nd.dof + j) = k.Rp(0, j) * ud[0] + k.Rp(1, j) * ud[1] + k.Rp(2, j) * ud[2];
     const Eigen::Vector3d& r = k.r_i;
-    p.acc(0) = a_prime(0) + (r(1) * ud(2) - r(2) * ud(1));
-    p.acc(1) = a_prime(1) + (r(2) * ud(0) - r(0) * ud(2));
-    p.acc(2) = a_prime(2) + (r(0) * ud(1) - r(1) * ud(0));
-    p.acc(3) = a_prime(3) + ud(0);
-    p.acc(4) = a_prime(4) + ud(1);
-    p.acc(5) = a_prime(5) + ud(2);
+    p.acc(0) = a[0] + (r(1) * ud[2] - r(2) * ud[1]);
+    p.acc(1) = a[1] + (r(2) * ud[0] - r(0) * ud[2]);
+    p.acc(2) = a[2] + (r(0) * ud[1] - r(1) * ud[0]);
+    p.acc(3) = a[3] + ud[0];
+    p.acc(4) = a[4] + ud[1];
+    p.acc(5) = a[5] + ud[2];
   } else {
+    const Vector6d a_prime = (nd.parent_node >= 0 ? shiftMotion(k.d, pass_[nd.parent_node].acc) : k.a_base) + k.c;
+    const Eigen::Matrix<double, D, 1> ud =
+        p.dinv.topLeftCorner<D, D>() * (p.u.head<D>() - p.U.leftCols<D>().transpose() * a_prime);
     udot.segment<D>(nd.dof) = ud;
     p.acc = a_prime + k.S.leftCols<D>() * ud;
   }
