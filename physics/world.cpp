@@ -387,10 +387,15 @@ double World::maxAngularSpeed() const {
 void World::watchStability(double h) {
   if (!ok() || params_.integrator == Integrator::ImplicitEuler) return;
   const double limit = params_.integrator == Integrator::RK4 ? 2.83 : 2.0;
-  gatherStateInto(state_scratch_);
-  gatherAccelerationsInto(acc_scratch_);
-  gathered_ = true;  // integrate() steps from these (nothing moves the bodies in between)
-  if (!monitor_.observe(h, state_scratch_, acc_scratch_, limit)) return;
+  if (params_.integrator == Integrator::SymplecticEuler) {
+    // Read in place: integrate() steps the bodies in place, no gathered copy needed.
+    if (!monitor_.observe(h, bodies_, dynamic_, limit)) return;
+  } else {
+    gatherStateInto(state_scratch_);
+    gatherAccelerationsInto(acc_scratch_);
+    gathered_ = true;  // integrate() steps from these (nothing moves the bodies in between)
+    if (!monitor_.observe(h, state_scratch_, acc_scratch_, limit)) return;
+  }
   char what[160];
   std::snprintf(what, sizeof what,
                 "the step is unstable: h rho = %.3g > %.3g (stiffness estimate rho = %.3g 1/s) and the state "
@@ -512,15 +517,28 @@ void World::integrate(double h) {
     checkBodies("integrate", false);
     return;
   }
+  if (params_.integrator == Integrator::SymplecticEuler) {
+    // In place on the bodies from their accelerations (the joint-force stage's; nothing moved
+    // them since), and checked in the same pass (checkBodies only to say which body and stop).
+    // Its quaternions are unit (normalized by the step). The same operations as stepping a
+    // gathered copy and copying it back.
+    bool fine = true;
+    for (int i : dynamic_) {
+      RigidBody& b = bodies_[i];
+      symplecticEulerStep(h, b.a, b.alpha, b.state());
+      fine = fine && finiteAndBounded(b.x) && finite(b.q.coeffs()) && finiteAndBounded(b.v) && finiteAndBounded(b.w);
+    }
+    time_ += h;
+    stage_time_ = time_;
+    if (!fine) checkBodies("integrate", false);
+    return;
+  }
   State& state = state_scratch_;
   if (!gathered) {
     gatherStateInto(state);
     gatherAccelerationsInto(acc_scratch_);
   }
   switch (params_.integrator) {
-    case Integrator::SymplecticEuler:
-      symplecticEulerStep(h, acc_scratch_, state);
-      break;
     case Integrator::RK4:
       rk4Step(
           time_, h, acc_scratch_, [this](double t, const State& s, Accelerations& out) { accelerationsAt(t, s, out); },
@@ -532,18 +550,6 @@ void World::integrate(double h) {
   if (!ok()) return;  // a stage evaluation stopped the world
   time_ += h;
   stage_time_ = time_;
-  if (params_.integrator == Integrator::SymplecticEuler) {
-    // Its quaternions are unit already (normalized by the step): copied back as they are, and
-    // the state checked in the same pass (checkBodies only to say which body and stop).
-    bool fine = true;
-    for (size_t k = 0; k < dynamic_.size(); ++k) {
-      BodyState& b = bodies_[dynamic_[k]].state();
-      b = state[k];
-      fine = fine && finiteAndBounded(b.x) && finite(b.q.coeffs()) && finiteAndBounded(b.v) && finiteAndBounded(b.w);
-    }
-    if (!fine) checkBodies("integrate", false);
-    return;
-  }
   scatterState(state);
   checkBodies("integrate", false);
 }

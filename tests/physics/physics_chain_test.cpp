@@ -10,6 +10,7 @@
 #include "common/physics_util.h"
 #include "physics/chain.h"
 #include "physics/spherical_joint.h"
+#include "physics/stability_monitor.h"
 
 namespace ponyhop {
 namespace {
@@ -258,6 +259,30 @@ TEST(PhysicsChain, StageTimingCanBeSwitchedOff) {
   untimed.world.setStageTiming(true);
   for (int i = 0; i < 50; ++i) untimed.world.step();
   EXPECT_GT(untimed.world.stageTimes()[Stage::JointForces], 0.0);
+}
+
+// The stability monitor reads the bodies in place (symplectic Euler) or a gathered copy (the other
+// explicit methods): the same estimates from the same states.
+TEST(PhysicsChain, StabilityMonitorReadsBodiesAsAGatheredState) {
+  ChainWorld cw = chainWorld(Integrator::SymplecticEuler, Stabilization::None, 1.0 / 240.0);
+  StabilityMonitor in_place, gathered;
+  std::vector<int> dynamic;
+  for (int i = 0; i < cw.world.bodyCount(); ++i)
+    if (cw.world.body(i).isDynamic()) dynamic.push_back(i);
+  for (int step = 0; step < 40; ++step) {
+    cw.world.evaluate();
+    State y;
+    Accelerations f;
+    for (int i : dynamic) {
+      y.push_back(cw.world.body(i).state());
+      f.push_back({cw.world.body(i).a, cw.world.body(i).alpha});
+    }
+    EXPECT_EQ(in_place.observe(1.0 / 240.0, cw.world.bodies(), dynamic, 2.0), gathered.observe(1.0 / 240.0, y, f, 2.0));
+    EXPECT_EQ(in_place.hRho(), gathered.hRho());
+    EXPECT_EQ(in_place.growth(), gathered.growth());
+    cw.world.step();
+  }
+  EXPECT_GT(gathered.hRho(), 0.0);
 }
 
 }  // namespace
