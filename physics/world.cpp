@@ -164,7 +164,13 @@ void World::step() {
 void World::substep(double h, int depth) {
   if (substep_starts_.empty()) substep_starts_.resize(kMaxSplits + 1);  // never resized again
   Snapshot& start = substep_starts_[depth];
-  snapshotInto(start);
+  // The snapshot (every body's state and the stability monitor's, 3-5 % of a fixed step) only
+  // when the substep can be undone: a contact set may report an impact inside it, the rotation
+  // limit may split it, RATTLE or implicit Euler may fail and ask for halves. Otherwise a step
+  // that fails has stopped the world, and nothing is restored.
+  const bool undoable = !contacts_.empty() || (params_.max_step_rotation > 0.0 && params_.tolerance <= 0.0) ||
+                        params_.integrator == Integrator::Rattle || params_.integrator == Integrator::ImplicitEuler;
+  if (undoable) snapshotInto(start);
   const bool stepped = takeStep(h);
   if (stepped && depth < kMaxSplits && impactInside()) {
     restore(start);  // a contact began inside the substep: bisect towards it
@@ -174,7 +180,7 @@ void World::substep(double h, int depth) {
   }
   if (!stepped) {
     if (!ok()) return;
-    if (depth < kMaxSplits) {
+    if (depth < kMaxSplits && undoable) {
       restore(start);
       substep(0.5 * h, depth + 1);
       if (ok()) substep(0.5 * h, depth + 1);
