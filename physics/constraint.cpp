@@ -20,6 +20,7 @@ void ConstraintSystem::evaluate(const std::vector<RigidBody>& bodies, const Cons
   c_.resize(rows_);
   bias_.resize(rows_);
   max_error_ = 0.0;
+  max_error_known_ = constraints.empty();
   int row = 0;
   for (size_t j = 0; j < constraints.size(); ++j) {
     const Constraint& c = *constraints[j];
@@ -36,11 +37,20 @@ void ConstraintSystem::evaluate(const std::vector<RigidBody>& bodies, const Cons
     b.body_b = c.bodyB();
     b.row = row;
     b.rows = m;
+    b.constraint = &c;
     c_.segment(row, m) = b.C;
     bias_.segment(row, m) = b.bias;
-    max_error_ = std::max(max_error_, c.error(b));
     row += m;
   }
+}
+
+double ConstraintSystem::maxError() const {
+  if (!max_error_known_) {
+    max_error_ = 0.0;
+    for (const Block& b : blocks_) max_error_ = std::max(max_error_, b.constraint->error(b));
+    max_error_known_ = true;
+  }
+  return max_error_;
 }
 
 Eigen::VectorXd ConstraintSystem::times(const std::vector<Vector6d>& per_body) const {

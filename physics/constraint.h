@@ -90,8 +90,9 @@ class ConstraintSystem {
   struct Block : ConstraintRows {
     int body_a = kWorldBody;
     int body_b = kWorldBody;
-    int row = 0;   // first row in the stacked system
-    int rows = 0;  // the constraint's dimension
+    int row = 0;                             // first row in the stacked system
+    int rows = 0;                            // the constraint's dimension
+    const Constraint* constraint = nullptr;  // the joint that wrote it (for maxError())
   };
 
   void evaluate(const std::vector<RigidBody>& bodies, const Constraints& constraints);
@@ -100,8 +101,10 @@ class ConstraintSystem {
   const std::vector<Block>& blocks() const { return blocks_; }
   const Eigen::VectorXd& C() const { return c_; }
   const Eigen::VectorXd& bias() const { return bias_; }
-  // max over joints of |C_j| (each joint's own error measure).
-  double maxError() const { return max_error_; }
+  // max over joints of |C_j| (each joint's own error measure), computed on the first call after
+  // evaluate() (a norm and a virtual call per joint that the joint-force stage never needs). The
+  // constraints given to evaluate() must still exist.
+  double maxError() const;
 
   // J x for one 6-vector per body (x of kinematic bodies counts; the world's is zero).
   Eigen::VectorXd times(const std::vector<Vector6d>& per_body) const;
@@ -116,7 +119,8 @@ class ConstraintSystem {
   Eigen::VectorXd c_;
   Eigen::VectorXd bias_;
   int rows_ = 0;
-  double max_error_ = 0.0;
+  mutable double max_error_ = 0.0;
+  mutable bool max_error_known_ = true;
 };
 
 }  // namespace ponyhop

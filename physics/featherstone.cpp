@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <limits>
+#include <type_traits>
 
 #include "physics/integrator.h"
 #include "physics/prismatic_joint.h"
@@ -61,7 +62,7 @@ Eigen::Matrix<double, N, 3> timesSkew(const Eigen::MatrixBase<Derived>& m, const
 }
 // skew(r) M for a 3 x 3 M: column j is r x (column j of M).
 template <class Derived>
-Eigen::Matrix3d skewTimes(const Eigen::Vector3d& r, const Eigen::MatrixBase<Derived>& m) {
+[[gnu::always_inline]] inline Eigen::Matrix3d skewTimes(const Eigen::Vector3d& r, const Eigen::MatrixBase<Derived>& m) {
   Eigen::Matrix3d out;
   const double r0 = r(0), r1 = r(1), r2 = r(2);
   for (int j = 0; j < 3; ++j) {  // in scalars: no Vector3d of the column through the stack
@@ -73,23 +74,6 @@ Eigen::Matrix3d skewTimes(const Eigen::Vector3d& r, const Eigen::MatrixBase<Deri
   return out;
 }
 
-// out += X^T M X for M = [a b; b^T e] given by its blocks (a, e symmetric), the same formulas
-// with the symmetric blocks by their upper triangles.
-void addShiftedInertia(const Eigen::Vector3d& d, const Eigen::Matrix3d& a, const Eigen::Matrix3d& b,
-                       const Eigen::Matrix3d& e, Matrix6& out) {
-  const Eigen::Matrix3d ak = timesSkew<3>(a, d);
-  const Eigen::Matrix3d top_right = b - ak;
-  const Eigen::Matrix3d kb = skewTimes(d, b);
-  const Eigen::Matrix3d kak = skewTimes(d, ak);
-  Eigen::Matrix3d br;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = i; j < 3; ++j) br(i, j) = br(j, i) = e(i, j) + kb(i, j) + kb(j, i) - kak(i, j);
-  }
-  out.topLeftCorner<3, 3>() += a;
-  out.topRightCorner<3, 3>() += top_right;
-  out.bottomLeftCorner<3, 3>() += top_right.transpose();
-  out.bottomRightCorner<3, 3>() += br;
-}
 // The cross products in scalars (the same operations): Eigen's cross() goes through a stack
 // temporary read back in 16-byte halves of 8-byte stores (failed store forwarding).
 Vector6d shiftMotion(const Eigen::Vector3d& d, const Vector6d& a) {
@@ -143,15 +127,23 @@ void writeInertiaAndBias(const RigidBody& b, const Eigen::Matrix3d& r, Matrix6& 
   for (int i = 0; i < 3; ++i) {
     for (int j = i; j < 3; ++j) m[i][j] = m[j][i] = rd.row(i).dot(r.row(j));
   }
-  ia.setZero();
+  // Block by block (ia.setZero() was a `rep stos` of 288 bytes per body, then overwritten).
+  ia.topLeftCorner<3, 3>().setZero();
+  ia.topRightCorner<3, 3>().setZero();
+  ia.bottomLeftCorner<3, 3>().setZero();
   for (int i = 0; i < 3; ++i) {
     ia(i, i) = b.mass;
     for (int j = 0; j < 3; ++j) ia(3 + i, 3 + j) = m[i][j];
   }
-  Eigen::Vector3d iw;
-  for (int i = 0; i < 3; ++i) iw(i) = m[i][0] * b.w(0) + m[i][1] * b.w(1) + m[i][2] * b.w(2);
+  const double w0 = b.w(0), w1 = b.w(1), w2 = b.w(2);
+  double iw[3];
+  for (int i = 0; i < 3; ++i) iw[i] = m[i][0] * w0 + m[i][1] * w1 + m[i][2] * w2;
   pa.head<3>() = -b.force;
-  pa.tail<3>() = b.w.cross(iw) - b.torque;
+  // w x I w - t in scalars (the cross product through a stack temporary, read back as a 16-byte
+  // load of two 8-byte stores, stalled on store forwarding: 15 % of aba's samples).
+  pa(3) = (w1 * iw[2] - w2 * iw[1]) - b.torque(0);
+  pa(4) = (w2 * iw[0] - w0 * iw[2]) - b.torque(1);
+  pa(5) = (w0 * iw[1] - w1 * iw[0]) - b.torque(2);
 }
 
 }  // namespace
@@ -376,12 +368,18 @@ void ArticulatedSystem::writeState(std::vector<RigidBody>& bodies) const {
         Frame& f = frames_[i];
         b.q = renormalized(p.q * coords_.q[i]);  // one normalization: RK4 stages are not unit
         f.R = b.q.toRotationMatrix();
-        const Eigen::Matrix3d rp = nd.parent_node >= 0 ? frames_[nd.parent_node].R : p.rotation();
+        // The parent's rotation read where it is (a copy of it into a local was read back across
+        // its 16-byte stores: a failed store forwarding, a fifth of this pass's samples), and
+        // w_i kept in a local for v_i (read back from b.w, the same stall).
+        Eigen::Matrix3d rp_prescribed;
+        const Eigen::Matrix3d& rp =
+            nd.parent_node >= 0 ? frames_[nd.parent_node].R : (rp_prescribed = p.rotation(), rp_prescribed);
         f.r_p.noalias() = rp * nd.point_parent;
         f.r_i.noalias() = f.R * nd.point_child;
         b.x = p.x + f.r_p - f.r_i;
-        b.w = p.w + rp * u_.segment<3>(nd.dof);
-        b.v = p.v + p.w.cross(f.r_p) - b.w.cross(f.r_i);
+        const Eigen::Vector3d w = p.w + rp * u_.segment<3>(nd.dof);
+        b.w = w;
+        b.v = p.v + p.w.cross(f.r_p) - w.cross(f.r_i);
         break;
       }
       case Type::Prismatic: {
@@ -434,7 +432,10 @@ void ArticulatedSystem::jointKinematics(const std::vector<RigidBody>& bodies, st
       case Type::Spherical: {
         // Parents come first: a dynamic parent's rotation is already in out.
         k.Rp = nd.parent_node >= 0 ? out[nd.parent_node].R : p.rotation();
-        const Eigen::Matrix3d& rp = k.Rp;
+        // Read from writeState()'s frames when it has just written them: k.Rp, just copied, was
+        // read back across its 16-byte stores (a failed store forwarding, a quarter of this
+        // loop's samples).
+        const Eigen::Matrix3d& rp = written && nd.parent_node >= 0 ? frames_[nd.parent_node].R : k.Rp;
         const Eigen::Vector3d r_p = written ? frames_[i].r_p : Eigen::Vector3d(rp * nd.point_parent);
         const Eigen::Vector3d r_i = written ? frames_[i].r_i : Eigen::Vector3d(k.R * nd.point_child);
         k.r_i = r_i;
@@ -486,7 +487,10 @@ void ArticulatedSystem::abaInward(size_t r, const Eigen::VectorXd* tau) {
   const Node& nd = nodes_[r];
   const Kinematics& k = kin_[r];
   Pass& p = pass_[r];
-  Eigen::Matrix<double, 6, D> U;
+  // Spherical: U row-major. It is written row by row and read back by columns of its top
+  // half (D_w = U_bottom - r_i~ U_top); column-major, that read took two of its 16-byte stores
+  // in one 16-byte load (a failed store forwarding, ~9 % of this pass's samples).
+  std::conditional_t<D == 3, Eigen::Matrix<double, 6, 3, Eigen::RowMajor>, Eigen::Matrix<double, 6, D>> U;
   Eigen::Matrix<double, D, D> d;
   Eigen::Matrix<double, D, 1> u;
   if constexpr (D == 3) {
@@ -516,29 +520,44 @@ void ArticulatedSystem::abaInward(size_t r, const Eigen::VectorXd* tau) {
   p.dinv.topLeftCorner<D, D>() = dinv;
   p.u.head<D>() = u;
   if (nd.parent_node < 0) return;
-  const Eigen::Matrix<double, 6, D> ud = U * dinv;
   Pass& parent = pass_[nd.parent_node];
   if constexpr (D == 3) {
-    // I^a = I^A - U D^-1 U^T is symmetric: its blocks A (top left), B (top right), E (bottom
-    // right) are all that c, the force and shiftInertia need, A and E by their upper triangles.
-    const auto ud_top = ud.template topRows<3>(), ud_bottom = ud.template bottomRows<3>();
-    const auto u_top = U.template topRows<3>(), u_bottom = U.template bottomRows<3>();
-    Eigen::Matrix3d a, e;
+    // I^a = I^A - U D^-1 U^T annihilates S_w (I^a S_w = U - U D^-1 D = 0): a spherical joint
+    // passes no torque about its point P, and I^a is fixed by its top-left block
+    // K = A - U_top D^-1 U_top^T (symmetric, by its upper triangle): with r_i,
+    //   I^a = [K, -K r_i~; r_i~ K, -r_i~ K r_i~],  I^a c = [t; r_i x t],  t = K (c_lin - r_i x c_ang),
+    // and carried to the parent's centre (X^T I^a X, r_i + d = r_p):
+    //   [K, -K r_p~; r_p~ K, -r_p~ K r_p~].
+    // The same as the 6 x 6 formulas in exact arithmetic, without forming B and E of I^a and
+    // shifting them (about a third of this pass's products).
+    const auto u_top = U.template topRows<3>();
+    const Eigen::Matrix3d ud_top = u_top * dinv;
+    Eigen::Matrix3d kk;
     for (int i = 0; i < 3; ++i) {
-      for (int j = i; j < 3; ++j) {
-        a(i, j) = a(j, i) = p.ia(i, j) - ud_top.row(i).dot(u_top.row(j));
-        e(i, j) = e(j, i) = p.ia(3 + i, 3 + j) - ud_bottom.row(i).dot(u_bottom.row(j));
+      for (int j = i; j < 3; ++j) kk(i, j) = kk(j, i) = p.ia(i, j) - ud_top.row(i).dot(u_top.row(j));
+    }
+    const Eigen::Vector3d& ri = k.r_i;
+    const Eigen::Vector3d c_lin = k.c.template head<3>(), c_ang = k.c.template tail<3>();
+    const Eigen::Vector3d t = kk * (c_lin - ri.cross(c_ang));
+    const Eigen::Vector3d du = dinv * u;
+    Vector6d pa_a = p.pa;
+    pa_a.noalias() += U * du;
+    pa_a.template head<3>() += t;
+    pa_a.template tail<3>() += ri.cross(t);
+    addShiftedForce(k.d, pa_a, parent.pa);
+    const Eigen::Vector3d rp = k.d + ri;
+    const Eigen::Matrix3d tr = -timesSkew<3>(kk, rp);  // -K r_p~
+    const Eigen::Matrix3d br = skewTimes(rp, tr);      // -r_p~ K r_p~, symmetric: its upper triangle
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        parent.ia(i, j) += kk(i, j);
+        parent.ia(i, 3 + j) += tr(i, j);
+        parent.ia(3 + j, i) += tr(i, j);
+        parent.ia(3 + i, 3 + j) += i <= j ? br(i, j) : br(j, i);
       }
     }
-    Eigen::Matrix3d b = p.ia.template topRightCorner<3, 3>();
-    b.noalias() -= ud_top * u_bottom.transpose();
-    const auto c_lin = k.c.template head<3>(), c_ang = k.c.template tail<3>();
-    Vector6d pa_a = p.pa + ud * u;
-    pa_a.template head<3>() += a * c_lin + b * c_ang;
-    pa_a.template tail<3>() += b.transpose() * c_lin + e * c_ang;
-    addShiftedInertia(k.d, a, b, e, parent.ia);
-    addShiftedForce(k.d, pa_a, parent.pa);
   } else {
+    const Eigen::Matrix<double, 6, D> ud = U * dinv;
     const Matrix6 ia_a = p.ia - ud * U.transpose();
     const Vector6d pa_a = p.pa + ia_a * k.c + ud * u;
     parent.ia += shiftInertia(k.d, ia_a);
@@ -552,21 +571,42 @@ void ArticulatedSystem::abaOutward(size_t i, Eigen::VectorXd& udot) {
   const Node& nd = nodes_[i];
   const Kinematics& k = kin_[i];
   Pass& p = pass_[i];
-  const Vector6d a_prime = (nd.parent_node >= 0 ? shiftMotion(k.d, pass_[nd.parent_node].acc) : k.a_base) + k.c;
-  const Eigen::Matrix<double, D, 1> ud =
-      p.dinv.topLeftCorner<D, D>() * (p.u.head<D>() - p.U.leftCols<D>().transpose() * a_prime);
-  if constexpr (D == 3) {  // spherical, world axes (abaInward): u' = R_p^T u'_w, A = A' + [r_i x u'_w; u'_w]
-    udot.segment<3>(nd.dof).noalias() = k.Rp.transpose() * ud;
-    // Entry by entry (the child reads this A next, entry by entry in shiftMotion: no wide load
-    // of narrow stores).
+  if constexpr (D == 3) {
+    // Spherical, world axes (abaInward): u'_w = D^-1 (u - U^T A'), u' = R_p^T u'_w,
+    // A = A' + [r_i x u'_w; u'_w]. In scalars, A' included: as a Vector6d, A' was written entry
+    // by entry and read back in 16-byte loads (failed store forwarding, a fifth of this
+    // pass's samples).
+    double a[6];
+    if (nd.parent_node >= 0) {  // A' = X A_p + c
+      const Vector6d& ap = pass_[nd.parent_node].acc;
+      const Eigen::Vector3d& d = k.d;
+      a[0] = (ap(0) + (ap(4) * d(2) - ap(5) * d(1))) + k.c(0);
+      a[1] = (ap(1) + (ap(5) * d(0) - ap(3) * d(2))) + k.c(1);
+      a[2] = (ap(2) + (ap(3) * d(1) - ap(4) * d(0))) + k.c(2);
+      for (int j = 3; j < 6; ++j) a[j] = ap(j) + k.c(j);
+    } else {
+      for (int j = 0; j < 6; ++j) a[j] = k.a_base(j) + k.c(j);
+    }
+    double v[3];
+    for (int j = 0; j < 3; ++j) {
+      double uta = p.U(0, j) * a[0];
+      for (int m = 1; m < 6; ++m) uta += p.U(m, j) * a[m];
+      v[j] = p.u(j) - uta;
+    }
+    double ud[3];
+    for (int m = 0; m < 3; ++m) ud[m] = p.dinv(m, 0) * v[0] + p.dinv(m, 1) * v[1] + p.dinv(m, 2) * v[2];
+    for (int j = 0; j < 3; ++j) udot(nd.dof + j) = k.Rp(0, j) * ud[0] + k.Rp(1, j) * ud[1] + k.Rp(2, j) * ud[2];
     const Eigen::Vector3d& r = k.r_i;
-    p.acc(0) = a_prime(0) + (r(1) * ud(2) - r(2) * ud(1));
-    p.acc(1) = a_prime(1) + (r(2) * ud(0) - r(0) * ud(2));
-    p.acc(2) = a_prime(2) + (r(0) * ud(1) - r(1) * ud(0));
-    p.acc(3) = a_prime(3) + ud(0);
-    p.acc(4) = a_prime(4) + ud(1);
-    p.acc(5) = a_prime(5) + ud(2);
+    p.acc(0) = a[0] + (r(1) * ud[2] - r(2) * ud[1]);
+    p.acc(1) = a[1] + (r(2) * ud[0] - r(0) * ud[2]);
+    p.acc(2) = a[2] + (r(0) * ud[1] - r(1) * ud[0]);
+    p.acc(3) = a[3] + ud[0];
+    p.acc(4) = a[4] + ud[1];
+    p.acc(5) = a[5] + ud[2];
   } else {
+    const Vector6d a_prime = (nd.parent_node >= 0 ? shiftMotion(k.d, pass_[nd.parent_node].acc) : k.a_base) + k.c;
+    const Eigen::Matrix<double, D, 1> ud =
+        p.dinv.topLeftCorner<D, D>() * (p.u.head<D>() - p.U.leftCols<D>().transpose() * a_prime);
     udot.segment<D>(nd.dof) = ud;
     p.acc = a_prime + k.S.leftCols<D>() * ud;
   }
@@ -600,21 +640,24 @@ void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorX
   for (size_t i = n; i-- > 0;) {
     const Pass& p = pass_[i];
     RigidBody& b = bodies[nodes_[i].body];
-    Vector6d fc = p.u;
-    for (int c : nodes_[i].children) {  // fc -= shiftForce(d, f) in scalars: no Vector6d through the stack
+    // fc = F^J_i - sum_c shiftForce(d, f) in scalars: no Vector6d through the stack (a copy of
+    // p.u there was read back in 16-byte loads across its 16-byte stores, 11 % of aba's samples).
+    double fc[6];
+    for (int j = 0; j < 6; ++j) fc[j] = p.u(j);
+    for (int c : nodes_[i].children) {
       const Eigen::Vector3d& d = kin_[c].d;
       const Vector6d& f = pass_[c].u;
-      fc(0) -= f(0);
-      fc(1) -= f(1);
-      fc(2) -= f(2);
-      fc(3) -= f(3) + (d(1) * f(2) - d(2) * f(1));
-      fc(4) -= f(4) + (d(2) * f(0) - d(0) * f(2));
-      fc(5) -= f(5) + (d(0) * f(1) - d(1) * f(0));
+      fc[0] -= f(0);
+      fc[1] -= f(1);
+      fc[2] -= f(2);
+      fc[3] -= f(3) + (d(1) * f(2) - d(2) * f(1));
+      fc[4] -= f(4) + (d(2) * f(0) - d(0) * f(2));
+      fc[5] -= f(5) + (d(0) * f(1) - d(1) * f(0));
     }
     b.a = p.acc.head<3>();
     b.alpha = p.acc.tail<3>();
-    b.constraint_force = fc.head<3>();
-    b.constraint_torque = fc.tail<3>();
+    b.constraint_force = Eigen::Vector3d(fc[0], fc[1], fc[2]);
+    b.constraint_torque = Eigen::Vector3d(fc[3], fc[4], fc[5]);
   }
 }
 

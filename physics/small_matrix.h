@@ -12,8 +12,8 @@ namespace ponyhop {
 // one division, a fraction of Eigen::LLT's solve against the identity. The inverse is symmetric
 // by construction. False, like a failed Cholesky pivot, when a leading minor is not positive
 // (singular or indefinite: redundant constraint rows) or the inverse is not finite.
-inline bool inverseSpd3(const Eigen::Matrix3d& m, Eigen::Matrix3d& inv) {
-  const double m00 = m(0, 0), m01 = m(0, 1), m02 = m(0, 2), m11 = m(1, 1), m12 = m(1, 2), m22 = m(2, 2);
+// From the upper triangle's six entries.
+inline bool inverseSpd3(double m00, double m01, double m02, double m11, double m12, double m22, Eigen::Matrix3d& inv) {
   const double c00 = m11 * m22 - m12 * m12;
   const double c01 = m12 * m02 - m01 * m22;
   const double c02 = m01 * m12 - m11 * m02;
@@ -29,6 +29,9 @@ inline bool inverseSpd3(const Eigen::Matrix3d& m, Eigen::Matrix3d& inv) {
   inv(0, 2) = inv(2, 0) = i02;
   inv(1, 2) = inv(2, 1) = i12;
   return inv.allFinite();
+}
+inline bool inverseSpd3(const Eigen::Matrix3d& m, Eigen::Matrix3d& inv) {
+  return inverseSpd3(m(0, 0), m(0, 1), m(0, 2), m(1, 1), m(1, 2), m(2, 2), inv);
 }
 
 // q v q^-1 for a unit quaternion q, the same operations as Eigen's q * v (uv = 2 vec x v,

@@ -23,21 +23,36 @@ double turnSquared(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q0) {
 }
 }  // namespace
 
-bool StabilityMonitor::observe(double h, const State& y, const Accelerations& f, double limit) {
-  if (!has_previous_ || y.size() != y_.size()) {
-    y_ = y;
-    f_ = f;
+template <class Y, class A, class Alpha>
+bool StabilityMonitor::observeWith(double h, size_t n, const Y& y, const A& a, const Alpha& alpha, double limit) {
+  if (!has_previous_ || n != y_.size()) {
+    y_.resize(n);
+    f_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      y_[i] = y(i);
+      f_[i].a = a(i);
+      f_[i].alpha = alpha(i);
+    }
     has_previous_ = true;
     increment_ = 0.0;
     strikes_ = 0;
     return false;
   }
+  // One pass: each entry's differences, then the entry kept for the next step.
   double dy2 = 0.0, df2 = 0.0;
-  for (size_t i = 0; i < y.size(); ++i) {
-    dy2 += (y[i].x - y_[i].x).squaredNorm() + turnSquared(y[i].q, y_[i].q) + (y[i].v - y_[i].v).squaredNorm() +
-           (y[i].w - y_[i].w).squaredNorm();
-    df2 += (y[i].v - y_[i].v).squaredNorm() + (y[i].w - y_[i].w).squaredNorm() + (f[i].a - f_[i].a).squaredNorm() +
-           (f[i].alpha - f_[i].alpha).squaredNorm();
+  for (size_t i = 0; i < n; ++i) {
+    const BodyState& yi = y(i);
+    const Eigen::Vector3d& ai = a(i);
+    const Eigen::Vector3d& alphai = alpha(i);
+    BodyState& yp = y_[i];
+    BodyAcceleration& fp = f_[i];
+    dy2 += (yi.x - yp.x).squaredNorm() + turnSquared(yi.q, yp.q) + (yi.v - yp.v).squaredNorm() +
+           (yi.w - yp.w).squaredNorm();
+    df2 += (yi.v - yp.v).squaredNorm() + (yi.w - yp.w).squaredNorm() + (ai - fp.a).squaredNorm() +
+           (alphai - fp.alpha).squaredNorm();
+    yp = yi;
+    fp.a = ai;
+    fp.alpha = alphai;
   }
   const double increment = std::sqrt(dy2);
   h_rho_ = increment > 0.0 ? h * std::sqrt(df2) / increment : 0.0;
@@ -45,9 +60,22 @@ bool StabilityMonitor::observe(double h, const State& y, const Accelerations& f,
   const bool unstable = h_rho_ > limit && growth_ > kGrowth;
   strikes_ = unstable ? strikes_ + 1 : 0;
   increment_ = increment;
-  y_ = y;
-  f_ = f;
   return strikes_ >= 2;
+}
+
+bool StabilityMonitor::observe(double h, const State& y, const Accelerations& f, double limit) {
+  return observeWith(
+      h, y.size(), [&](size_t i) -> const BodyState& { return y[i]; },
+      [&](size_t i) -> const Eigen::Vector3d& { return f[i].a; },
+      [&](size_t i) -> const Eigen::Vector3d& { return f[i].alpha; }, limit);
+}
+
+bool StabilityMonitor::observe(double h, const std::vector<RigidBody>& bodies, const std::vector<int>& which,
+                               double limit) {
+  return observeWith(
+      h, which.size(), [&](size_t i) -> const BodyState& { return bodies[which[i]].state(); },
+      [&](size_t i) -> const Eigen::Vector3d& { return bodies[which[i]].a; },
+      [&](size_t i) -> const Eigen::Vector3d& { return bodies[which[i]].alpha; }, limit);
 }
 
 }  // namespace ponyhop

@@ -14,9 +14,13 @@
 // motion, such as a whip, does not triple its increment every step).
 #pragma once
 
+#include <vector>
+
 #include "physics/integrator.h"
 
 namespace ponyhop {
+
+struct RigidBody;
 
 class StabilityMonitor {
  public:
@@ -29,10 +33,17 @@ class StabilityMonitor {
   // The state and its derivative at the start of a step of h. Returns true when the last two
   // steps were unstable (then hRho() and growth() say by how much).
   bool observe(double h, const State& y, const Accelerations& f, double limit);
+  // The same for the state and accelerations of bodies[which[i]], read in place (no gathered
+  // copy of them first).
+  bool observe(double h, const std::vector<RigidBody>& bodies, const std::vector<int>& which, double limit);
   double hRho() const { return h_rho_; }
   double growth() const { return growth_; }
 
  private:
+  // y(i), a(i), alpha(i): entry i of the observed state and its accelerations.
+  template <class Y, class A, class Alpha>
+  bool observeWith(double h, size_t n, const Y& y, const A& a, const Alpha& alpha, double limit);
+
   bool has_previous_ = false;
   State y_;
   Accelerations f_;

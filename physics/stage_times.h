@@ -6,7 +6,9 @@
 // stages at their stage times; featherstone's step calls them at every evaluation) is charged to
 // itself and paused in its caller. Time outside every stage (step control, kinematic updates,
 // state checks) is not charged to any stage: compare total() with the wall time of step().
-// Cost: two steady_clock reads per stage call (~50 ns), against steps of 5 us and more.
+// Cost: two steady_clock reads per stage call (~25-50 ns): 4-5 % of a 2 us tree step at N = 8
+// (docs/bench/profile.md). setEnabled(false) leaves the clock unread (the calls are still
+// counted): the scaling bench times its steps that way, as the peers' steps are timed.
 #pragma once
 
 #include <array>
@@ -41,25 +43,35 @@ class StageClock {
 
   class Scope {
    public:
-    Scope(StageClock& c, int previous) : clock_(c), previous_(previous) {}
+    Scope(StageClock* c, int previous) : clock_(c), previous_(previous) {}
     Scope(const Scope&) = delete;
     Scope& operator=(const Scope&) = delete;
-    ~Scope() { clock_.end(previous_); }
+    ~Scope() {
+      if (clock_) clock_->end(previous_);
+    }
 
    private:
-    StageClock& clock_;
+    StageClock* clock_;  // null: the clock is off
     int previous_;
   };
 
   [[nodiscard]] Scope time(Stage stage) {
+    ++times_.calls[static_cast<int>(stage)];
+    if (!enabled_) return Scope(nullptr, -1);
     const int previous = active_;
     charge(Clock::now());
     active_ = static_cast<int>(stage);
-    ++times_.calls[active_];
-    return Scope(*this, previous);
+    return Scope(this, previous);
   }
   const StageTimes& times() const { return times_; }
   void reset() { times_ = {}; }
+  // Off: no clock reads, seconds stay as they are (calls are still counted). Only between steps
+  // (a stage scope open across the switch would charge or end the wrong stage).
+  void setEnabled(bool on) {
+    enabled_ = on;
+    active_ = -1;
+  }
+  bool enabled() const { return enabled_; }
 
  private:
   void charge(Clock::time_point now) {
@@ -73,6 +85,7 @@ class StageClock {
 
   StageTimes times_;
   int active_ = -1;
+  bool enabled_ = true;
   Clock::time_point since_{};
 };
 

@@ -5,14 +5,7 @@
 namespace ponyhop {
 
 void symplecticEulerStep(double h, const Accelerations& acc, State& state) {
-  for (size_t i = 0; i < state.size(); ++i) {
-    BodyState& s = state[i];
-    s.v += h * acc[i].a;
-    s.w += h * acc[i].alpha;
-    s.x += h * s.v;
-    // Rotate by the new angular velocity over h (exact exponential map for constant w).
-    s.q = renormalized(quaternionFromRotationVector(h * s.w) * s.q);
-  }
+  for (size_t i = 0; i < state.size(); ++i) symplecticEulerStep(h, acc[i].a, acc[i].alpha, state[i]);
 }
 
 }  // namespace ponyhop

@@ -4,8 +4,18 @@
 #pragma once
 
 #include "physics/integrator.h"
+#include "physics/rigid_body.h"
 
 namespace ponyhop {
+
+// One body's step in place from its accelerations a, alpha at (t, s).
+inline void symplecticEulerStep(double h, const Eigen::Vector3d& a, const Eigen::Vector3d& alpha, BodyState& s) {
+  s.v += h * a;
+  s.w += h * alpha;
+  s.x += h * s.v;
+  // Rotate by the new angular velocity over h (exact exponential map for constant w).
+  s.q = renormalized(quaternionFromRotationVector(h * s.w) * s.q);
+}
 
 // acc: accelerations at (t, state) (already computed by the force stages).
 void symplecticEulerStep(double h, const Accelerations& acc, State& state);

@@ -353,13 +353,25 @@ bool TreeSolver::factorTree(const std::vector<RigidBody>& bodies, const Constrai
 bool TreeSolver::eliminate3() {
   for (int j : order_) {
     const Node& n = nodes_[j];
-    Eigen::Matrix3d d = a3_[cliques_[n.cliques[0]].a + n.cliques[1] * (cliques_[n.cliques[0]].members.size() + 1)];
+    // D_j = sum of j's diagonal blocks, only the upper triangle that inverseSpd3 reads, in
+    // scalars: the blocks were just written entry by entry (step 1, or the elimination of j's
+    // child), and a Matrix3d copy of them read those stores back 16 bytes at a time (failed
+    // store forwarding on the elimination's critical path).
+    const Eigen::Matrix3d& d0 =
+        a3_[cliques_[n.cliques[0]].a + n.cliques[1] * (cliques_[n.cliques[0]].members.size() + 1)];
+    double m00 = d0(0, 0), m01 = d0(0, 1), m02 = d0(0, 2), m11 = d0(1, 1), m12 = d0(1, 2), m22 = d0(2, 2);
     for (size_t i = 2; i < n.cliques.size(); i += 2) {
       const Clique& cl = cliques_[n.cliques[i]];
-      d += a3_[cl.a + n.cliques[i + 1] * (cl.members.size() + 1)];
+      const Eigen::Matrix3d& di = a3_[cl.a + n.cliques[i + 1] * (cl.members.size() + 1)];
+      m00 += di(0, 0);
+      m01 += di(0, 1);
+      m02 += di(0, 2);
+      m11 += di(1, 1);
+      m12 += di(1, 2);
+      m22 += di(2, 2);
     }
     Eigen::Matrix3d& d_inv = d_inv3_[j];
-    if (!inverseSpd3(d, d_inv)) return false;  // redundant rows: A is singular
+    if (!inverseSpd3(m00, m01, m02, m11, m12, m22, d_inv)) return false;  // redundant rows: A is singular
     if (n.clique < 0) continue;
     const Clique& cl = cliques_[n.clique];
     const size_t k = cl.members.size(), s = n.slot;
@@ -497,6 +509,17 @@ Eigen::VectorXd TreeSolver::solve(const Eigen::VectorXd& rhs) const {
 }
 
 void TreeSolver::solveInto(const Eigen::VectorXd& rhs, Eigen::VectorXd& y) const {
+  if (loop_rows_ == 0 && tree_rows_ == rhs.size()) {
+    // No loop rows: the tree's rows are the system's, in its order (buildStructure numbers them
+    // block by block), so the solve runs in y itself, without the copies into and out of the
+    // tree's vector (3 % of a tree step's instructions at N = 128).
+    y = rhs;
+    if (all_three_)
+      treeSolveInPlace<3>(y);
+    else
+      treeSolveInPlace<Eigen::Dynamic>(y);
+    return;
+  }
   r_tree_.resize(tree_rows_);
   r_loop_.resize(loop_rows_);
   for (int r = 0; r < rhs.size(); ++r) {

@@ -127,6 +127,9 @@ class World {
   // Wall time per stage of step() since construction or the last reset (physics/stage_times.h).
   const StageTimes& stageTimes() const { return clock_.times(); }
   void resetStageTimes() { clock_.reset(); }
+  // Off: the stages are not timed (no clock reads; stageTimes() keeps its seconds and still
+  // counts calls). On by default. Call between steps.
+  void setStageTiming(bool on) { clock_.setEnabled(on); }
 
   double kineticEnergy() const;    // J, dynamic bodies
   double potentialEnergy() const;  // J, gravity + springs - reference

@@ -10,6 +10,7 @@
 #include "common/physics_util.h"
 #include "physics/chain.h"
 #include "physics/spherical_joint.h"
+#include "physics/stability_monitor.h"
 
 namespace ponyhop {
 namespace {
@@ -233,6 +234,55 @@ TEST(PhysicsChain, SphericalJointDerivativesMatchFiniteDifferences) {
     EXPECT_LT((r0.ja * qa + r0.jb * qb - dc).norm(), 1e-6);
     EXPECT_LT((r0.bias - ddc).norm(), 1e-4 * (1.0 + ddc.norm()));
   }
+}
+
+// The stage clock (physics/stage_times.h) off: the same steps, the stages still counted, no time
+// charged; on again: time charged from then on.
+TEST(PhysicsChain, StageTimingCanBeSwitchedOff) {
+  ChainWorld timed = chainWorld(Integrator::SymplecticEuler, Stabilization::None, 1.0 / 1920.0);
+  ChainWorld untimed = chainWorld(Integrator::SymplecticEuler, Stabilization::None, 1.0 / 1920.0);
+  untimed.world.setStageTiming(false);
+  for (int i = 0; i < 50; ++i) {
+    timed.world.step();
+    untimed.world.step();
+  }
+  ASSERT_TRUE(timed.world.ok() && untimed.world.ok());
+  for (int i = 0; i < untimed.world.bodyCount(); ++i) {
+    EXPECT_EQ(timed.world.body(i).x, untimed.world.body(i).x);
+    EXPECT_EQ(timed.world.body(i).v, untimed.world.body(i).v);
+  }
+  const StageTimes& off = untimed.world.stageTimes();
+  EXPECT_EQ(off.total(), 0.0);
+  EXPECT_EQ(off.calls, timed.world.stageTimes().calls);
+  EXPECT_EQ(off.calls[static_cast<int>(Stage::JointForces)], 50);
+  EXPECT_GT(timed.world.stageTimes()[Stage::JointForces], 0.0);
+  untimed.world.setStageTiming(true);
+  for (int i = 0; i < 50; ++i) untimed.world.step();
+  EXPECT_GT(untimed.world.stageTimes()[Stage::JointForces], 0.0);
+}
+
+// The stability monitor reads the bodies in place (symplectic Euler) or a gathered copy (the other
+// explicit methods): the same estimates from the same states.
+TEST(PhysicsChain, StabilityMonitorReadsBodiesAsAGatheredState) {
+  ChainWorld cw = chainWorld(Integrator::SymplecticEuler, Stabilization::None, 1.0 / 240.0);
+  StabilityMonitor in_place, gathered;
+  std::vector<int> dynamic;
+  for (int i = 0; i < cw.world.bodyCount(); ++i)
+    if (cw.world.body(i).isDynamic()) dynamic.push_back(i);
+  for (int step = 0; step < 40; ++step) {
+    cw.world.evaluate();
+    State y;
+    Accelerations f;
+    for (int i : dynamic) {
+      y.push_back(cw.world.body(i).state());
+      f.push_back({cw.world.body(i).a, cw.world.body(i).alpha});
+    }
+    EXPECT_EQ(in_place.observe(1.0 / 240.0, cw.world.bodies(), dynamic, 2.0), gathered.observe(1.0 / 240.0, y, f, 2.0));
+    EXPECT_EQ(in_place.hRho(), gathered.hRho());
+    EXPECT_EQ(in_place.growth(), gathered.growth());
+    cw.world.step();
+  }
+  EXPECT_GT(gathered.hRho(), 0.0);
 }
 
 }  // namespace
