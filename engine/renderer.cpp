@@ -1217,6 +1217,9 @@ void Renderer::endFrame() {
     glBindFramebuffer(GL_FRAMEBUFFER, I.ground_lo_fbo);
     glViewport(0, 0, I.ground_lo_w, I.ground_lo_h);
     glClearColor(0, 0, 0, 0);
+    glEnable(GL_DEPTH_TEST);  // (without a shadow pass before it, the state is what the last frame left)
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     setGroundUniforms();
     glUniform2f(loc(I.prog_ground, "u_viewport"), float(I.ground_lo_w), float(I.ground_lo_h));
