@@ -20,6 +20,9 @@ namespace ponyhop {
 
 namespace {
 
+// The rotation limit splits substeps (step control by the turn per step, not by a tolerance).
+bool splitsOnRotation(const PhysicsParams& p) { return p.max_step_rotation > 0.0 && p.tolerance <= 0.0; }
+
 // A substep in which a body turned more than this times max_step_rotation is undone and split.
 // 1.25, not 2: the energy error follows the largest turns (docs/STABILITY.md, "The default and
 // why"), and the whip speeds up within a dt, so a looser split let single substeps turn up to
@@ -168,8 +171,8 @@ void World::substep(double h, int depth) {
   // when the substep can be undone: a contact set may report an impact inside it, the rotation
   // limit may split it, RATTLE or implicit Euler may fail and ask for halves. Otherwise a step
   // that fails has stopped the world, and nothing is restored.
-  const bool undoable = !contacts_.empty() || (params_.max_step_rotation > 0.0 && params_.tolerance <= 0.0) ||
-                        params_.integrator == Integrator::Rattle || params_.integrator == Integrator::ImplicitEuler;
+  const bool undoable = !contacts_.empty() || splitsOnRotation(params_) || params_.integrator == Integrator::Rattle ||
+                        params_.integrator == Integrator::ImplicitEuler;
   if (undoable) snapshotInto(start);
   const bool stepped = takeStep(h);
   if (stepped && depth < kMaxSplits && impactInside()) {
@@ -225,7 +228,7 @@ bool World::takeStep(double h) {
     integrate(h);                  // t += h (RK4 re-runs the four stages above at its stage times)
     stabilize();                   // projection onto C = 0 and J v = -J_k v_k (when chosen)
   }
-  if (ok() && split_reason_.empty() && params_.max_step_rotation > 0.0 && params_.tolerance <= 0.0) {
+  if (ok() && split_reason_.empty() && splitsOnRotation(params_)) {
     const double turned = h * maxAngularSpeed();
     if (turned > kSplitRotation * params_.max_step_rotation * std::numbers::pi / 180.0) {
       char buf[96];
