@@ -192,6 +192,7 @@ uniform mat4 u_model;
 uniform mat3 u_normalMat;   // inverse transpose of the model's 3x3
 uniform vec4 u_colorSpec;   // linear albedo, specular
 uniform vec2 u_shinRim;     // shininess, rim
+uniform vec4 u_clipPlane;   // gl_ClipDistance[0] (enabled over the half-resolution ground)
 out vec3 v_pos;
 out vec3 v_normal;
 flat out vec4 v_colorSpec;
@@ -202,6 +203,7 @@ void main() {
   v_normal = u_normalMat * a_normal;
   v_colorSpec = u_colorSpec;
   v_shinRim = u_shinRim;
+  gl_ClipDistance[0] = dot(u_clipPlane, w);
   gl_Position = u_viewProj * w;
 }
 )GLSL";
@@ -218,6 +220,7 @@ uniform mat4 u_model;
 uniform mat3 u_normalMat;
 uniform vec4 u_colorSpec;
 uniform vec2 u_shinRim;
+uniform vec4 u_clipPlane;
 out vec3 v_pos;
 out vec3 v_normal;
 out vec4 v_color;
@@ -232,6 +235,7 @@ void main() {
   v_uv = a_uv;
   v_colorSpec = u_colorSpec;
   v_shinRim = u_shinRim;
+  gl_ClipDistance[0] = dot(u_clipPlane, w);
   gl_Position = u_viewProj * w;
 }
 )GLSL";
@@ -250,6 +254,7 @@ layout(location = 2) in vec4 i_p1r1;
 layout(location = 3) in vec4 i_colorSpec; // linear albedo, specular
 layout(location = 4) in vec2 i_shinRim;
 uniform mat4 u_viewProj;
+uniform vec4 u_clipPlane;
 out vec3 v_pos;
 out vec3 v_normal;
 flat out vec4 v_colorSpec;
@@ -272,6 +277,7 @@ void main() {
   v_normal = n;
   v_colorSpec = i_colorSpec;
   v_shinRim = i_shinRim;
+  gl_ClipDistance[0] = dot(u_clipPlane, vec4(v_pos, 1.0));
   gl_Position = u_viewProj * vec4(v_pos, 1.0);
 }
 )GLSL";
@@ -326,6 +332,7 @@ uniform vec3 u_eye;
 uniform int u_faceLight;      // 1: shadow pass, face along u_faceDir
 uniform vec3 u_faceDir;
 uniform vec2 u_minHalfWidth;  // m, + m per metre of distance to the eye
+uniform vec4 u_clipPlane;
 out vec3 v_pos;
 out vec3 v_tangent;
 out vec3 v_normal;
@@ -348,6 +355,7 @@ void main() {
   v_normal = a_normal;
   v_color = a_color;
   v_occlusion = a_widthOcclusion.y;
+  gl_ClipDistance[0] = dot(u_clipPlane, vec4(P, 1.0));
   gl_Position = u_viewProj * vec4(P, 1.0);
 }
 )GLSL";
@@ -394,7 +402,8 @@ void main() {
 // drawn after the objects. Its depth comes from rasterization, so the early depth test skips every
 // pixel an object covers (no shading wasted), and it still hides whatever is below the ground (its
 // fragments are nearer there). The background gradient fills what is left (kBackgroundFS at the
-// far plane), after it.
+// far plane), after it. Single-sample frames shade it at half resolution, alone, before the
+// objects (kGroundUpFS, renderer.cpp).
 const char* const kGroundVS = R"GLSL(
 uniform mat4 u_viewProj;
 uniform mat4 u_lightViewProj;
@@ -496,12 +505,22 @@ void main() {
 }
 )GLSL";
 
-// The ground square at full resolution over the one shaded at half resolution (renderer.cpp):
-// a bilinear tap of it per pixel, at the same place in the frame.
+// The ground shaded at half resolution (over the background), brought to full resolution
+// (renderer.cpp): before the objects, over the whole frame, a bilinear tap of it per pixel at the
+// same place in the frame. The texture coordinate is a plain input, nothing computed from it.
+const char* const kGroundUpVS = R"GLSL(
+out vec2 v_uv;
+void main() {
+  vec2 c = vec2(float(gl_VertexID & 1), float((gl_VertexID >> 1) & 1));  // a strip of 4
+  v_uv = c;
+  gl_Position = vec4(c * 2.0 - 1.0, 0.0, 1.0);
+}
+)GLSL";
 const char* const kGroundUpFS = R"GLSL(
 uniform sampler2D u_groundLo;
+in vec2 v_uv;
 out vec4 o_color;
-void main() { o_color = texture(u_groundLo, gl_FragCoord.xy / u_viewport); }
+void main() { o_color = texture(u_groundLo, v_uv); }
 )GLSL";
 
 // The background gradient, at the far plane after everything else: where nothing was drawn.

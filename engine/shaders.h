@@ -10,6 +10,7 @@ extern const char* const kMeshVS;        // meshes and boxes: per-draw model mat
 extern const char* const kMeshMatVS;     // meshes with their own colours/texture coordinates
 extern const char* const kCapsuleVS;     // spheres / capsules / tapered capsules: one instanced draw
 extern const char* const kFullscreenVS;  // full-screen triangle from gl_VertexID (ground shadow pass)
+extern const char* const kGroundUpVS;    // the whole viewport as a strip of 4, with its texture coordinates
 extern const char* const kGroundVS;      // the ground square (a strip of 4 from gl_VertexID)
 extern const char* const kLinesVS;       // debug lines
 extern const char* const kHairVS;        // hair strands (camera- or light-facing ribbons) and core tube

@@ -211,6 +211,38 @@ TEST(Renderer, ShadowDarkensTheGroundUnderTheSphere) {
   EXPECT_LT(worst, 3.0) << "lit ground changed by a far caster: acne or a misplaced shadow";
 }
 
+// The ground hides what is below it in every anti-aliasing mode: the full-resolution ground by its
+// depth (MSAA), the half-resolution one, upsampled before the objects, by clipping them at its
+// plane (no AA, the post filter).
+TEST(Renderer, TheGroundHidesWhatIsBelowIt) {
+  REQUIRE_GL();
+  for (const AntiAlias aa : {AntiAlias::Post, AntiAlias::Msaa}) {
+    for (const int samples : {1, 4}) {
+      RenderParams rp = testParams(samples, true);
+      rp.antialias = aa;
+      const auto empty = render(testCamera(), rp, [](Renderer&) {});
+      const auto below = render(testCamera(), rp, [](Renderer& r) {
+        r.drawSphere(Eigen::Vector3d(0.0, 0.0, -0.2), 0.15, red());
+        r.drawCapsule({0.1, 0.1, -0.4}, {0.1, 0.1, -0.07}, 0.05, red());  // top at z = -0.02
+      });
+      // The same sphere and capsule lifted above the ground are in view (the test looks at them).
+      const auto above = render(testCamera(), rp, [](Renderer& r) {
+        r.drawSphere(Eigen::Vector3d(0.0, 0.0, 0.2), 0.15, red());
+        r.drawCapsule({0.1, 0.1, 0.07}, {0.1, 0.1, 0.4}, 0.05, red());
+      });
+      double worst = 0.0, seen = 0.0;
+      for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+          worst = std::max(worst, std::abs(luminance(below, x, y) - luminance(empty, x, y)));
+          seen = std::max(seen, std::abs(luminance(above, x, y) - luminance(empty, x, y)));
+        }
+      EXPECT_LT(worst, 2.0) << "samples " << samples << ": something below the ground shows through it";
+      EXPECT_GT(seen, 40.0) << "samples " << samples << ": the objects above the ground are not in view";
+      if (samples == 4 && aa == AntiAlias::Post) save("below_ground.png", below);
+    }
+  }
+}
+
 TEST(Renderer, SameDrawListIsByteIdentical) {
   REQUIRE_GL();
   auto scene = [](Renderer& r) {
