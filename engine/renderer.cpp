@@ -162,6 +162,8 @@ struct Renderer::Impl {
   GLuint prog_mesh_split = 0, prog_mesh_mat_split = 0, prog_hull_split = 0, prog_hair_split = 0;
   GLuint prog_deferred = 0;
   GLuint prog_ground_up = 0;            // the half-resolution ground, upsampled (kGroundUpFS)
+  GLuint prog_ground_near = 0;          // kGroundFS where nothing fades (GROUND_NEAR)
+  GLuint prog_ground_near_lit = 0;      // ... and nothing is shadowed (GROUND_LIT)
   GLuint prog_ground_shadow_class = 0;  // the ground shadow's first pass (shadowClass)
   GLuint prog_post_class = 0;           // the post filter's first pass (edge or not)
   // Static geometry.
@@ -197,6 +199,10 @@ struct Renderer::Impl {
   GLuint ground_shadow_fbo = 0, ground_shadow_tex = 0;  // R8, shadowFactor on the ground plane
   GLuint ground_shadow_depth = 0;                       // marks the texels that need the filter
   int ground_shadow_size = 0;
+  // This frame's texels of the ground's shadow texture that are not 1 (lit) lie in this box
+  // [x0, x1) x [y0, y1) (casterTexelBox); none when !ground_shadow_boxed.
+  bool ground_shadow_boxed = false;
+  int ground_shadow_box[4] = {0, 0, 0, 0};
   LightFrustum frustum;
   int target_w = 0, target_h = 0, target_samples = -1, shadow_size = 0;
   int max_samples = 1;
@@ -236,6 +242,9 @@ struct Renderer::Impl {
   bool screenRects(const Eigen::Matrix4f& view_proj, int w, int h, std::vector<PixelRect>& rects) const;
   std::vector<PixelRect> rects;  // scratch of endFrame (kept: no allocation per frame)
   bool casterTexelBox(const Eigen::Matrix4d& light_vp, double margin_m, int size, int box[4]) const;
+  // The pixel rectangle (of a w x h viewport) outside which the ground is lit: its shadow texture
+  // reads 1 there. False: none (nothing shadowed); `whole` set when it cannot be bounded.
+  bool groundShadowRect(const Eigen::Matrix4f& view_proj, int w, int h, PixelRect& rect, bool& whole) const;
   void ensureShadowMap(int size);
   void ensureGroundShadow(int size);
   void bindShadowTextures(bool ground_shadow);  // units 0, 1: the shadow map; 2: the ground's
@@ -357,6 +366,8 @@ bool Renderer::init(std::string* err) {
       {&I.prog_hair_split, "hair (deferred)", kHairVS, kHairFS, kSplitLightDefine},
       {&I.prog_deferred, "deferred shading", kFullscreenVS, kDeferredFS},
       {&I.prog_ground_up, "ground (upsampled)", kGroundUpVS, kGroundUpFS},
+      {&I.prog_ground_near, "ground (near)", kGroundVS, kGroundFS, kGroundNearDefine},
+      {&I.prog_ground_near_lit, "ground (near, lit)", kGroundVS, kGroundFS, kGroundNearLitDefine},
       {&I.prog_ground_shadow_class, "ground shadow (classify)", kFullscreenVS, kGroundShadowFS, kShadowClassifyDefine},
       {&I.prog_post_class, "post AA (edges)", kFullscreenVS, kPostAaFS, kPostEdgesDefine}};
   for (const P& p : progs) {
@@ -1042,6 +1053,40 @@ bool Renderer::Impl::casterTexelBox(const Eigen::Matrix4d& light_vp, double marg
   return box[2] > box[0] && box[3] > box[1];
 }
 
+bool Renderer::Impl::groundShadowRect(const Eigen::Matrix4f& view_proj, int w, int h, PixelRect& rect,
+                                      bool& whole) const {
+  whole = false;
+  if (!ground_shadow_boxed || ground_shadow_size <= 0) return false;
+  // The box's corners, a texel further out (the bilinear footprint), on the ground: the light ray
+  // through each (as kGroundShadowFS finds it) meets the plane there.
+  const Eigen::Matrix4d inv = frustum.view_proj.inverse();
+  const double gs = double(ground_shadow_size), g = params.ground_height;
+  const double xs[2] = {double(ground_shadow_box[0] - 1), double(ground_shadow_box[2] + 1)};
+  const double ys[2] = {double(ground_shadow_box[1] - 1), double(ground_shadow_box[3] + 1)};
+  double x0 = 1e30, y0 = 1e30, x1 = -1e30, y1 = -1e30;
+  for (double tx : xs)
+    for (double ty : ys) {
+      const Eigen::Vector2d ndc(tx / gs * 2.0 - 1.0, ty / gs * 2.0 - 1.0);
+      const Eigen::Vector4d a4 = inv * Eigen::Vector4d(ndc.x(), ndc.y(), -1.0, 1.0);
+      const Eigen::Vector4d b4 = inv * Eigen::Vector4d(ndc.x(), ndc.y(), 1.0, 1.0);
+      const Eigen::Vector3d a = a4.head<3>() / a4.w(), b = b4.head<3>() / b4.w();
+      if (std::abs(b.z() - a.z()) < 1e-12) return whole = true;
+      const Eigen::Vector3d P = a + (b - a) * ((g - a.z()) / (b.z() - a.z()));
+      const Eigen::Vector4d c = view_proj.cast<double>() * P.homogeneous();
+      if (c.w() < 1e-6) return whole = true;  // behind the eye: not bounded on screen
+      const double px = (c.x() / c.w() * 0.5 + 0.5) * w, py = (c.y() / c.w() * 0.5 + 0.5) * h;
+      x0 = std::min(x0, px);
+      x1 = std::max(x1, px);
+      y0 = std::min(y0, py);
+      y1 = std::max(y1, py);
+    }
+  rect.x0 = std::clamp(int(std::floor(x0)) - 1, 0, w);
+  rect.y0 = std::clamp(int(std::floor(y0)) - 1, 0, h);
+  rect.x1 = std::clamp(int(std::ceil(x1)) + 1, 0, w);
+  rect.y1 = std::clamp(int(std::ceil(y1)) + 1, 0, h);
+  return rect.x1 > rect.x0 && rect.y1 > rect.y0;
+}
+
 // A full-screen program in two passes over the bound target, whose depth buffer is scratch:
 // `first` writes the pixels it can decide and depth 0 at the others (gl_FragDepth); `second`, the
 // costly one, then runs under the far-plane triangle with depth test GREATER, on those pixels
@@ -1108,6 +1153,7 @@ void Renderer::endFrame() {
   if (ld.norm() < 1e-9) ld = Eigen::Vector3d(-0.5, 0.6, -1.0);
   ld.normalize();
   const bool shadows_on = !casters.isEmpty() && I.light.intensity > 0.0;
+  I.ground_shadow_boxed = false;
   LightFrustum lf;
   if (shadows_on) {
     I.beginPass(Impl::kShadowPass);
@@ -1148,8 +1194,10 @@ void Renderer::endFrame() {
       glDepthMask(GL_TRUE);
       glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
       const double ground_texel = lf.texel_world * double(I.shadow_size) / double(gs);
-      int box[4];
-      if (I.casterTexelBox(lf.view_proj, kMaxPenumbraMetres + 12.0 * lf.texel_world + 2.0 * ground_texel, gs, box)) {
+      int* box = I.ground_shadow_box;
+      I.ground_shadow_boxed =
+          I.casterTexelBox(lf.view_proj, kMaxPenumbraMetres + 12.0 * lf.texel_world + 2.0 * ground_texel, gs, box);
+      if (I.ground_shadow_boxed) {
         const Eigen::Matrix4f lvp = lf.view_proj.cast<float>();
         for (GLuint p : {I.prog_ground_shadow_class, I.prog_ground_shadow}) {
           I.setCommonUniforms(p, lvp, lvp, float(1.5 * lf.texel_world), true);
@@ -1194,11 +1242,11 @@ void Renderer::endFrame() {
 
   I.beginPass(Impl::kMainPass);
   stats_.draw_calls = 0;
-  const auto setGroundUniforms = [&] {
-    const GLuint p = I.prog_ground;
+  const auto setGroundUniforms = [&](GLuint p) {
     I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
     glUniform3f(loc(p, "u_quadCenter"), float(cam.target.x()), float(cam.target.y()), float(I.params.ground_height));
     glUniform1f(loc(p, "u_quadHalf"), float(ground_half));
+    glUniform1f(loc(p, "u_quadInner"), 0.0f);
     glUniform1i(loc(p, "u_transparent"), I.params.transparent ? 1 : 0);
     setVec3(p, "u_groundAlbedo", srgbToLinear(I.params.ground_color.cast<float>()));
     glUniform1f(loc(p, "u_gridSpacing"), float(std::max(I.params.grid_spacing, 0.0)));
@@ -1231,10 +1279,46 @@ void Renderer::endFrame() {
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    setGroundUniforms();
-    glUniform2f(loc(I.prog_ground, "u_viewport"), float(I.ground_lo_w), float(I.ground_lo_h));
+    const int lw = I.ground_lo_w, lh = I.ground_lo_h;
+    for (GLuint p : {I.prog_ground, I.prog_ground_near, I.prog_ground_near_lit}) {
+      setGroundUniforms(p);
+      glUniform2f(loc(p, "u_viewport"), float(lw), float(lh));
+    }
     glBindVertexArray(I.empty_vao);
-    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    // In parts, each with the least its pixels need (the colours are the same): the square inside
+    // the circle where the fade starts, without the fade (GROUND_NEAR), and without the shadow
+    // lookup outside the pixel rectangle of the shadow texture's shaded texels (GROUND_LIT); then
+    // the ring around it to the edge, with both. Most ground pixels are in the square, and the
+    // shadows in a small part of it.
+    const float inner = float(fade_start / std::sqrt(2.0) * 0.999);
+    Impl::PixelRect sr{};
+    bool whole = false;
+    const bool boxed = shadows_on && I.groundShadowRect(view_proj, lw, lh, sr, whole);
+    for (GLuint p : {I.prog_ground_near, I.prog_ground_near_lit}) {
+      glUseProgram(p);
+      glUniform1f(loc(p, "u_quadHalf"), inner);
+    }
+    if (!boxed || whole) {
+      glUseProgram(boxed ? I.prog_ground_near : I.prog_ground_near_lit);
+      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    } else {
+      glEnable(GL_SCISSOR_TEST);
+      glUseProgram(I.prog_ground_near);
+      glScissor(sr.x0, sr.y0, sr.x1 - sr.x0, sr.y1 - sr.y0);
+      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+      glUseProgram(I.prog_ground_near_lit);
+      const Impl::PixelRect around[4] = {
+          {0, 0, lw, sr.y0}, {0, sr.y1, lw, lh}, {0, sr.y0, sr.x0, sr.y1}, {sr.x1, sr.y0, lw, sr.y1}};
+      for (const Impl::PixelRect& a : around) {
+        if (a.area() <= 0) continue;
+        glScissor(a.x0, a.y0, a.x1 - a.x0, a.y1 - a.y0);
+        glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+      }
+      glDisable(GL_SCISSOR_TEST);
+    }
+    glUseProgram(I.prog_ground);
+    glUniform1f(loc(I.prog_ground, "u_quadInner"), inner);
+    glDrawArrays(GL_TRIANGLE_STRIP, 0, 10);
     if (!I.params.transparent) {
       I.setCommonUniforms(I.prog_bg, view_proj, light_vp, normal_offset, shadows_on);
       glUniform2f(loc(I.prog_bg, "u_viewport"), float(I.ground_lo_w), float(I.ground_lo_h));
@@ -1354,7 +1438,7 @@ void Renderer::endFrame() {
     // background, last, fills only the pixels nothing was drawn on (none when transparent: alpha
     // 0 there).
     if (I.params.ground) {
-      setGroundUniforms();
+      setGroundUniforms(I.prog_ground);
       glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
       ++stats_.draw_calls;
     }

@@ -409,11 +409,18 @@ uniform mat4 u_viewProj;
 uniform mat4 u_lightViewProj;
 uniform vec3 u_quadCenter;  // on the ground plane
 uniform float u_quadHalf;   // m
+uniform float u_quadInner;  // m; > 0: the ring between this square and the u_quadHalf one
 out vec3 v_world;
 out vec2 v_shadowUv;  // light-space xy: affine in the point for the orthographic light, so exact per vertex
 void main() {
   vec2 c = vec2(float(gl_VertexID & 1), float((gl_VertexID >> 1) & 1)) * 2.0 - 1.0;  // a strip of 4
-  v_world = vec3(u_quadCenter.xy + c * u_quadHalf, u_quadCenter.z);
+  float h = u_quadHalf;
+  if (u_quadInner > 0.0) {  // a strip of 10: outer and inner corner in turn, around and back to the first
+    int k = (gl_VertexID >> 1) & 3;
+    c = vec2(k == 1 || k == 2 ? 1.0 : -1.0, k >= 2 ? 1.0 : -1.0);
+    h = (gl_VertexID & 1) == 1 ? u_quadInner : u_quadHalf;
+  }
+  v_world = vec3(u_quadCenter.xy + c * h, u_quadCenter.z);
   vec4 s = u_lightViewProj * vec4(v_world, 1.0);
   v_shadowUv = s.xy / s.w * 0.5 + 0.5;
   gl_Position = u_viewProj * vec4(v_world, 1.0);
@@ -451,10 +458,17 @@ vec3 linearToSrgbFast(vec3 c) {
   return mix(c * 12.92, g, step(0.0031308, c));
 }
 
+// Compiled with GROUND_NEAR: for the part of the ground nearer the fade's centre than its start
+// (f = 0: no fade, no background); with GROUND_LIT as well: where the shadow texture is 1 (sh = 1).
+// The same colours, for less work per pixel (renderer.cpp draws each part with its program).
 void main() {
-  vec3 bg = background(gl_FragCoord.y / u_viewport.y);
   vec3 P = v_world;
+#ifdef GROUND_NEAR
+  const float f = 0.0;
+#else
+  vec3 bg = background(gl_FragCoord.y / u_viewport.y);
   float f = smoothstep(u_fade.x, u_fade.y, length(P.xy - u_fadeCenter.xy));
+#endif
   float grid = step(1e-9, u_gridSpacing);
   float k = filteredChecker(P.xy / max(u_gridSpacing, 1e-9));
   vec3 albedo = u_groundAlbedo * mix(1.0, mix(0.93, 1.05, k), grid);  // checker: subtle, about +-6 %
@@ -463,9 +477,13 @@ void main() {
   vec3 V = normalize(u_eye - P);
   vec3 L = -u_lightDir;
   float ndl = max(L.z, 0.0);
+#ifdef GROUND_LIT
+  float sh = step(1e-30, ndl);
+#else
   vec2 c = v_shadowUv;
   float inside = step(0.0, c.x) * step(c.x, 1.0) * step(0.0, c.y) * step(c.y, 1.0) * float(u_shadowsOn != 0);
   float sh = mix(1.0, texture(u_groundShadow, c).r, inside) * step(1e-30, ndl);
+#endif
   vec3 H = normalize(L + V);
   float h2 = max(H.z, 0.0);
   h2 *= h2;
@@ -475,9 +493,13 @@ void main() {
   vec3 key = u_lightColor * sh * (albedo * ndl + vec3(spec));
   vec3 fill = u_fillColor * albedo * max(-u_fillDir.z, 0.0);
   vec3 col = linearToSrgbFast(toneMap(key + fill + albedo * u_skyAmbient));
+#ifdef GROUND_NEAR
+  o_color = vec4(col, 1.0);
+#else
   // Faded into the background: its colour exactly, so the square's edge is unseen.
   vec4 gone = u_transparent != 0 ? vec4(0.0) : vec4(bg, 1.0);
   o_color = f >= 1.0 ? gone : vec4(mix(col, bg, f), 1.0);
+#endif
 }
 )GLSL";
 

@@ -30,6 +30,9 @@ extern const char* const kDeferredFS;  // the shadow and the colour once per vis
 // Compiled into kLitFS / kMeshMatFS / kHairFS by `defines`: they write the visible surface and the
 // two parts of its radiance into three targets for kDeferredFS instead of a colour.
 inline constexpr const char* kSplitLightDefine = "#define SPLIT_LIGHT 1\n";
+// Compiled into kGroundFS: the ground nearer than the fade (no fade), and also where it is lit.
+inline constexpr const char* kGroundNearDefine = "#define GROUND_NEAR 1\n";
+inline constexpr const char* kGroundNearLitDefine = "#define GROUND_NEAR 1\n#define GROUND_LIT 1\n";
 // Compiled into kGroundShadowFS: the classifying first pass (shadowClass()).
 inline constexpr const char* kShadowClassifyDefine = "#define SHADOW_CLASSIFY 1\n";
 // Compiled into kPostAaFS: its first pass (flat pixels copied, edges marked).
