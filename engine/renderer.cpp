@@ -184,7 +184,10 @@ struct Renderer::Impl {
   GLuint msaa_fbo = 0, msaa_color = 0, msaa_depth = 0, main_color_tex = 0;
   GLuint resolve_fbo = 0, resolve_color = 0;
   GLuint resolve_depth = 0;  // marks the pixels the post filter has an edge at
-  GLuint output_fbo = 0;     // where the finished frame is: resolve_fbo, or msaa_fbo without AA
+  GLuint output_fbo = 0;     // where the finished frame is: resolve_fbo; msaa_fbo without AA or filtered in place
+  // The post filter over rectangles: a copy of them (and around them, as far as its taps reach)
+  // that it reads while it writes the main target in place (endFrame).
+  GLuint post_src_fbo = 0, post_src_tex = 0;
   bool target_post = false;
   // With a single-sample target: position + normal of the visible surface, and the key light's
   // part of its radiance before the shadow and the rest (kDeferredFS), sharing the main depth
@@ -318,14 +321,14 @@ Renderer::~Renderer() {
   GLuint bufs[] = {I.hull_vbo,       I.hull_ebo,  I.hull_shadow_vbo, I.hull_shadow_ebo,
                    I.hull_instances, I.lines_vbo, I.hair_vbo,        I.hair_ebo};
   glDeleteBuffers(8, bufs);
-  GLuint fbos[] = {I.msaa_fbo, I.resolve_fbo,   I.shadow_fbo,   I.ground_shadow_fbo,
-                   I.surf_fbo, I.ground_lo_fbo, I.ground_up_fbo};
-  glDeleteFramebuffers(7, fbos);
+  GLuint fbos[] = {I.msaa_fbo, I.resolve_fbo,   I.shadow_fbo,    I.ground_shadow_fbo,
+                   I.surf_fbo, I.ground_lo_fbo, I.ground_up_fbo, I.post_src_fbo};
+  glDeleteFramebuffers(8, fbos);
   GLuint rbs[] = {I.msaa_color,          I.msaa_depth,    I.resolve_color,
                   I.ground_shadow_depth, I.resolve_depth, I.ground_lo_depth};
   glDeleteRenderbuffers(6, rbs);
   if (I.main_color_tex) glDeleteTextures(1, &I.main_color_tex);
-  for (GLuint t : {I.surf_tex, I.key_tex, I.rest_tex, I.ground_lo_tex})
+  for (GLuint t : {I.surf_tex, I.key_tex, I.rest_tex, I.ground_lo_tex, I.post_src_tex})
     if (t) glDeleteTextures(1, &t);
   if (I.shadow_tex) glDeleteTextures(1, &I.shadow_tex);
   if (I.ground_shadow_tex) glDeleteTextures(1, &I.ground_shadow_tex);
@@ -690,6 +693,17 @@ void Renderer::Impl::ensureTargets(int w, int h, int samples, bool post) {
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, resolve_color);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, resolve_depth);
   output_fbo = (samples > 1 || post) ? resolve_fbo : msaa_fbo;
+  if (post) {
+    if (!post_src_fbo) {
+      glGenFramebuffers(1, &post_src_fbo);
+      glGenTextures(1, &post_src_tex);
+    }
+    glBindTexture(GL_TEXTURE_2D, post_src_tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+    linearClampToEdge();
+    glBindFramebuffer(GL_FRAMEBUFFER, post_src_fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, post_src_tex, 0);
+  }
   if (samples == 1) {
     if (!surf_fbo) {
       glGenFramebuffers(1, &surf_fbo);
@@ -1480,16 +1494,28 @@ void Renderer::endFrame() {
       // The filter runs only over the screen rectangles of what was drawn (objects, hair,
       // lines), grown by its reach; the background and the ground around them have no edges to
       // smooth (the checker is box-filtered, the shadows soft) and are copied as they are.
+      // Then the frame stays where it is and is filtered in place there, from a copy of the
+      // rectangles and of what the filter's taps reach around them (5 px: 4 along an edge, and a
+      // texel of bilinear footprint), instead of a copy of the whole frame.
       const bool boxed = I.screenRects(view_proj, w, h, I.rects);
+      GLuint source = I.main_color_tex;
+      I.output_fbo = I.resolve_fbo;
       if (boxed) {
         glBindFramebuffer(GL_READ_FRAMEBUFFER, I.msaa_fbo);
-        glBindFramebuffer(GL_DRAW_FRAMEBUFFER, I.resolve_fbo);
-        glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+        glBindFramebuffer(GL_DRAW_FRAMEBUFFER, I.post_src_fbo);
+        constexpr int kReach = 6;
+        for (const Impl::PixelRect& r : I.rects) {
+          const int x0 = std::max(r.x0 - kReach, 0), y0 = std::max(r.y0 - kReach, 0);
+          const int x1 = std::min(r.x1 + kReach, w), y1 = std::min(r.y1 + kReach, h);
+          glBlitFramebuffer(x0, y0, x1, y1, x0, y0, x1, y1, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+        }
+        source = I.post_src_tex;
+        I.output_fbo = I.msaa_fbo;  // its depth buffer is done with: the filter marks edges in it
         glEnable(GL_SCISSOR_TEST);
       }
-      glBindFramebuffer(GL_FRAMEBUFFER, I.resolve_fbo);
+      glBindFramebuffer(GL_FRAMEBUFFER, I.output_fbo);
       glActiveTexture(GL_TEXTURE3);
-      glBindTexture(GL_TEXTURE_2D, I.main_color_tex);
+      glBindTexture(GL_TEXTURE_2D, source);
       glActiveTexture(GL_TEXTURE0);
       for (GLuint p : {I.prog_post_class, I.prog_post}) {
         glUseProgram(p);
