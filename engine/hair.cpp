@@ -180,13 +180,38 @@ HairMesh buildHair(const HairCurve& curve, const HairParams& hair, const Eigen::
     mesh.vertices.push_back(v);
   }
   const uint32_t sides = uint32_t(tube_sides);
-  for (uint32_t i = 0; i + 1 < uint32_t(m); ++i) {
+  // Rings i and j of the tube, quad by quad.
+  const auto tubeBand = [&](std::vector<uint32_t>& out, uint32_t i, uint32_t j) {
     for (uint32_t k = 0; k < sides; ++k) {
       const uint32_t a = i * sides + k, b = i * sides + (k + 1) % sides;
-      const uint32_t c = a + sides, d = b + sides;
-      mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
+      const uint32_t c = j * sides + k, d = j * sides + (k + 1) % sides;
+      out.insert(out.end(), {a, b, d, a, d, c});
     }
-  }
+  };
+  // The shadow pass's spans of samples 0..last along a line through pos(0..last): from each kept
+  // sample, as many (up to 3) are skipped as lie within `tol` of the chord to the next kept one.
+  const double tol = kShadowChordTolerance * hair.width;
+  const auto shadowSpans = [tol](uint32_t last, auto&& pos, auto&& band) {
+    for (uint32_t i = 0; i < last;) {
+      uint32_t j = i + 1;
+      for (uint32_t k = i + 2; k <= std::min(i + 4, last); ++k) {
+        const Eigen::Vector3d a = pos(i), u = (pos(k) - a).normalized();
+        bool straight = true;
+        for (uint32_t q = i + 1; q < k && straight; ++q) {
+          const Eigen::Vector3d d = pos(q) - a;
+          straight = (d - d.dot(u) * u).norm() <= tol;
+        }
+        if (!straight) break;
+        j = k;
+      }
+      band(i, j);
+      i = j;
+    }
+  };
+  for (uint32_t i = 0; i + 1 < uint32_t(m); ++i) tubeBand(mesh.indices, i, i + 1);
+  shadowSpans(
+      uint32_t(m - 1), [&](uint32_t i) { return curve.points[i]; },
+      [&](uint32_t i, uint32_t j) { tubeBand(mesh.shadow_indices, i, j); });
 
   // The strands: roots spread evenly over the tie's disc (Vogel's sunflower), each following the
   // curve at its own offset in the curve's frame, the clump widening toward the tip.
@@ -259,10 +284,15 @@ HairMesh buildHair(const HairCurve& curve, const HairParams& hair, const Eigen::
         mesh.vertices.push_back(v);
       }
     }
-    for (uint32_t i = 0; i < uint32_t(last); ++i) {
-      const uint32_t a = base + 2 * i;
-      mesh.indices.insert(mesh.indices.end(), {a, a + 1, a + 3, a, a + 3, a + 2});
-    }
+    // Samples i and j of the strand: a quad of its ribbon.
+    const auto ribbon = [&](std::vector<uint32_t>& out, uint32_t i, uint32_t j) {
+      const uint32_t a = base + 2 * i, b = base + 2 * j;
+      out.insert(out.end(), {a, a + 1, b + 1, a, b + 1, b});
+    };
+    for (uint32_t i = 0; i < uint32_t(last); ++i) ribbon(mesh.indices, i, i + 1);
+    shadowSpans(
+        uint32_t(last), [&](uint32_t i) { return pos[i]; },
+        [&](uint32_t i, uint32_t j) { ribbon(mesh.shadow_indices, i, j); });
   }
   mesh.strands = size_t(std::max(strands, 0));
   return mesh;

@@ -56,9 +56,18 @@ struct HairShading {
   float shift = 0.12f;      // tangent shift of the primary lobe (the secondary gets -1.5x)
 };
 
+// How far (in strand widths, HairParams::width) a sample the shadow pass leaves out may lie from
+// the chord that replaces it (HairMesh::shadow_indices).
+inline constexpr double kShadowChordTolerance = 1.0;
+
 struct HairMesh {
   std::vector<HairVertex> vertices;
   std::vector<uint32_t> indices;  // triangles
+  // The same surfaces for the shadow pass, through fewer samples along the tail: a sample is left
+  // out where it lies within kShadowChordTolerance strand widths of the chord between its kept
+  // neighbours (so within a fraction of a shadow texel), its first and last kept. Fewer triangles
+  // are what a software rasterizer pays for in that pass.
+  std::vector<uint32_t> shadow_indices;
   HairShading shading;
   size_t strands = 0;
 };

@@ -62,9 +62,11 @@ struct HullInstance {
   float shin_rim[2];
 };
 
-// One hair draw: a range of the frame's hair indices and its shading constants.
+// One hair draw: a range of the frame's hair indices, another for the shadow pass
+// (HairMesh::shadow_indices), and its shading constants.
 struct HairDraw {
   size_t first = 0, count = 0;
+  size_t shadow_first = 0, shadow_count = 0;
   HairShading shading;
 };
 
@@ -645,6 +647,10 @@ void Renderer::drawHair(const HairMesh& hair) {
   I.part_bounds.push_back(bounds);
   I.draw_bounds.extend(bounds);
   for (uint32_t i : hair.indices) I.hair_indices.push_back(base + i);
+  const std::vector<uint32_t>& shadow = hair.shadow_indices.empty() ? hair.indices : hair.shadow_indices;
+  d.shadow_first = I.hair_indices.size();
+  d.shadow_count = shadow.size();
+  for (uint32_t i : shadow) I.hair_indices.push_back(base + i);
   I.hair_draws.push_back(d);
 }
 
@@ -953,8 +959,9 @@ void Renderer::Impl::drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only
   const GLint l_shading = loc(p, "u_hairShading");
   for (const HairDraw& d : hair_draws) {
     glUniform2f(l_shading, d.shading.highlight, d.shading.shift);
-    glDrawElements(GL_TRIANGLES, GLsizei(d.count), GL_UNSIGNED_INT,
-                   reinterpret_cast<const void*>(d.first * sizeof(uint32_t)));
+    const size_t first = depth_only ? d.shadow_first : d.first, count = depth_only ? d.shadow_count : d.count;
+    glDrawElements(GL_TRIANGLES, GLsizei(count), GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(first * sizeof(uint32_t)));
   }
   glBindVertexArray(0);
 }
@@ -1403,7 +1410,7 @@ void Renderer::endFrame() {
   I.drawHairs(view_proj, false, ld, hair_prog);
   glDisable(GL_CLIP_DISTANCE0);
   stats_.draw_calls += int(I.hair_draws.size());
-  stats_.triangles += I.hair_indices.size() / 3;
+  for (const HairDraw& d : I.hair_draws) stats_.triangles += d.count / 3;
   stats_.draw_calls += int(I.mesh_draws.size()) + (I.hulls.empty() ? 0 : 1);
   for (const MeshDraw& d : I.mesh_draws) stats_.triangles += size_t(I.meshes[size_t(d.mesh)].index_count / 3);
   stats_.triangles += I.hulls.size() * I.hull_triangles;

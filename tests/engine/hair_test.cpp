@@ -183,6 +183,62 @@ TEST(Hair, DraftDrawsFewerStrandsAndTheMeshIsDeterministic) {
   EXPECT_LT(a.indices.size(), full.indices.size());
 }
 
+// The shadow pass's triangles: fewer, through the samples of each strand and of the tube it keeps,
+// from root to tip; the samples it leaves out lie within kShadowChordTolerance strand widths of
+// the chords that replace them.
+TEST(Hair, ShadowTrianglesLeaveOutOnlySamplesNearTheirChords) {
+  HairParams hair;
+  const auto pts = bentChain({30.0, 20.0, -40.0});
+  const HairCurve c = hairCurve(pts, taperedRadii(pts.size()), Eigen::Vector3d::UnitX());
+  const HairMesh m = buildHair(c, hair, Eigen::Vector3f(0.4f, 0.25f, 0.1f), hairStrandCount(hair, false));
+  ASSERT_FALSE(m.shadow_indices.empty());
+  ASSERT_EQ(m.shadow_indices.size() % 3, 0u);
+  const double share = double(m.shadow_indices.size()) / double(m.indices.size());
+  EXPECT_LT(share, 0.8) << "the shadow pass keeps nearly every sample";
+  EXPECT_GT(share, 0.2);
+  std::vector<char> used(m.vertices.size(), 0), used_main(m.vertices.size(), 0);
+  for (uint32_t i : m.indices) used_main[i] = 1;
+  for (uint32_t i : m.shadow_indices) {
+    ASSERT_LT(i, m.vertices.size());
+    EXPECT_TRUE(used_main[i]) << "vertex " << i << " is in the shadow pass only";
+    used[i] = 1;
+  }
+  // The tube (the first vertices, 12 a ring): its first and last rings.
+  const size_t rings = c.points.size(), sides = 12;
+  for (size_t k = 0; k < sides; ++k) {
+    EXPECT_TRUE(used[k]);
+    EXPECT_TRUE(used[(rings - 1) * sides + k]);
+  }
+  // The strands: vertex pairs from the root, where the half width is hair.width / 2, to the tip.
+  const float root_hw = float(0.5 * hair.width);
+  size_t roots = 0, tips = 0;
+  for (size_t v = rings * sides; v < m.vertices.size();) {
+    ASSERT_FLOAT_EQ(std::abs(m.vertices[v].half_width), root_hw) << "not a strand's root: " << v;
+    size_t e = v + 2;
+    while (e < m.vertices.size() && std::abs(m.vertices[e].half_width) != root_hw) e += 2;
+    ++roots;
+    EXPECT_TRUE(used[v] && used[v + 1]) << "a strand's root is not in the shadow pass";
+    if (used[e - 1] && used[e - 2]) ++tips;
+    // Each run of left-out samples lies within the tolerance of the chord between the kept ones
+    // around it.
+    const double tol = kShadowChordTolerance * hair.width + 1e-7;
+    for (size_t a = v; a + 2 < e;) {
+      size_t b = a + 2;
+      while (!used[b]) b += 2;
+      const Eigen::Vector3d pa = Eigen::Vector3f(m.vertices[a].pos).cast<double>();
+      const Eigen::Vector3d u = (Eigen::Vector3f(m.vertices[b].pos).cast<double>() - pa).normalized();
+      for (size_t q = a + 2; q < b; q += 2) {
+        const Eigen::Vector3d d = Eigen::Vector3f(m.vertices[q].pos).cast<double>() - pa;
+        EXPECT_LE((d - d.dot(u) * u).norm(), tol) << "strand vertex " << q;
+      }
+      a = b;
+    }
+    v = e;
+  }
+  EXPECT_EQ(roots, size_t(hairStrandCount(hair, false)));
+  EXPECT_EQ(tips, roots) << "a strand's tip is not in the shadow pass";
+}
+
 // A render in draft quality (render.quality, or the window while the view moves) draws the draft
 // strand count: fewer triangles than final.
 TEST(Hair, DraftQualityRendersFewerStrands) {
