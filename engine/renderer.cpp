@@ -1275,6 +1275,48 @@ void Renderer::endFrame() {
     glUniform2f(loc(p, "u_fade"), float(fade_start), float(fade_end));
     glUniform1i(loc(p, "u_groundShadow"), 2);
   };
+  // The ground square into the bound target of vw x vh pixels, in parts, each with the least its
+  // pixels need (the colours are the same): the square inside the circle where the fade starts,
+  // without the fade (GROUND_NEAR), and without the shadow lookup outside the pixel rectangle of
+  // the shadow texture's shaded texels (GROUND_LIT); then the ring around it to the edge, with
+  // both. Most ground pixels are in the square, and the shadows in a small part of it. Leaves the
+  // empty VAO bound.
+  const auto drawGroundParts = [&](int vw, int vh) {
+    for (GLuint p : {I.prog_ground, I.prog_ground_near, I.prog_ground_near_lit}) {
+      setGroundUniforms(p);
+      glUniform2f(loc(p, "u_viewport"), float(vw), float(vh));
+    }
+    glBindVertexArray(I.empty_vao);
+    const float inner = float(fade_start / std::sqrt(2.0) * 0.999);
+    Impl::PixelRect sr{};
+    bool whole = false;
+    const bool boxed = shadows_on && I.groundShadowRect(view_proj, vw, vh, sr, whole);
+    for (GLuint p : {I.prog_ground_near, I.prog_ground_near_lit}) {
+      glUseProgram(p);
+      glUniform1f(loc(p, "u_quadHalf"), inner);
+    }
+    if (!boxed || whole) {
+      glUseProgram(boxed ? I.prog_ground_near : I.prog_ground_near_lit);
+      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    } else {
+      glEnable(GL_SCISSOR_TEST);
+      glUseProgram(I.prog_ground_near);
+      glScissor(sr.x0, sr.y0, sr.x1 - sr.x0, sr.y1 - sr.y0);
+      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+      glUseProgram(I.prog_ground_near_lit);
+      const Impl::PixelRect around[4] = {
+          {0, 0, vw, sr.y0}, {0, sr.y1, vw, vh}, {0, sr.y0, sr.x0, sr.y1}, {sr.x1, sr.y0, vw, sr.y1}};
+      for (const Impl::PixelRect& a : around) {
+        if (a.area() <= 0) continue;
+        glScissor(a.x0, a.y0, a.x1 - a.x0, a.y1 - a.y0);
+        glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+      }
+      glDisable(GL_SCISSOR_TEST);
+    }
+    glUseProgram(I.prog_ground);
+    glUniform1f(loc(I.prog_ground, "u_quadInner"), inner);
+    glDrawArrays(GL_TRIANGLE_STRIP, 0, 10);
+  };
   // Single-sample frames: the ground is shaded at half resolution (a quarter of the pixels) and
   // upsampled bilinearly after the objects. Everything on it is smooth at the pixel scale: the
   // shadow (a soft texture), the lighting, the fade, the background it fades into; the checker is
@@ -1300,46 +1342,7 @@ void Renderer::endFrame() {
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    const int lw = I.ground_lo_w, lh = I.ground_lo_h;
-    for (GLuint p : {I.prog_ground, I.prog_ground_near, I.prog_ground_near_lit}) {
-      setGroundUniforms(p);
-      glUniform2f(loc(p, "u_viewport"), float(lw), float(lh));
-    }
-    glBindVertexArray(I.empty_vao);
-    // In parts, each with the least its pixels need (the colours are the same): the square inside
-    // the circle where the fade starts, without the fade (GROUND_NEAR), and without the shadow
-    // lookup outside the pixel rectangle of the shadow texture's shaded texels (GROUND_LIT); then
-    // the ring around it to the edge, with both. Most ground pixels are in the square, and the
-    // shadows in a small part of it.
-    const float inner = float(fade_start / std::sqrt(2.0) * 0.999);
-    Impl::PixelRect sr{};
-    bool whole = false;
-    const bool boxed = shadows_on && I.groundShadowRect(view_proj, lw, lh, sr, whole);
-    for (GLuint p : {I.prog_ground_near, I.prog_ground_near_lit}) {
-      glUseProgram(p);
-      glUniform1f(loc(p, "u_quadHalf"), inner);
-    }
-    if (!boxed || whole) {
-      glUseProgram(boxed ? I.prog_ground_near : I.prog_ground_near_lit);
-      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
-    } else {
-      glEnable(GL_SCISSOR_TEST);
-      glUseProgram(I.prog_ground_near);
-      glScissor(sr.x0, sr.y0, sr.x1 - sr.x0, sr.y1 - sr.y0);
-      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
-      glUseProgram(I.prog_ground_near_lit);
-      const Impl::PixelRect around[4] = {
-          {0, 0, lw, sr.y0}, {0, sr.y1, lw, lh}, {0, sr.y0, sr.x0, sr.y1}, {sr.x1, sr.y0, lw, sr.y1}};
-      for (const Impl::PixelRect& a : around) {
-        if (a.area() <= 0) continue;
-        glScissor(a.x0, a.y0, a.x1 - a.x0, a.y1 - a.y0);
-        glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
-      }
-      glDisable(GL_SCISSOR_TEST);
-    }
-    glUseProgram(I.prog_ground);
-    glUniform1f(loc(I.prog_ground, "u_quadInner"), inner);
-    glDrawArrays(GL_TRIANGLE_STRIP, 0, 10);
+    drawGroundParts(I.ground_lo_w, I.ground_lo_h);
     if (!I.params.transparent) {
       I.setCommonUniforms(I.prog_bg, view_proj, light_vp, normal_offset, shadows_on);
       glUniform2f(loc(I.prog_bg, "u_viewport"), float(I.ground_lo_w), float(I.ground_lo_h));
@@ -1459,8 +1462,7 @@ void Renderer::endFrame() {
     // background, last, fills only the pixels nothing was drawn on (none when transparent: alpha
     // 0 there).
     if (I.params.ground) {
-      setGroundUniforms(I.prog_ground);
-      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+      drawGroundParts(w, h);
       ++stats_.draw_calls;
     }
     if (!I.params.transparent) {
