@@ -243,6 +243,67 @@ TEST(Renderer, TheGroundHidesWhatIsBelowIt) {
   }
 }
 
+// The shadow map is reused from frame to frame. What a frame shows must not depend on what the
+// frames before it drew: (1) a caster gone since the last frame leaves no depth behind; (2) the
+// first frame on a new or resized map reads no blocker where none is. Any scheme that clears or
+// caches less than the whole map each frame must keep both (one that cleared only this frame's
+// caster box failed both checks). All frames keep the same light frustum (setShadowBounds), and
+// the slab of one frame lies just beside the sphere of the next, within reach of its shadow
+// lookups but outside its caster box.
+TEST(Renderer, ACasterGoneSinceTheLastFrameLeavesNoShadow) {
+  REQUIRE_GL();
+  const Camera cam = testCamera();
+  const Eigen::AlignedBox3d bounds(Eigen::Vector3d(-0.6, -0.6, 0.0), Eigen::Vector3d(0.6, 0.6, 0.6));
+  constexpr double kR = 0.1;
+  const auto sphere = [&](Renderer& r) {
+    r.setShadowBounds(bounds);
+    r.drawSphere(kSphereC, kR, red());
+  };
+  const auto slab = [&](Renderer& r) {
+    r.setShadowBounds(bounds);
+    r.drawBox(Eigen::Affine3d(Eigen::Translation3d(0.13, 0.0, 0.2)), Eigen::Vector3d(0.01, 0.12, 0.12), red());
+  };
+  const auto nothing = [&](Renderer& r) { r.setShadowBounds(bounds); };
+  // A map of another size first, so that the frames below start from a new, never cleared one.
+  LightParams other = testLight();
+  other.shadow_size = testLight().shadow_size / 2;
+  render(cam, testParams(), sphere, other);
+  const auto first_sphere = render(cam, testParams(), sphere);
+  render(cam, testParams(), slab);
+  const auto after_slab = render(cam, testParams(), sphere);
+  const auto after_sphere = render(cam, testParams(), sphere);
+  const auto lit = render(cam, testParams(), nothing);
+  save("gone_first_sphere.png", first_sphere);
+  save("gone_after_slab.png", after_slab);
+  save("gone_after_sphere.png", after_sphere);
+  ASSERT_EQ(after_slab.size(), after_sphere.size());
+  EXPECT_TRUE(after_slab == after_sphere) << "the slab's shadow is still there a frame later";
+  EXPECT_TRUE(first_sphere == after_sphere) << "the first frame on a new shadow map differs";
+
+  // (2) in absolute terms: the ground 6 cm outside the sphere's shadow cylinder (past the widest
+  // penumbra, 3 cm, yet within the reach of the ground's shadow lookups) is lit, all around it.
+  const Eigen::Vector3d d = LightParams().direction.normalized();
+  const Eigen::Vector3d hit = kSphereC + d * (kSphereC.z() / -d.z());
+  const Eigen::Vector2d c = project(cam, kSphereC);
+  const double r_px = (project(cam, kSphereC + cam.view().block<1, 3>(1, 0).transpose() * kR) - c).norm();
+  int checked = 0;
+  for (int k = 0; k < 16; ++k) {
+    const double a = 2.0 * M_PI * k / 16.0;
+    const Eigen::Vector3d w(std::cos(a), std::sin(a), 0.0);
+    const double across = (w - w.dot(d) * d).norm();  // distance from the axis per metre along w
+    const Eigen::Vector3d g = hit + w * ((kR + 0.06) / across);
+    const Eigen::Vector2d p = project(cam, g);
+    if ((p - c).norm() < r_px + 3.0 || p.x() < 1 || p.y() < 1 || p.x() > kW - 2 || p.y() > kH - 2) continue;
+    ++checked;
+    for (const auto* img : {&first_sphere, &after_slab}) {
+      const double dl = luminance(*img, int(p.x()), int(p.y())) - luminance(lit, int(p.x()), int(p.y()));
+      EXPECT_LT(std::abs(dl), 3.0) << "ground at " << g.transpose() << " (pixel " << p.transpose()
+                                   << ") is shadowed by no caster: " << dl;
+    }
+  }
+  EXPECT_GE(checked, 10);
+}
+
 TEST(Renderer, SameDrawListIsByteIdentical) {
   REQUIRE_GL();
   auto scene = [](Renderer& r) {
