@@ -31,8 +31,11 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// The scenes `make demo` renders (the Makefile's DEMO_SCENES), and the ponytail on the hopper.
 struct BenchRenderArgs {
-  std::vector<std::string> scenes{"assets/scenes/ponytail.json", "assets/scenes/ponytail_hopper.json"};
+  std::vector<std::string> scenes{"assets/scenes/ponytail.json",       "assets/scenes/ponytail_toss.json",
+                                  "assets/scenes/hopper.json",         "assets/scenes/hopper_fall.json",
+                                  "assets/scenes/hopper_terrain.json", "assets/scenes/ponytail_hopper.json"};
   std::vector<std::string> sizes{"1280x720", "1920x1080"};
   int frames = 20;
   std::vector<std::string> sets;  // applied to every configuration, before its own
@@ -120,6 +123,21 @@ std::string loadAverage() {
 }
 
 int runBenchRender(const BenchRenderArgs& args) {
+  // Every size and scene is checked before anything is measured: a typo in the last one does not
+  // cost the minutes spent on the others.
+  std::vector<std::pair<int, int>> sizes;
+  for (const auto& size : args.sizes) {
+    int w = 0, h = 0;
+    char tail = 0;
+    if (std::sscanf(size.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192)
+      throw SceneError("--sizes " + size + ": expected WIDTHxHEIGHT between 16x16 and 8192x8192, e.g. 1280x720");
+    sizes.emplace_back(w, h);
+  }
+  for (const auto& scene : args.scenes) {
+    std::vector<Override> o;
+    for (const auto& s : args.sets) o.push_back(parseOverride(s));
+    validateScene(loadScene(scene, o), scene);
+  }
   std::ostringstream md;
   utsname u{};
   uname(&u);
@@ -145,15 +163,16 @@ int runBenchRender(const BenchRenderArgs& args) {
   md << "*render* is the wall time of one frame (all passes and the read-back); the pass columns are "
         "RenderStats (glFinish-bracketed: llvmpipe rasterizes a pass synchronously at its flush). "
         "*x floor* = render / the floor of the same scene and size (1 sample, no shadow, no ground).\n\n";
+  std::ostringstream summary, tables;
+  summary << "## Final / floor\n\n"
+          << "| scene | size | final (ms) | floor (ms) | x floor |\n"
+          << "|---|---|---:|---:|---:|\n";
   for (const auto& scene : args.scenes) {
-    for (const auto& size : args.sizes) {
-      int w = 0, h = 0;
-      char tail = 0;
-      if (std::sscanf(size.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192)
-        throw SceneError("--sizes " + size + ": expected WIDTHxHEIGHT between 16x16 and 8192x8192, e.g. 1280x720");
-      md << "## " << scene << " at " << w << "x" << h << "\n\n"
-         << "| configuration | render | shadow | main | AA | read-back | x floor |\n"
-         << "|---|---:|---:|---:|---:|---:|---:|\n";
+    for (const auto& [w, h] : sizes) {
+      const std::string size = std::to_string(w) + "x" + std::to_string(h);
+      tables << "## " << scene << " at " << w << "x" << h << "\n\n"
+             << "| configuration | render | shadow | main | AA | read-back | x floor |\n"
+             << "|---|---:|---:|---:|---:|---:|---:|\n";
       const std::vector<Row> rows = measureAll(scene, args.sets, w, h, args.frames);
       for (size_t i = 0; i < rows.size(); ++i)
         std::fprintf(stderr, "bench-render: %s %s %-38s %7.1f ms\n", scene.c_str(), size.c_str(), variants()[i].name,
@@ -164,11 +183,17 @@ int runBenchRender(const BenchRenderArgs& args) {
         char line[256];
         std::snprintf(line, sizeof line, "| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.2f |\n", variants()[i].name,
                       r.total, r.shadow, r.main, r.aa, r.readback, r.total / floor_ms);
-        md << line;
+        tables << line;
       }
-      md << "\n";
+      tables << "\n";
+      char line[256];
+      std::snprintf(line, sizeof line, "| %s | %s | %.1f | %.1f | %.2f |\n",
+                    std::filesystem::path(scene).stem().c_str(), size.c_str(), rows[0].total, floor_ms,
+                    rows[0].total / floor_ms);
+      summary << line;
     }
   }
+  md << summary.str() << "\n" << tables.str();
   md << "Load average at the end: " << loadAverage() << ".\n";
   std::fputs(md.str().c_str(), stdout);
   if (!args.out.empty()) {
@@ -194,7 +219,8 @@ void addBenchRenderCommand(CLI::App& app, int& exit_code) {
   auto args = std::make_shared<BenchRenderArgs>();
   auto* cmd =
       app.add_subcommand("bench-render", "Render time per pass of the demo scenes in each quality configuration");
-  cmd->add_option("--scenes", args->scenes, "Scenes to render (default ponytail, ponytail_hopper)")->delimiter(',');
+  cmd->add_option("--scenes", args->scenes, "Scenes to render (default: the scenes of make demo, and ponytail_hopper)")
+      ->delimiter(',');
   cmd->add_option("--sizes", args->sizes, "Frame sizes, e.g. 1280x720,1920x1080")->delimiter(',');
   cmd->add_option("--frames", args->frames, "Timed frames per configuration (default 20)")->check(CLI::Range(1, 10000));
   cmd->add_option("--set", args->sets, "key=value overrides applied to every configuration (as render --set)");
