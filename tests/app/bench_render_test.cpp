@@ -35,9 +35,11 @@ std::vector<std::string> cells(const std::string& row) {
 TEST(BenchRender, WritesEveryConfigurationAndItsRatioToTheFloor) {
   const std::string dir = scratch("bench_render");
   const std::string out = dir + "/table.md";
-  const auto r = runPonyhop("bench-render --scenes assets/scenes/hopper.json,assets/scenes/chain.json --sizes "
-                            "96x64,64x48 --frames 2 --out " + out,
-                            "bench_render");
+  const auto r = runPonyhop(
+      "bench-render --scenes assets/scenes/hopper.json,assets/scenes/chain.json --sizes "
+      "96x64,64x48 --frames 2 --out " +
+          out,
+      "bench_render");
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string md = readFile(out);
   EXPECT_NE(md.find("llvmpipe"), std::string::npos) << "the table names the GL renderer\n" << md;
@@ -52,7 +54,7 @@ TEST(BenchRender, WritesEveryConfigurationAndItsRatioToTheFloor) {
                                             "final with 4x MSAA (antialias=msaa)",
                                             "draft (quality=draft)"};
   std::map<std::string, std::map<std::string, std::vector<double>>> tables;  // "## heading" -> config -> cells
-  std::map<std::string, double> summary;                                      // "scene size" -> x floor
+  std::map<std::string, double> summary;                                     // "scene size" -> x floor
   std::string section;
   std::stringstream ss(md);
   for (std::string line; std::getline(ss, line);) {
@@ -68,9 +70,8 @@ TEST(BenchRender, WritesEveryConfigurationAndItsRatioToTheFloor) {
     for (size_t i = 1; i < c.size(); ++i) v.push_back(std::stod(c[i]));
     tables[section][c[0]] = v;
   }
-  const std::vector<std::string> headings = {
-      "assets/scenes/hopper.json at 96x64", "assets/scenes/hopper.json at 64x48", "assets/scenes/chain.json at 96x64",
-      "assets/scenes/chain.json at 64x48"};
+  const std::vector<std::string> headings = {"assets/scenes/hopper.json at 96x64", "assets/scenes/hopper.json at 64x48",
+                                             "assets/scenes/chain.json at 96x64", "assets/scenes/chain.json at 64x48"};
   ASSERT_EQ(tables.size(), headings.size()) << md;
   for (const auto& h : headings) {
     ASSERT_TRUE(tables.count(h)) << h << "\n" << md;
@@ -111,9 +112,9 @@ TEST(BenchRender, BadInputIsRefusedBeforeAnythingIsMeasured) {
   EXPECT_EQ(r.out.find("bench-render: assets/scenes/hopper.json 96x64"), std::string::npos)
       << "measured before the bad size was seen\n"
       << r.out;
-  r = runPonyhop("bench-render --scenes assets/scenes/hopper.json,no_such_scene.json --sizes 96x64 --frames 2 --out " +
-                     out,
-                 "bench_render_bad_scene");
+  r = runPonyhop(
+      "bench-render --scenes assets/scenes/hopper.json,no_such_scene.json --sizes 96x64 --frames 2 --out " + out,
+      "bench_render_bad_scene");
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("no_such_scene.json"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("bench-render: assets/scenes/hopper.json 96x64"), std::string::npos)
