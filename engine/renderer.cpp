@@ -162,7 +162,7 @@ struct Renderer::Impl {
   // surface and the two parts of its radiance (SPLIT_LIGHT), and the pass that shadows and
   // finishes each visible pixel once.
   GLuint prog_mesh_split = 0, prog_mesh_mat_split = 0, prog_hull_split = 0, prog_hair_split = 0;
-  GLuint prog_deferred = 0;
+  GLuint prog_deferred = 0, prog_deferred_class = 0;
   GLuint prog_ground_up = 0;            // the half-resolution ground, upsampled (kGroundUpFS)
   GLuint prog_ground_near = 0;          // kGroundFS where nothing fades (GROUND_NEAR)
   GLuint prog_ground_near_lit = 0;      // ... and nothing is shadowed (GROUND_LIT)
@@ -370,6 +370,7 @@ bool Renderer::init(std::string* err) {
       {&I.prog_hull_split, "hull (deferred)", kCapsuleVS, kLitFS, kSplitLightDefine},
       {&I.prog_hair_split, "hair (deferred)", kHairVS, kHairFS, kSplitLightDefine},
       {&I.prog_deferred, "deferred shading", kFullscreenVS, kDeferredFS},
+      {&I.prog_deferred_class, "deferred shading (lit and unlit)", kFullscreenVS, kDeferredFS, kShadowClassifyDefine},
       {&I.prog_ground_up, "ground (upsampled)", kGroundUpVS, kGroundUpFS},
       {&I.prog_ground_near, "ground (near)", kGroundVS, kGroundFS, kGroundNearDefine},
       {&I.prog_ground_near_lit, "ground (near, lit)", kGroundVS, kGroundFS, kGroundNearLitDefine},
@@ -1424,30 +1425,45 @@ void Renderer::endFrame() {
   if (deferred) {
     glBindFramebuffer(GL_FRAMEBUFFER, I.msaa_fbo);
     if (clear_color) glClear(GL_COLOR_BUFFER_BIT);  // as above
-    const GLuint p = I.prog_deferred;
-    I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
     const GLuint targets[] = {I.surf_tex, I.key_tex, I.rest_tex};
     for (int i = 0; i < 3; ++i) {
       glActiveTexture(GLenum(GL_TEXTURE4 + i));
       glBindTexture(GL_TEXTURE_2D, targets[i]);
     }
     glActiveTexture(GL_TEXTURE0);
-    glUniform1i(loc(p, "u_surface"), 4);
-    glUniform1i(loc(p, "u_key"), 5);
-    glUniform1i(loc(p, "u_rest"), 6);
-    glDepthFunc(GL_GREATER);  // the triangle is at the far plane: passes where an object is
-    glDepthMask(GL_FALSE);
+    for (GLuint p : {I.prog_deferred_class, I.prog_deferred}) {
+      I.setCommonUniforms(p, view_proj, light_vp, normal_offset, shadows_on);
+      glUniform1i(loc(p, "u_surface"), 4);
+      glUniform1i(loc(p, "u_key"), 5);
+      glUniform1i(loc(p, "u_rest"), 6);
+    }
+    // Two passes, each a full-screen triangle just short of the far plane (glDepthRange) with
+    // depth test GREATER: it passes where an object is. The first finishes the pixels whose
+    // shadow needs no filter (no key light, or nothing above the surface: nothingAbove()) and
+    // moves their depth to the triangle's, discarding the others; the second, the whole
+    // shadowFactor(), then runs only where an object's depth is left: llvmpipe tests depth
+    // before the shader (a discarding shader keeps the early test when it writes no stencil), so
+    // the filter costs nothing where it is not needed. Just short of the far plane, so that the
+    // background drawn after the objects at the far plane (without a ground) leaves them alone.
+    glDepthRange(0.0, 1.0 - std::ldexp(1.0, -19));
+    glDepthFunc(GL_GREATER);
     glBindVertexArray(I.empty_vao);
-    if (I.screenRects(view_proj, w, h, I.rects)) {
-      glEnable(GL_SCISSOR_TEST);
-      for (const Impl::PixelRect& r : I.rects) {
-        glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+    const bool boxed = I.screenRects(view_proj, w, h, I.rects);
+    if (boxed) glEnable(GL_SCISSOR_TEST);
+    for (GLuint p : {I.prog_deferred_class, I.prog_deferred}) {
+      glUseProgram(p);
+      glDepthMask(p == I.prog_deferred_class ? GL_TRUE : GL_FALSE);
+      if (boxed) {
+        for (const Impl::PixelRect& r : I.rects) {
+          glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+          glDrawArrays(GL_TRIANGLES, 0, 3);
+        }
+      } else {
         glDrawArrays(GL_TRIANGLES, 0, 3);
       }
-      glDisable(GL_SCISSOR_TEST);
-    } else {
-      glDrawArrays(GL_TRIANGLES, 0, 3);
     }
+    glDisable(GL_SCISSOR_TEST);
+    glDepthRange(0.0, 1.0);
     glBindVertexArray(0);
     glDepthMask(GL_TRUE);
     for (int i = 0; i < 3; ++i) {  // they are render targets again next frame
@@ -1455,7 +1471,7 @@ void Renderer::endFrame() {
       glBindTexture(GL_TEXTURE_2D, 0);
     }
     glActiveTexture(GL_TEXTURE0);
-    ++stats_.draw_calls;
+    stats_.draw_calls += 2;
   }
   glDepthFunc(GL_LESS);
 

@@ -128,6 +128,35 @@ float shadowClass(vec3 P, vec3 N) {
   return nB == 0.0 ? 1.0 : (nB == 7.0 ? 0.0 : 0.5);
 }
 
+// True when nothing can shadow the receiver at P (normal N): no shadow-map texel within the blocker
+// search's reach rises above its tangent plane (through the lookup point), so shadowFactor() is
+// 1 up to its own filter's self-shadowing on slopes. The plain search counts the receiver's own
+// surface uphill of the lookup as blockers on every slope and curve (and so runs the filter
+// there); measured against the tangent plane, a flat or convex lit surface has none. Errors
+// (sampling the nearest texel, a plane seen edge-on from the light) only ever add blockers: such
+// a point takes the whole shadowFactor(). Used by the deferred shading's first pass.
+bool nothingAbove(vec3 P, vec3 N) {
+  vec3 c = shadowCoord(P, N);
+  if (outsideShadowMap(c)) return true;
+  // The tangent plane's depth as an affine function of the shadow-map xy: depth = c.z + g . dxy.
+  vec3 t1 = normalize(cross(N, abs(N.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
+  vec3 t2 = cross(N, t1);
+  vec3 a = 0.5 * (u_lightViewProj * vec4(t1, 0.0)).xyz, b = 0.5 * (u_lightViewProj * vec4(t2, 0.0)).xyz;
+  float det = a.x * b.y - a.y * b.x;
+  // Edge-on (or nearly): the plane's depth is undefined in xy; the whole filter decides.
+  if (abs(det) < 1e-6 * (dot(a, a) + dot(b, b))) return false;
+  vec2 g = vec2(a.z * b.y - a.y * b.z, a.x * b.z - a.z * b.x) / det;
+  float searchR = u_maxPenumbraTexels * u_shadowTexel;
+  float eps = 0.25 * u_texelWorld / u_lightDepthRange;  // a quarter texel of depth
+  float above = 0.0;
+  for (int i = 0; i < 12; i += 2) {  // the blocker search's taps
+    vec2 o = kPoisson[i] * searchR;
+    above += texture(u_shadowDepth, c.xy + o).r < c.z + dot(g, o) - eps ? 1.0 : 0.0;
+  }
+  above += texture(u_shadowDepth, c.xy).r < c.z - eps ? 1.0 : 0.0;
+  return above == 0.0;
+}
+
 // Linear radiance of a surface point (before tone mapping), in two parts: `key`, the key light's
 // share before its shadow, and `rest` (fill, ambient, the rim's sky part). The radiance is
 // key * shadowFactor(P, N) + rest: emit() below, or the deferred shading pass (kDeferredFS).
@@ -523,7 +552,15 @@ void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
   vec4 s = texelFetch(u_surface, p, 0);
   vec3 key = texelFetch(u_key, p, 0).rgb, rest = texelFetch(u_rest, p, 0).rgb;
+#ifdef SHADOW_CLASSIFY
+  // The first of two passes: finish the pixels whose shadow is known without the filter (no key
+  // light at all, or nothing above the surface: fully lit) and leave the others, by discarding
+  // them, to the second pass, the whole shadowFactor() (renderer.cpp).
+  if (max(key.r, max(key.g, key.b)) > 0.0 && !nothingAbove(s.xyz, unpackNormal(s.w))) discard;
+  o_color = vec4(linearToSrgb(toneMap(key + rest)), 1.0);
+#else
   o_color = vec4(linearToSrgb(toneMap(key * shadowFactor(s.xyz, unpackNormal(s.w)) + rest)), 1.0);
+#endif
 }
 )GLSL";
 

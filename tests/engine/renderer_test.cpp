@@ -304,6 +304,54 @@ TEST(Renderer, ACasterGoneSinceTheLastFrameLeavesNoShadow) {
   EXPECT_GE(checked, 10);
 }
 
+// A single-sample frame shades its objects deferred, in two passes (renderer.cpp): the pixels that
+// need no shadow filter (fully lit, or no key light) first, then the filter on the rest. The
+// shadow on an object must come out as the forward shading (4x MSAA) computes it, pixel centre
+// for pixel centre: lit, penumbra and umbra of a sphere's shadow on a box's top.
+TEST(Renderer, DeferredShadowsOnObjectsMatchTheForwardOnes) {
+  REQUIRE_GL();
+  const Camera cam = testCamera();
+  LightParams light = testLight();
+  light.direction = Eigen::Vector3d(1.0, 0.3, -1.0);
+  Material grey;
+  grey.color = Eigen::Vector3f(0.7f, 0.7f, 0.7f);
+  const Eigen::Vector3d ball(0.0, 0.0, 0.3);
+  constexpr double kBallR = 0.08, kTop = 0.1;
+  const auto scene = [&](Renderer& r) {
+    r.drawBox(Eigen::Affine3d(Eigen::Translation3d(0.1, 0.0, kTop / 2)), Eigen::Vector3d(0.3, 0.3, kTop / 2), grey);
+    r.drawSphere(ball, kBallR, red());
+  };
+  const auto deferred = render(cam, testParams(1, true), scene, light);
+  RenderParams msaa = testParams(4, true);
+  msaa.antialias = AntiAlias::Msaa;
+  const auto forward = render(cam, msaa, scene, light);
+  save("deferred_box.png", deferred);
+  save("forward_box.png", forward);
+  // Points of the box's top, inset from its edges, not behind or beside the ball on screen.
+  const Eigen::Vector2d c = project(cam, ball);
+  const double r_px = (project(cam, ball + cam.view().block<1, 3>(1, 0).transpose() * kBallR) - c).norm();
+  std::vector<double> lum_f, diff;
+  for (double x = -0.17; x <= 0.37; x += 0.01)
+    for (double y = -0.27; y <= 0.27; y += 0.01) {
+      const Eigen::Vector2d p = project(cam, Eigen::Vector3d(x, y, kTop));
+      if ((p - c).norm() < r_px + 3.0) continue;
+      const int px = int(p.x()), py = int(p.y());
+      if (px < 1 || py < 1 || px > kW - 2 || py > kH - 2) continue;
+      lum_f.push_back(luminance(forward, px, py));
+      diff.push_back(std::abs(luminance(deferred, px, py) - lum_f.back()));
+    }
+  ASSERT_GT(diff.size(), 500u);
+  const double lit = *std::max_element(lum_f.begin(), lum_f.end());
+  const auto count = [&](double lo, double hi) {
+    return std::count_if(lum_f.begin(), lum_f.end(), [&](double l) { return l >= lo * lit && l < hi * lit; });
+  };
+  EXPECT_GT(count(0.97, 1.01), 300) << "lit points on the box";
+  EXPECT_GT(count(0.0, 0.6), 20) << "points in the ball's shadow on the box";
+  EXPECT_GT(count(0.6, 0.95), 3) << "points in its penumbra";
+  const double worst = *std::max_element(diff.begin(), diff.end());
+  EXPECT_LT(worst, 3.0) << "the deferred shadow differs from the forward one by " << worst << " (0-255 luminance)";
+}
+
 TEST(Renderer, SameDrawListIsByteIdentical) {
   REQUIRE_GL();
   auto scene = [](Renderer& r) {
