@@ -133,11 +133,9 @@ int runBenchRender(const BenchRenderArgs& args) {
       throw SceneError("--sizes " + size + ": expected WIDTHxHEIGHT between 16x16 and 8192x8192, e.g. 1280x720");
     sizes.emplace_back(w, h);
   }
-  for (const auto& scene : args.scenes) {
-    std::vector<Override> o;
-    for (const auto& s : args.sets) o.push_back(parseOverride(s));
-    validateScene(loadScene(scene, o), scene);
-  }
+  std::vector<Override> overrides;
+  for (const auto& s : args.sets) overrides.push_back(parseOverride(s));
+  for (const auto& scene : args.scenes) validateScene(loadScene(scene, overrides), scene);
   std::ostringstream md;
   utsname u{};
   uname(&u);

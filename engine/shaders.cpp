@@ -76,18 +76,22 @@ vec3 shadowCoord(vec3 P, vec3 N) {
 bool outsideShadowMap(vec3 c) { return c.x <= 0.0 || c.x >= 1.0 || c.y <= 0.0 || c.y >= 1.0 || c.z >= 1.0; }
 
 // 1) Blockers within the largest penumbra we allow: how many of the 7 taps (x) and their depths'
-// sum (y).
-vec2 shadowBlockers(vec3 c) {
+// sum (y). A tap blocks when its depth is nearer the light than the receiver's plane there, less
+// `eps`: the plane through c with depth slope g (per unit of shadow-map xy); the plain search
+// takes the flat plane at c.z (g = 0, eps = 0: exactly the comparison d < c.z).
+vec2 shadowBlockers(vec3 c, vec2 g, float eps) {
   float searchR = u_maxPenumbraTexels * u_shadowTexel;
   float sumB = 0.0, nB = 0.0;
   for (int i = 0; i < 12; i += 2) {  // 6 of the 12 directions + the centre: cheap, and enough
-    float d = texture(u_shadowDepth, c.xy + kPoisson[i] * searchR).r;
-    if (d < c.z) { sumB += d; nB += 1.0; }
+    vec2 o = kPoisson[i] * searchR;
+    float d = texture(u_shadowDepth, c.xy + o).r;
+    if (d < c.z + dot(g, o) - eps) { sumB += d; nB += 1.0; }
   }
   float dCentre = texture(u_shadowDepth, c.xy).r;
-  if (dCentre < c.z) { sumB += dCentre; nB += 1.0; }
+  if (dCentre < c.z - eps) { sumB += dCentre; nB += 1.0; }
   return vec2(nB, sumB);
 }
+vec2 shadowBlockers(vec3 c) { return shadowBlockers(c, vec2(0.0), 0.0); }
 
 float shadowFactor(vec3 P, vec3 N) {
   if (u_shadowsOn == 0) return 1.0;
@@ -146,15 +150,8 @@ bool nothingAbove(vec3 P, vec3 N) {
   // Edge-on (or nearly): the plane's depth is undefined in xy; the whole filter decides.
   if (abs(det) < 1e-6 * (dot(a, a) + dot(b, b))) return false;
   vec2 g = vec2(a.z * b.y - a.y * b.z, a.x * b.z - a.z * b.x) / det;
-  float searchR = u_maxPenumbraTexels * u_shadowTexel;
-  float eps = 0.25 * u_texelWorld / u_lightDepthRange;  // a quarter texel of depth
-  float above = 0.0;
-  for (int i = 0; i < 12; i += 2) {  // the blocker search's taps
-    vec2 o = kPoisson[i] * searchR;
-    above += texture(u_shadowDepth, c.xy + o).r < c.z + dot(g, o) - eps ? 1.0 : 0.0;
-  }
-  above += texture(u_shadowDepth, c.xy).r < c.z - eps ? 1.0 : 0.0;
-  return above == 0.0;
+  // The blocker search's own taps, against the plane, with a quarter texel of depth to spare.
+  return shadowBlockers(c, g, 0.25 * u_texelWorld / u_lightDepthRange).x == 0.0;
 }
 
 // Linear radiance of a surface point (before tone mapping), in two parts: `key`, the key light's
