@@ -62,6 +62,7 @@ const std::vector<Variant>& variants() {
 
 struct Row {
   double total = 0, shadow = 0, main = 0, aa = 0, readback = 0;
+  int map_min = 0, map_max = 0;  // the shadow map's side over the timed frames (0: no shadow pass)
 };
 
 double median(std::vector<double> v) {
@@ -77,6 +78,7 @@ std::vector<Row> measureAll(const std::string& scene_path, const std::vector<std
     Scene scene;
     std::unique_ptr<RenderSession> session;
     std::vector<double> total, shadow, main, aa, readback;
+    int map_min = 0, map_max = 0;
   };
   std::vector<Run> runs;
   for (const Variant& v : variants()) {
@@ -107,11 +109,16 @@ std::vector<Row> measureAll(const std::string& scene_path, const std::vector<std
       r.main.push_back(st.main_ms);
       r.aa.push_back(st.resolve_ms);
       r.readback.push_back(st.readback_ms);
+      if (st.shadow_size > 0) {
+        r.map_min = r.map_min ? std::min(r.map_min, st.shadow_size) : st.shadow_size;
+        r.map_max = std::max(r.map_max, st.shadow_size);
+      }
     }
   }
   std::vector<Row> rows;
   for (const Run& r : runs)
-    rows.push_back({median(r.total), median(r.shadow), median(r.main), median(r.aa), median(r.readback)});
+    rows.push_back(
+        {median(r.total), median(r.shadow), median(r.main), median(r.aa), median(r.readback), r.map_min, r.map_max});
   return rows;
 }
 
@@ -160,7 +167,9 @@ int runBenchRender(const BenchRenderArgs& args) {
   }
   md << "*render* is the wall time of one frame (all passes and the read-back); the pass columns are "
         "RenderStats (glFinish-bracketed: llvmpipe rasterizes a pass synchronously at its flush). "
-        "*x floor* = render / the floor of the same scene and size (1 sample, no shadow, no ground).\n\n";
+        "*x floor* = render / the floor of the same scene and size (1 sample, no shadow, no ground). *shadow map*: "
+        "the side of the shadow map over the timed frames, in texels (the renderer matches it to the frame: "
+        "docs/RENDERING.md).\n\n";
   std::ostringstream summary, tables;
   summary << "## Final / floor\n\n"
           << "| scene | size | final (ms) | floor (ms) | x floor |\n"
@@ -169,8 +178,8 @@ int runBenchRender(const BenchRenderArgs& args) {
     for (const auto& [w, h] : sizes) {
       const std::string size = std::to_string(w) + "x" + std::to_string(h);
       tables << "## " << scene << " at " << w << "x" << h << "\n\n"
-             << "| configuration | render | shadow | main | AA | read-back | x floor |\n"
-             << "|---|---:|---:|---:|---:|---:|---:|\n";
+             << "| configuration | render | shadow | main | AA | read-back | x floor | shadow map |\n"
+             << "|---|---:|---:|---:|---:|---:|---:|---:|\n";
       const std::vector<Row> rows = measureAll(scene, args.sets, w, h, args.frames);
       for (size_t i = 0; i < rows.size(); ++i)
         std::fprintf(stderr, "bench-render: %s %s %-38s %7.1f ms\n", scene.c_str(), size.c_str(), variants()[i].name,
@@ -178,9 +187,12 @@ int runBenchRender(const BenchRenderArgs& args) {
       const double floor_ms = rows[3].total;
       for (size_t i = 0; i < rows.size(); ++i) {
         const Row& r = rows[i];
+        const std::string map = r.map_max == 0           ? "-"
+                                : r.map_min == r.map_max ? std::to_string(r.map_max)
+                                                         : std::to_string(r.map_min) + "-" + std::to_string(r.map_max);
         char line[256];
-        std::snprintf(line, sizeof line, "| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.2f |\n", variants()[i].name,
-                      r.total, r.shadow, r.main, r.aa, r.readback, r.total / floor_ms);
+        std::snprintf(line, sizeof line, "| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.2f | %s |\n", variants()[i].name,
+                      r.total, r.shadow, r.main, r.aa, r.readback, r.total / floor_ms, map.c_str());
         tables << line;
       }
       tables << "\n";

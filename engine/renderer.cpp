@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "engine/gl_context.h"
 #include "engine/primitives.h"
@@ -20,6 +21,8 @@ double msSince(Clock::time_point t0) { return std::chrono::duration<double, std:
 
 // The ground's shadow texture has shadow_size / this texels a side (renderer.cpp, endFrame).
 constexpr int kGroundShadowDivisor = 4;
+// The fewest texels a side resolutionMatchedShadowSize() gives a shadow map.
+constexpr int kMinMatchedShadowSize = 512;
 
 // Angular radius of the key light (rad) for the penumbra of the soft shadows.
 constexpr double kKeyLightAngularRadius = 1.5 * 3.14159265358979 / 180.0;
@@ -141,6 +144,35 @@ LightFrustum fitLightFrustum(const Eigen::Vector3d& dir, const Eigen::AlignedBox
   return lf;
 }
 
+// The shadow map's side for a frame (light.shadow_match; draft takes half): as many texels as the
+// frame can show, at most `max_size`. A texel finer than a screen pixel adds nothing the picture
+// can hold (the soft filter averages over several texels anyway), while every texel costs the
+// clear, the casters' depth and the ground's shadow texture. The finest pixel is at the nearest
+// point of the casters and of their shadows on the ground (a box's nearest depth is at a corner),
+// where one pixel spans 2 z tan(fov / 2) / height metres; the side is the light frustum's extent
+// at `max_size` over that, rounded up to a step of 2^(1/4) (few distinct sizes, each reallocation
+// rare), and never below `min_size`: small frames keep the goldens' look (320x180) and thin parts
+// keep their shadows. Stateless: a frame gets the same map whatever was drawn before it.
+int resolutionMatchedShadowSize(const Camera& cam, int height, const Eigen::Vector3d& light_dir,
+                                const Eigen::AlignedBox3d& casters, double ground_z, double extent, int min_size,
+                                int max_size) {
+  const Eigen::Vector3d fwd = (cam.target - cam.eye).normalized();
+  double z = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d c = casters.corner(Eigen::AlignedBox3d::CornerType(i));
+    z = std::min(z, (c - cam.eye).dot(fwd));
+    const double above = c.z() - ground_z;
+    if (light_dir.z() < -1e-3 && above > 0.0)
+      z = std::min(z, (c + light_dir * (above / -light_dir.z()) - cam.eye).dot(fwd));
+  }
+  const double pixel = 2.0 * z * std::tan(0.5 * cam.fov * M_PI / 180.0) / double(std::max(height, 1));
+  if (!(pixel > 0.0) || !std::isfinite(pixel)) return max_size;  // a caster at or behind the eye
+  const double texels = extent / pixel;
+  if (texels >= double(max_size)) return max_size;
+  const int stepped = int(std::ceil(std::pow(2.0, std::ceil(std::log2(std::max(texels, 1.0)) * 4.0) / 4.0)));
+  return std::clamp(stepped, std::min(min_size, max_size), max_size);
+}
+
 void unpremultiplyAlpha(std::vector<uint8_t>& rgba) {
   for (size_t i = 0; i + 3 < rgba.size(); i += 4) {
     const int a = rgba[i + 3];
@@ -210,6 +242,10 @@ struct Renderer::Impl {
   int ground_shadow_box[4] = {0, 0, 0, 0};
   LightFrustum frustum;
   int target_w = 0, target_h = 0, target_samples = -1, shadow_size = 0;
+  // The shadow filter's least radius in this frame's texels: light.shadow_softness texels of the
+  // map shadow_size would have, unmatched (resolutionMatchedShadowSize), so that a matched map
+  // blurs no wider than the full one.
+  double softness_texels = 0.0;
   int max_samples = 1;
   // The frame being built.
   Camera camera;
@@ -841,7 +877,7 @@ void Renderer::Impl::setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_
   glUniform1f(loc(prog, "u_exposure"), 0.6f);
   glUniform1i(loc(prog, "u_shadowMap"), 0);
   glUniform1f(loc(prog, "u_shadowTexel"), 1.0f / float(std::max(shadow_size, 1)));
-  glUniform1f(loc(prog, "u_shadowSoftness"), float(std::clamp(light.shadow_softness, 0.0, 8.0)));
+  glUniform1f(loc(prog, "u_shadowSoftness"), float(softness_texels));
   glUniform1f(loc(prog, "u_normalOffset"), normal_offset);
   glUniform1i(loc(prog, "u_shadowsOn"), shadows_on ? 1 : 0);
   glUniform1i(loc(prog, "u_shadowDraft"), draft ? 1 : 0);
@@ -1183,9 +1219,27 @@ void Renderer::endFrame() {
   LightFrustum lf;
   if (shadows_on) {
     I.beginPass(Impl::kShadowPass);
-    const int size = std::clamp(I.light.shadow_size, 64, 8192);
+    const int max_size = std::clamp(I.light.shadow_size, 64, 8192);
+    const double extent =
+        fitLightFrustum(ld, casters, max_size, I.light.shadow_softness, I.params.ground_height).texel_world *
+        double(max_size);
+    // Not with hair: a strand is thinner than a texel (drawn a texel wide), and its shadow is the
+    // share of texels its depth covers, which depends on the texel's size whatever the pixel's
+    // (the chain's shadow on the ground at 1920x1080 came out lighter and grainy on a map of 609
+    // texels, whose texels were still a tenth of a pixel there).
+    const bool match = I.light.shadow_match && I.hair_draws.empty();
+    const int size = !match ? max_size
+                            : resolutionMatchedShadowSize(I.camera, h, ld, casters, I.params.ground_height, extent,
+                                                          kMinMatchedShadowSize, max_size);
     I.ensureShadowMap(draft ? std::max(256, size / 2) : size);
-    lf = fitLightFrustum(ld, casters, I.shadow_size, I.light.shadow_softness, I.params.ground_height);
+    stats_.shadow_size = I.shadow_size;
+    const int unmatched = draft ? std::max(256, max_size / 2) : max_size;
+    // (at most 8 texels, the widest the margins around the casters allow: only a shadow_size
+    // above 4096 matched down to 512 reaches it)
+    I.softness_texels = std::min(std::clamp(I.light.shadow_softness, 0.0, 8.0) *
+                                     double(std::max(unmatched, I.shadow_size)) / double(I.shadow_size),
+                                 8.0);
+    lf = fitLightFrustum(ld, casters, I.shadow_size, I.softness_texels, I.params.ground_height);
     I.frustum = lf;
     glBindFramebuffer(GL_FRAMEBUFFER, I.shadow_fbo);
     glViewport(0, 0, I.shadow_size, I.shadow_size);

@@ -63,6 +63,7 @@ struct RenderStats {
   int samples = 0;            // MSAA samples actually used (1: none)
   bool post_aa = false;       // the post-process anti-aliasing filter ran
   bool draft = false;         // RenderQuality::Draft
+  int shadow_size = 0;        // the shadow map's side this frame (texels; 0: no shadow pass)
 };
 
 class Renderer {

@@ -57,8 +57,9 @@ struct LightParams {
   double intensity = 2.6;                      // key light multiplier
   double ambient = 0.28;                       // hemispheric ambient / fill strength
   double fill = 0.35;                          // second, shadowless fill light from the camera side
-  int shadow_size = 1024;                      // px, shadow map resolution
+  int shadow_size = 1024;                      // px, shadow map resolution (the most; see shadow_match)
   double shadow_softness = 1.5;                // texels, PCF filter radius
+  bool shadow_match = true;                    // fewer texels when the frame cannot show them (docs/RENDERING.md)
 
   template <class V>
   void reflect(V& v) {
@@ -69,6 +70,9 @@ struct LightParams {
     v("fill", fill, {.min = 0, .max = 5, .help = "Fill light strength"});
     v("shadow_size", shadow_size, {.unit = "px", .min = 256, .max = 8192, .help = "Shadow map size", .log = true});
     v("shadow_softness", shadow_softness, {.unit = "texel", .min = 0, .max = 8, .help = "Shadow blur radius"});
+    v("shadow_match", shadow_match,
+      {.help = "No more shadow texels than the frame has pixels over the casters (at least 512, at most "
+               "shadow_size; draft: half; frames with hair keep shadow_size); off: always shadow_size"});
   }
 };
 

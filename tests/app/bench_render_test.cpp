@@ -55,6 +55,7 @@ TEST(BenchRender, WritesEveryConfigurationAndItsRatioToTheFloor) {
                                             "draft (quality=draft)"};
   std::map<std::string, std::map<std::string, std::vector<double>>> tables;  // "## heading" -> config -> cells
   std::map<std::string, double> summary;                                     // "scene size" -> x floor
+  std::map<std::string, std::map<std::string, std::string>> maps;            // ... -> config -> shadow map
   std::string section;
   std::stringstream ss(md);
   for (std::string line; std::getline(ss, line);) {
@@ -65,10 +66,11 @@ TEST(BenchRender, WritesEveryConfigurationAndItsRatioToTheFloor) {
       if (c.size() == 5 && c[0] != "scene") summary[c[0] + " " + c[1]] = std::stod(c[4]);
       continue;
     }
-    if (c.size() != 7 || c[0] == "configuration") continue;
+    if (c.size() != 8 || c[0] == "configuration") continue;
     std::vector<double> v;
-    for (size_t i = 1; i < c.size(); ++i) v.push_back(std::stod(c[i]));
+    for (size_t i = 1; i < 7; ++i) v.push_back(std::stod(c[i]));
     tables[section][c[0]] = v;
+    maps[section][c[0]] = c[7];
   }
   const std::vector<std::string> headings = {"assets/scenes/hopper.json at 96x64", "assets/scenes/hopper.json at 64x48",
                                              "assets/scenes/chain.json at 96x64", "assets/scenes/chain.json at 64x48"};
@@ -93,6 +95,14 @@ TEST(BenchRender, WritesEveryConfigurationAndItsRatioToTheFloor) {
     // The passes the configurations turn off take no time there.
     EXPECT_EQ(t.at(configs[2])[1], 0.0) << h << ": a shadow pass without a light";
     EXPECT_EQ(t.at(configs[1])[3], 0.0) << h << ": anti-aliasing with 1 sample";
+    // The shadow map's side: none without a light; at these tiny sizes the fewest texels the
+    // renderer matches to a frame (512), half of it in draft; the chain's hair keeps all 1024.
+    const auto& m = maps[h];
+    const bool hair = h.find("chain") != std::string::npos;
+    EXPECT_EQ(m.at(configs[2]), "-") << h;
+    EXPECT_EQ(m.at(configs[3]), "-") << h;
+    EXPECT_EQ(m.at(configs[0]), hair ? "1024" : "512") << h;
+    EXPECT_EQ(m.at(configs[5]), hair ? "512" : "256") << h;
   }
   // The summary at the top repeats each final / floor.
   ASSERT_EQ(summary.size(), headings.size()) << md;

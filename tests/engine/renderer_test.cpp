@@ -14,6 +14,9 @@
 #include "engine/camera.h"
 #include "engine/frame_writer.h"
 #include "engine/gl_context.h"
+#include "engine/hair.h"
+#include "engine/image.h"
+#include "engine/image_diff.h"
 #include "engine/mesh.h"
 
 using namespace ponyhop;
@@ -266,7 +269,7 @@ TEST(Renderer, ACasterGoneSinceTheLastFrameLeavesNoShadow) {
   const auto nothing = [&](Renderer& r) { r.setShadowBounds(bounds); };
   // A map of another size first, so that the frames below start from a new, never cleared one.
   LightParams other = testLight();
-  other.shadow_size = testLight().shadow_size / 2;
+  other.shadow_size = testLight().shadow_size / 4;  // below the 512 the matched map never goes under
   render(cam, testParams(), sphere, other);
   const auto first_sphere = render(cam, testParams(), sphere);
   render(cam, testParams(), slab);
@@ -302,6 +305,92 @@ TEST(Renderer, ACasterGoneSinceTheLastFrameLeavesNoShadow) {
     }
   }
   EXPECT_GE(checked, 10);
+}
+
+// The shadow map has no more texels than the frame shows over the casters (light.shadow_match,
+// resolutionMatchedShadowSize in renderer.cpp): fewer for a small or distant view, all of
+// shadow_size for a close one or with hair, never fewer than 512 nor more than shadow_size, half in
+// draft; off, always shadow_size. And the matched map's picture passes the snapshot comparator
+// against the full map's.
+TEST(Renderer, ShadowMapMatchesTheFrame) {
+  REQUIRE_GL();
+  Renderer& r = *gl().renderer;
+  // Shadow bounds 1 m wide (as a scene's fixed box would be): enough texels at 720p to match.
+  const Eigen::AlignedBox3d bounds(Eigen::Vector3d(-0.5, -0.5, 0.0), Eigen::Vector3d(0.5, 0.5, 0.5));
+  const auto sphere = [&](Renderer& rr) {
+    rr.setShadowBounds(bounds);
+    rr.drawSphere(kSphereC, kSphereR, red());
+  };
+  const auto frame = [&](const Camera& cam, int w, int h, const LightParams& l,
+                         RenderQuality q = RenderQuality::Final) {
+    RenderParams rp = testParams(1, true);
+    rp.width = w;
+    rp.height = h;
+    rp.quality = q;
+    std::vector<uint8_t> px = render(cam, rp, sphere, l);
+    return std::make_pair(r.stats().shadow_size, std::move(px));
+  };
+  const LightParams light = testLight();  // shadow_size 1024
+  Camera view = testCamera();             // farther out: 1280x720 shows fewer than 1024 texels of the box
+  view.eye = view.target + (view.eye - view.target) * 2.0;
+  Camera close = testCamera();
+  close.eye = kSphereC + (testCamera().eye - kSphereC).normalized() * 0.6;
+  close.target = kSphereC;
+
+  const int small = frame(view, 320, 180, light).first;
+  const int hd = frame(view, 1280, 720, light).first;
+  const int full_hd = frame(view, 1920, 1080, light).first;
+  EXPECT_EQ(small, 512) << "a small frame takes the fewest texels";
+  EXPECT_GT(hd, small) << "a larger frame of the same view takes more (" << small << ", " << hd << ", " << full_hd
+                       << ")";
+  EXPECT_GT(full_hd, hd);
+  EXPECT_LT(hd, 1024) << "1280x720 of this view shows fewer than 1024 texels over the sphere";
+  EXPECT_EQ(frame(close, 1920, 1080, light).first, 1024) << "a close-up takes all of shadow_size";
+  EXPECT_EQ(frame(view, 320, 180, light, RenderQuality::Draft).first, 256) << "draft: half";
+  LightParams fixed = light;
+  fixed.shadow_match = false;
+  EXPECT_EQ(frame(view, 320, 180, fixed).first, 1024);
+  // A strand of hair in the picture: the whole map (its shadow depends on the texel's size).
+  HairMesh strand;
+  for (int i = 0; i < 4; ++i) {
+    HairVertex v{};
+    v.pos[0] = 0.2f;
+    v.pos[1] = 0.0f;
+    v.pos[2] = 0.1f + 0.1f * float(i / 2);
+    v.tangent[2] = 1.0f;
+    v.normal[0] = 1.0f;
+    v.color[0] = v.color[1] = v.color[2] = 0.3f;
+    v.half_width = i % 2 ? 0.001f : -0.001f;
+    v.occlusion = 1.0f;
+    strand.vertices.push_back(v);
+  }
+  strand.indices = {0, 1, 2, 1, 3, 2};
+  RenderParams small_rp = testParams(1, true);
+  small_rp.width = 320;
+  small_rp.height = 180;
+  render(
+      view, small_rp,
+      [&](Renderer& rr) {
+        sphere(rr);
+        rr.drawHair(strand);
+      },
+      light);
+  EXPECT_EQ(r.stats().shadow_size, 1024) << "hair keeps shadow_size";
+  LightParams few = light;
+  few.shadow_size = 300;
+  EXPECT_EQ(frame(close, 1920, 1080, few).first, 300) << "never more than shadow_size";
+  EXPECT_EQ(frame(view, 320, 180, few).first, 300) << "nor the 512 floor above it";
+
+  // The look: 1280x720 with the matched map against the full one.
+  Image matched, full;
+  matched.width = full.width = 1280;
+  matched.height = full.height = 720;
+  matched.rgba = frame(view, 1280, 720, light).second;
+  full.rgba = frame(view, 1280, 720, fixed).second;
+  ASSERT_NE(matched.rgba, full.rgba) << "the two maps made the same picture: is the matched one in use?";
+  const DiffResult d = compareImages(full, matched, DiffOptions{});
+  EXPECT_TRUE(d.pass) << d.message;
+  save("matched_shadow_720p.png", matched.rgba, 1280, 720);
 }
 
 // A single-sample frame shades its objects deferred, in two passes (renderer.cpp): the pixels that
