@@ -1387,6 +1387,27 @@ void Renderer::endFrame() {
   // 1920x1080). What the ground hid, the object parts on its far side, is clipped at its plane
   // instead (gl_ClipDistance in the objects' vertex shaders).
   const bool half_ground = I.params.ground && samples == 1 && I.ground_lo_fbo != 0;
+  // Above the horizon there is no ground, only the background: those rows get the background's
+  // own full-screen pass (as a frame without a ground does) instead of the bilinear tap of a
+  // half-resolution copy of it, which costs llvmpipe half as much again per pixel; and the
+  // half-resolution target needs no background there. sky_row: the first pixel row (from the
+  // bottom) left to the background, 2 rows above the horizon's (the bilinear footprint: no tap
+  // below it reaches a texel with ground); h: no split (transparent, the eye below the ground, a
+  // rolled or straight-down view, the horizon out of the frame).
+  int sky_row = h;
+  if (half_ground && !I.params.transparent && cam.eye.z() > I.params.ground_height &&
+      cam.up.normalized().cross(Eigen::Vector3d::UnitZ()).norm() < 1e-6) {
+    Eigen::Vector3d f = cam.target - cam.eye;
+    f.z() = 0.0;
+    if (f.norm() > 1e-9) {
+      // Every horizontal direction projects onto one row when the camera does not roll.
+      const Eigen::Vector4d c = view_proj.cast<double>() * Eigen::Vector4d(f.x(), f.y(), 0.0, 0.0);
+      if (c.w() > 1e-9) {
+        const double row = (c.y() / c.w() * 0.5 + 0.5) * h;
+        if (row > -4.0 && row < h - 4.0) sky_row = std::clamp(int(std::ceil(row)) + 2, 0, h);
+      }
+    }
+  }
   if (half_ground) {
     // 1) The ground, then the background around it, in a half-size texture with a depth buffer of
     // its own (no object in it): the texels around the ground's edge hold the background it fades
@@ -1407,7 +1428,13 @@ void Renderer::endFrame() {
       glUniform2f(loc(I.prog_bg, "u_viewport"), float(I.ground_lo_w), float(I.ground_lo_h));
       glDepthFunc(GL_LEQUAL);  // the far plane, where the depth is still the cleared 1
       glDepthMask(GL_FALSE);
+      // Only the rows the upsampling below sky_row reads (its pixel row y taps rows y / 2 and
+      // y / 2 + 1 at most).
+      const int lo_rows = std::min(I.ground_lo_h, sky_row / 2 + 2);
+      glEnable(GL_SCISSOR_TEST);
+      glScissor(0, 0, I.ground_lo_w, lo_rows);
       glDrawArrays(GL_TRIANGLES, 0, 3);
+      glDisable(GL_SCISSOR_TEST);
       glDepthMask(GL_TRUE);
       glDepthFunc(GL_LESS);
     }
@@ -1426,7 +1453,17 @@ void Renderer::endFrame() {
     glActiveTexture(GL_TEXTURE0);
     glUniform1i(loc(u, "u_groundLo"), 7);
     glBindVertexArray(I.empty_vao);
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(0, 0, w, sky_row);
     glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    if (sky_row < h) {
+      I.setCommonUniforms(I.prog_bg, view_proj, light_vp, normal_offset, shadows_on);
+      glUniform2f(loc(I.prog_bg, "u_viewport"), float(w), float(h));
+      glScissor(0, sky_row, w, h - sky_row);
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+      ++stats_.draw_calls;
+    }
+    glDisable(GL_SCISSOR_TEST);
     glBindVertexArray(0);
     glActiveTexture(GL_TEXTURE7);
     glBindTexture(GL_TEXTURE_2D, 0);  // a render target again next frame

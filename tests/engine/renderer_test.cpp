@@ -393,6 +393,39 @@ TEST(Renderer, ShadowMapMatchesTheFrame) {
   save("matched_shadow_720p.png", matched.rgba, 1280, 720);
 }
 
+// A single-sample frame draws the rows above the horizon with the background's own pass rather
+// than the half-resolution ground's upsampling (renderer.cpp, sky_row): they must be the
+// background a frame without a ground has, and the frame must have no seam where the two meet:
+// down every column the colour changes smoothly from the sky into the ground.
+TEST(Renderer, TheSkyAboveTheHorizonIsTheBackgroundWithoutASeam) {
+  REQUIRE_GL();
+  Camera cam;
+  cam.eye = Eigen::Vector3d(0.0, -2.0, 0.45);
+  cam.target = Eigen::Vector3d(0.0, 0.0, 0.25);
+  cam.fov = 40.0;
+  const auto nothing = [](Renderer&) {};
+  const auto ground = render(cam, testParams(1, true), nothing);
+  const auto sky = render(cam, testParams(1, false), nothing);
+  save("sky_ground.png", ground);
+  // The horizon's row (from the top): where horizontal directions project.
+  const Eigen::Vector4d c =
+      cam.projection(double(kW) / kH, 0.1, 10.0) * cam.view() * Eigen::Vector4d(0.0, 1.0, 0.0, 0.0);
+  const double horizon = (0.5 - 0.5 * c.y() / c.w()) * kH;
+  ASSERT_GT(horizon, 20.0);
+  ASSERT_LT(horizon, kH - 20.0);
+  double worst_sky = 0.0, worst_step = 0.0;
+  for (int x = 0; x < kW; x += 7) {
+    for (int y = 0; y < int(horizon) - 3; ++y)
+      worst_sky = std::max(worst_sky, std::abs(luminance(ground, x, y) - luminance(sky, x, y)));
+    for (int y = 0; y + 1 < kH; ++y)
+      worst_step = std::max(worst_step, std::abs(luminance(ground, x, y + 1) - luminance(ground, x, y)));
+  }
+  EXPECT_LE(worst_sky, 1.0) << "the sky is not the background";
+  // The checker's edges are box-filtered: under 3 levels a row here; cut 40 rows into the
+  // ground, the sky leaves a step of 8.
+  EXPECT_LT(worst_step, 4.5) << "a seam between the sky and the ground";
+}
+
 // A single-sample frame shades its objects deferred, in two passes (renderer.cpp): the pixels that
 // need no shadow filter (fully lit, or no key light) first, then the filter on the rest. The
 // shadow on an object must come out as the forward shading (4x MSAA) computes it, pixel centre
