@@ -1393,10 +1393,10 @@ void Renderer::endFrame() {
   // half-resolution target needs no background there. sky_row: the first pixel row (from the
   // bottom) left to the background, 2 rows above the horizon's (the bilinear footprint: no tap
   // below it reaches a texel with ground); h: no split (transparent, the eye below the ground, a
-  // rolled or straight-down view, the horizon out of the frame).
+  // rolled, upside-down or straight-down view, the horizon out of the frame).
   int sky_row = h;
   if (half_ground && !I.params.transparent && cam.eye.z() > I.params.ground_height &&
-      cam.up.normalized().cross(Eigen::Vector3d::UnitZ()).norm() < 1e-6) {
+      cam.up.normalized().z() > 1.0 - 1e-9) {  // upright: neither rolled nor upside down
     Eigen::Vector3d f = cam.target - cam.eye;
     f.z() = 0.0;
     if (f.norm() > 1e-9) {
