@@ -62,7 +62,7 @@ const std::vector<Variant>& variants() {
 
 struct Row {
   double total = 0, shadow = 0, main = 0, aa = 0, readback = 0;
-  int map_min = 0, map_max = 0;  // the shadow map's side over the timed frames (0: no shadow pass)
+  ShadowSizeRange map;  // the shadow map's side over the timed frames
 };
 
 double median(std::vector<double> v) {
@@ -78,7 +78,7 @@ std::vector<Row> measureAll(const std::string& scene_path, const std::vector<std
     Scene scene;
     std::unique_ptr<RenderSession> session;
     std::vector<double> total, shadow, main, aa, readback;
-    int map_min = 0, map_max = 0;
+    ShadowSizeRange map;
   };
   std::vector<Run> runs;
   for (const Variant& v : variants()) {
@@ -109,16 +109,12 @@ std::vector<Row> measureAll(const std::string& scene_path, const std::vector<std
       r.main.push_back(st.main_ms);
       r.aa.push_back(st.resolve_ms);
       r.readback.push_back(st.readback_ms);
-      if (st.shadow_size > 0) {
-        r.map_min = r.map_min ? std::min(r.map_min, st.shadow_size) : st.shadow_size;
-        r.map_max = std::max(r.map_max, st.shadow_size);
-      }
+      r.map.add(st);
     }
   }
   std::vector<Row> rows;
   for (const Run& r : runs)
-    rows.push_back(
-        {median(r.total), median(r.shadow), median(r.main), median(r.aa), median(r.readback), r.map_min, r.map_max});
+    rows.push_back({median(r.total), median(r.shadow), median(r.main), median(r.aa), median(r.readback), r.map});
   return rows;
 }
 
@@ -187,9 +183,7 @@ int runBenchRender(const BenchRenderArgs& args) {
       const double floor_ms = rows[3].total;
       for (size_t i = 0; i < rows.size(); ++i) {
         const Row& r = rows[i];
-        const std::string map = r.map_max == 0           ? "-"
-                                : r.map_min == r.map_max ? std::to_string(r.map_max)
-                                                         : std::to_string(r.map_min) + "-" + std::to_string(r.map_max);
+        const std::string map = r.map.hi ? r.map.text() : "-";
         char line[256];
         std::snprintf(line, sizeof line, "| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.2f | %s |\n", variants()[i].name,
                       r.total, r.shadow, r.main, r.aa, r.readback, r.total / floor_ms, map.c_str());

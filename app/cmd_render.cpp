@@ -154,8 +154,8 @@ int runRender(const RenderArgs& args) {
   FrameWriter writer(staging, 2, 4);
   Progress progress(frames);
   double sim_ms = 0.0, render_ms = 0.0, wait_ms = 0.0;
-  RenderStats passes;            // summed per-pass times (engine/renderer.h)
-  int map_min = 0, map_max = 0;  // the shadow map's side over the frames (texels; 0: none)
+  RenderStats passes;   // summed per-pass times (engine/renderer.h)
+  ShadowSizeRange map;  // the shadow map's side over the frames
   const auto t_start = Clock::now();
   std::string err;
   for (int i = 0; i < frames; ++i) {
@@ -188,10 +188,7 @@ int runRender(const RenderArgs& args) {
     passes.resolve_ms += st.resolve_ms;
     passes.readback_ms += st.readback_ms;
     passes.timed_on_gpu = st.timed_on_gpu;
-    if (st.shadow_size > 0) {
-      map_min = map_min ? std::min(map_min, st.shadow_size) : st.shadow_size;
-      map_max = std::max(map_max, st.shadow_size);
-    }
+    map.add(st);
     t0 = Clock::now();
     if (!writer.push(i, out_w, out_h, std::move(rgba), &err)) break;
     wait_ms += msSince(t0);
@@ -248,14 +245,10 @@ int runRender(const RenderArgs& args) {
                "encode %.1f on 2 worker threads (overlapped; the render loop waited %.1f ms/frame for it)\n",
                frames, out_w, out_h, scene.render.samples, total_s, 1000.0 * total_s / frames, sim_ms / frames,
                render_ms / frames, writer.meanEncodeMs(), wait_ms / frames);
-  std::string map = "no shadow map";
-  if (map_max > 0)
-    map = "shadow map " +
-          (map_min == map_max ? std::to_string(map_max) : std::to_string(map_min) + "-" + std::to_string(map_max)) +
-          " texels a side";
+  const std::string map_text = map.hi ? "shadow map " + map.text() + " texels a side" : "no shadow map";
   std::fprintf(stderr, "render: per pass (ms/frame, %s): shadow %.1f, main %.1f, resolve %.1f, read-back %.1f; %s\n",
                passes.timed_on_gpu ? "GPU timer queries" : "glFinish-bracketed", passes.shadow_ms / frames,
-               passes.main_ms / frames, passes.resolve_ms / frames, passes.readback_ms / frames, map.c_str());
+               passes.main_ms / frames, passes.resolve_ms / frames, passes.readback_ms / frames, map_text.c_str());
   std::fprintf(stderr, "render: frames in %s/\n", out.c_str());
   if (!args.video.empty()) std::fprintf(stderr, "render: video %s (%.1f s to encode)\n", args.video.c_str(), video_s);
   return 0;

@@ -1236,9 +1236,8 @@ void Renderer::endFrame() {
     const int unmatched = draft ? std::max(256, max_size / 2) : max_size;
     // (at most 8 texels, the widest the margins around the casters allow: only a shadow_size
     // above 4096 matched down to 512 reaches it)
-    I.softness_texels = std::min(std::clamp(I.light.shadow_softness, 0.0, 8.0) *
-                                     double(std::max(unmatched, I.shadow_size)) / double(I.shadow_size),
-                                 8.0);
+    I.softness_texels =
+        std::min(std::clamp(I.light.shadow_softness, 0.0, 8.0) * double(unmatched) / double(I.shadow_size), 8.0);
     lf = fitLightFrustum(ld, casters, I.shadow_size, I.softness_texels, I.params.ground_height);
     I.frustum = lf;
     glBindFramebuffer(GL_FRAMEBUFFER, I.shadow_fbo);
@@ -1457,7 +1456,9 @@ void Renderer::endFrame() {
     glScissor(0, 0, w, sky_row);
     glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
     if (sky_row < h) {
-      I.setCommonUniforms(I.prog_bg, view_proj, light_vp, normal_offset, shadows_on);
+      // Its other uniforms are this frame's already: the half-resolution background above set
+      // them (a split needs an opaque frame, which draws it).
+      glUseProgram(I.prog_bg);
       glUniform2f(loc(I.prog_bg, "u_viewport"), float(w), float(h));
       glScissor(0, sky_row, w, h - sky_row);
       glDrawArrays(GL_TRIANGLES, 0, 3);

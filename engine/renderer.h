@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -64,6 +65,21 @@ struct RenderStats {
   bool post_aa = false;       // the post-process anti-aliasing filter ran
   bool draft = false;         // RenderQuality::Draft
   int shadow_size = 0;        // the shadow map's side this frame (texels; 0: no shadow pass)
+};
+
+// The shadow map's sides over several frames (RenderStats::shadow_size), for summaries.
+struct ShadowSizeRange {
+  int lo = 0, hi = 0;  // texels; 0: no frame had a shadow pass
+  void add(const RenderStats& st) {
+    if (st.shadow_size <= 0) return;
+    lo = lo ? std::min(lo, st.shadow_size) : st.shadow_size;
+    hi = std::max(hi, st.shadow_size);
+  }
+  // "1024" or "512-609"; "" when there was none.
+  std::string text() const {
+    if (hi == 0) return "";
+    return lo == hi ? std::to_string(hi) : std::to_string(lo) + "-" + std::to_string(hi);
+  }
 };
 
 class Renderer {
