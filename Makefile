@@ -7,7 +7,6 @@ BUILD      ?= build
 ASAN_BUILD ?= build-asan
 TSAN_BUILD ?= build-tsan
 FUZZ_BUILD ?= build-fuzz
-RELEASE_BUILD ?= build-release
 FUZZ_SECONDS ?= 60
 SOAK_SECONDS ?= 600
 JOBS       ?= $(shell nproc)
@@ -24,8 +23,12 @@ all: build
 setup:
 	@bash scripts/setup.sh
 
+# The normal build is the one users make: Release (GCC -O3, warnings as errors), so `make test`
+# checks the optimized code and CI needs no second build for -O3's own warnings. Ninja when it is
+# there (scripts/setup.sh installs it) for a new build folder; an existing one keeps its generator.
+GENERATOR = $(if $(wildcard $(1)/CMakeCache.txt),,$(if $(shell command -v ninja),-G Ninja))
 build: setup
-	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+	@cmake -S . -B $(BUILD) $(call GENERATOR,$(BUILD)) -DCMAKE_BUILD_TYPE=Release >/dev/null
 	@cmake --build $(BUILD) -j$(JOBS)
 
 # The executable, its assets and docs under PREFIX (bin/, share/ponyhop/, share/doc/ponyhop/).
@@ -49,7 +52,7 @@ test: build
 # 10 min to build and 6 min to run on 2 cores): CI runs it after `make test`.
 
 test-asan: setup
-	@cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPONYHOP_SANITIZE=ON >/dev/null
+	@cmake -S . -B $(ASAN_BUILD) $(call GENERATOR,$(ASAN_BUILD)) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPONYHOP_SANITIZE=ON >/dev/null
 	@cmake --build $(ASAN_BUILD) -j$(JOBS)
 	@# Leak checking is off: llvmpipe/LLVM keep process-lifetime caches that LSan reports as leaks.
 	@cd $(ASAN_BUILD) && \
@@ -61,7 +64,7 @@ test-asan: setup
 # under ThreadSanitizer, in their own build of only what they need.
 TSAN_TESTS := frame_writer_test render_command_test output_safety_test
 test-tsan: setup
-	@cmake -S . -B $(TSAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPONYHOP_TSAN=ON -DPONYHOP_WINDOW=OFF >/dev/null
+	@cmake -S . -B $(TSAN_BUILD) $(call GENERATOR,$(TSAN_BUILD)) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPONYHOP_TSAN=ON -DPONYHOP_WINDOW=OFF >/dev/null
 	@cmake --build $(TSAN_BUILD) -j$(JOBS) --target ponyhop $(TSAN_TESTS)
 	@cd $(TSAN_BUILD) && TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/tests/tsan.supp \
 	  ctest --output-on-failure -j$(JOBS) -R '^(FrameWriter|Video|RenderCommand|OutputSafety)\.' -E 'FullDisk'
@@ -69,10 +72,8 @@ test-tsan: setup
 # SIGBUS before ponyhop's error path runs; it runs in make test and make test-asan.)
 
 # What a user gets from a plain `cmake -DCMAKE_BUILD_TYPE=Release` (GCC at -O3, warnings as
-# errors): it must build.
-release: setup
-	@cmake -S . -B $(RELEASE_BUILD) -DCMAKE_BUILD_TYPE=Release >/dev/null
-	@cmake --build $(RELEASE_BUILD) -j$(JOBS)
+# errors): it must build. That is the normal build now, so this is `make build`.
+release: build
 
 # The libFuzzer targets of fuzz/ (clang, ASan + UBSan), each for FUZZ_SECONDS, starting from the
 # seed corpus in fuzz/corpus/NAME and the regression inputs in fuzz/regressions/NAME (when a target
@@ -82,7 +83,7 @@ release: setup
 FUZZ_TARGETS := scene clip png mesh
 fuzz:
 	@bash scripts/setup.sh --fuzz
-	@CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPONYHOP_FUZZ=ON \
+	@CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) $(call GENERATOR,$(FUZZ_BUILD)) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPONYHOP_FUZZ=ON \
 	  -DPONYHOP_TESTS=OFF -DPONYHOP_WINDOW=OFF >/dev/null
 	@cmake --build $(FUZZ_BUILD) -j$(JOBS) --target $(addprefix fuzz_,$(FUZZ_TARGETS))
 	@for t in $(FUZZ_TARGETS); do \
@@ -122,8 +123,7 @@ update-snapshots: build
 # long runs on the whole grid (about an hour).
 bench:
 	@bash scripts/setup.sh --bench
-	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
-	@cmake --build $(BUILD) -j$(JOBS)
+	@$(MAKE) --no-print-directory build
 	@$(PONYHOP) bench --out docs/bench --long-fixed 10 --long-shake 5 --long-hopper 5
 	@$(PONYHOP) bench --out docs/bench/long60 --links 8,32 --anchors fixed --dts 240 --long-fixed 60 --no-hopper --no-scaling
 
@@ -131,4 +131,4 @@ bench-quick: build
 	@$(PONYHOP) bench --quick --out $(BUILD)/bench-quick
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD) $(TSAN_BUILD) $(FUZZ_BUILD) $(RELEASE_BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD) $(TSAN_BUILD) $(FUZZ_BUILD)

@@ -7,6 +7,7 @@ set -euo pipefail
 
 PACKAGES=(
   build-essential cmake pkg-config     # toolchain
+  ninja-build                          # builds (make picks Ninja for a new build folder when it is there)
   libeigen3-dev                        # physics: dense and sparse linear algebra
   libosmesa6-dev                       # headless OpenGL (Mesa llvmpipe)
   python3-glad                         # generates the GL loader at build time (offline, --reproducible)

@@ -23,7 +23,7 @@ using namespace ponyhop;
 namespace {
 
 std::string outDir() {
-  const std::string d = std::string(PONYHOP_TEST_OUT) + "/mesh";
+  const std::string d = PONYHOP_TEST_OUT "/mesh";
   std::filesystem::create_directories(d);
   return d;
 }
@@ -214,7 +214,8 @@ TEST(MeshIsolation, CrashAbortHangAndMemoryOfTheChildAreMessages) {
   EXPECT_EQ(err, "refused");
   ASSERT_TRUE(runIsolated(
       [](std::string& r, std::string&) {
-        r = std::string(1 << 20, 'z') + "end";
+        r.assign(1 << 20, 'z');
+        r += "end";
         return true;
       },
       limits, &out, &err));
