@@ -114,11 +114,9 @@ class Hopper final : public Controller {
   // ("hopper.command.height = 9: must be ..."), leaving the command unchanged.
   std::string setCommand(const HopperCommand& command);
   bool inContact() const { return contact_->inContact(); }
-  int hops() const { return mem_.hops; }  // liftoffs so far
-  double measuredStanceTime() const { return mem_.stance_time; }
-  double lastApex() const { return mem_.last_apex; }                         // m, body height at the last apex
-  double thrust() const { return mem_.thrust; }                              // m, last thrust setpoint extension
-  Eigen::Vector2d desiredVelocity() const { return mem_.desired_velocity; }  // m/s, slewed command
+  int hops() const { return mem_.hops; }              // liftoffs so far
+  double lastApex() const { return mem_.last_apex; }  // m, body height at the last apex
+  double thrust() const { return mem_.thrust; }       // m, last thrust setpoint extension
 
   LegState leg(const World& world) const { return legState(model_, world.bodies()); }
   Eigen::Vector3d footPoint(const World& world) const { return contact_->point(world); }
