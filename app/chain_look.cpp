@@ -5,7 +5,7 @@
 namespace ponyhop {
 namespace {
 
-// Radius of link i over the root's (the taper of physics/chain.cpp).
+// Radius of link i over the root's (the taper of physics/models/chain.cpp).
 double radiusRatio(const ChainParams& p, int i) {
   const double s = p.links > 1 ? static_cast<double>(i) / (p.links - 1) : 0.0;
   return 1.0 + (p.taper - 1.0) * s;

@@ -16,7 +16,7 @@
 // 1 - bounce and the period 2 pi sqrt(I / (k + M g d)) (swingPeriod()).
 #pragma once
 
-#include "physics/chain_params.h"
+#include "physics/models/chain_params.h"
 
 namespace ponyhop {
 

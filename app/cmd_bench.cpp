@@ -31,7 +31,7 @@
 #include "app/bench_run.h"
 #include "app/commands.h"
 #include "engine/asset_loader.h"
-#include "physics/head_collisions.h"
+#include "physics/models/head_collisions.h"
 #include "physics/physics_params.h"
 #include "physics/validate.h"
 #include "sim/data_dir.h"

@@ -27,7 +27,7 @@
 
 #include "engine/renderer.h"
 #include "engine/scene_draw.h"
-#include "physics/perturbation.h"
+#include "physics/models/perturbation.h"
 #include "sim/scene.h"
 #include "sim/sim.h"
 

@@ -1,9 +1,9 @@
 // Keyframes from a mesh file's animation (glTF, FBX, Collada, ... through assimp), as pose samples
-// for physics/keyframes.h (docs/ANIMATION.md).
+// for physics/models/keyframes.h (docs/ANIMATION.md).
 //
 // assimp 5.2.5 keeps animation keys as samples only (glTF cubic-spline tangents are dropped and
 // the interpolation mode is not recorded), so they are treated as samples and the C2 track of
-// physics/keyframes.h interpolates them. A node's position and rotation channels may be keyed at
+// physics/models/keyframes.h interpolates them. A node's position and rotation channels may be keyed at
 // different times: both are resampled onto the union of their key times (linear for position,
 // slerp for rotation, holding the first/last key outside a channel's range). Scale keys are
 // ignored (the head is rigid).
@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "physics/keyframes.h"
+#include "physics/models/keyframes.h"
 
 namespace ponyhop {
 

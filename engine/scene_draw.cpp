@@ -3,7 +3,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "physics/hopper_collisions.h"
+#include "physics/models/hopper_collisions.h"
 
 namespace ponyhop {
 namespace {
@@ -34,7 +34,7 @@ void drawHopper(const Hopper& hopper, const HopperSection& p, const World& world
   };
   const double rz = half.z();
   const auto atBody = [&](const Eigen::Vector3d& v) { return at(v.x(), v.y(), v.z()); };
-  // Main hull: a capsule along the body's x axis (its collision shape too, physics/hopper_collisions.h),
+  // Main hull: a capsule along the body's x axis (its collision shape too, physics/models/hopper_collisions.h),
   // squashed look from a second, overlapping capsule.
   const std::array<CapsuleSpan, 3> hull = hopperHull(p);
   renderer.drawCapsule(atBody(hull[0].a), atBody(hull[0].b), hull[0].ra, paint);

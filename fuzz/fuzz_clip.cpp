@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string>
 
-#include "physics/keyframes.h"
+#include "physics/models/keyframes.h"
 #include "sim/scene_io.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -28,7 +28,7 @@
 //   ABA (forward dynamics, O(n)): three passes, see forwardDynamics().
 //   RNEA (inverse dynamics, O(n)): tau = S^T F^J given u'.
 //   CRBA (joint-space mass matrix H = Phi^T M Phi, O(n d) for depth d): composite inertias.
-// Cross-checks (tests/physics/physics_featherstone_test.cpp): RNEA(ABA(tau)) = tau; H is SPD and
+// Cross-checks (tests/physics/featherstone_test.cpp): RNEA(ABA(tau)) = tau; H is SPD and
 // H^-1 (tau - C) with C = RNEA(0) equals ABA; ABA's body accelerations equal the multiplier
 // solvers' on the same state.
 //

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -32,7 +31,6 @@ bool crossAlong(int a, const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, con
 bool SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices,
                                double cell, double padding, std::string* error, long max_nodes,
                                const Eigen::AlignedBox3d* region) {
-  const auto start = std::chrono::steady_clock::now();
   const auto fail = [&](const std::string& m) {
     if (error) *error = m;
     return false;
@@ -161,7 +159,6 @@ bool SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, con
   }
   values_.resize(nodes);
   for (long n = 0; n < nodes; ++n) values_[n] = static_cast<float>(votes[n] >= 2 ? -dist[n] : dist[n]);
-  build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return true;
 }
 

@@ -51,7 +51,6 @@ class SignedDistanceGrid {
   const Eigen::Vector3i& dims() const { return dims_; }
   Eigen::Vector3d upper() const { return origin_ + cell_ * (dims_ - Eigen::Vector3i::Ones()).cast<double>(); }
   double node(int i, int j, int k) const { return values_[index(i, j, k)]; }
-  double buildSeconds() const { return build_seconds_; }  // wall time of build()
 
  private:
   size_t index(int i, int j, int k) const { return (static_cast<size_t>(k) * dims_.y() + j) * dims_.x() + i; }
@@ -61,7 +60,6 @@ class SignedDistanceGrid {
   Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
   double cell_ = 0.0;
   std::vector<float> values_;
-  double build_seconds_ = 0.0;
 };
 
 // Exact signed distance from p to a closed triangle mesh by brute force over every triangle, the

@@ -1,6 +1,6 @@
 // Projected Gauss-Seidel for contact impulses with Coulomb friction in a cone (an isotropic disc
 // per contact): the solver of the collision stage (physics/collisions.h) and of the hopper's toe
-// at touchdown (physics/contact.h).
+// at touchdown (physics/models/hopper_foot.h).
 #pragma once
 
 #include <Eigen/Core>

@@ -39,7 +39,7 @@
 // (explicit) makes its error O(h) in F, O(h^2) per step in v': first order. With
 // `correct_velocity_forces` one fixed-point iteration follows: F again at (t + h, q', v'), the
 // second kick redone from the same p+ with it, projected again; then F's error is O(h^2), the
-// local error O(h^3) and the method second order (tests/physics/physics_rattle_order_test.cpp).
+// local error O(h^3) and the method second order (tests/physics/rattle_order_test.cpp).
 // Without such forces (gravity, springs) the predicted velocity is exact for them and the
 // corrector is skipped by the caller: the step is then exactly the classical RATTLE.
 // Stiff springs are explicit as in any Verlet method: stable for h omega < 2 (see

@@ -10,7 +10,6 @@
 #include <string>
 #include <type_traits>
 
-#include "physics/chain_params.h"
 #include "physics/physics_params.h"
 #include "physics/reflect.h"
 
@@ -75,7 +74,5 @@ std::string checkRanges(P p, const std::string& prefix) {
 }
 
 std::string validate(const PhysicsParams& p, const std::string& prefix = "physics");
-std::string validate(const ChainParams& p, const std::string& prefix = "chain");
-std::string validate(const AnchorParams& p, const std::string& prefix = "anchor");
 
 }  // namespace ponyhop

@@ -7,16 +7,15 @@
 #include <numbers>
 #include <utility>
 
-#include "physics/dense_solver.h"
-#include "physics/implicit_euler.h"
-#include "physics/rattle.h"
-#include "physics/rk4.h"
+#include "physics/integrator_scheme.h"
 #include "physics/solver_factory.h"
 #include "physics/stabilization.h"
-#include "physics/symplectic_euler.h"
 #include "physics/validate.h"
 
 namespace ponyhop {
+
+using checks::finite;
+using checks::finiteAndBounded;
 
 namespace {
 
@@ -29,21 +28,12 @@ bool splitsOnRotation(const PhysicsParams& p) { return p.max_step_rotation > 0.0
 // twice the limit.
 constexpr double kSplitRotation = 1.25;
 constexpr int kMaxSplits = 10;  // a substep is split in two at most this deep (1/1024 of it)
-constexpr double kHuge = 1e10;  // |x|, |v|, |w| beyond this: the run has diverged (cf. mj_checkPos)
 // A prescribed pose this far from its own prediction over one step is a jump (followTeleports).
 constexpr double kTeleportDistance = 1e-2;  // m
 constexpr double kTeleportAngle = 0.1;      // rad
 // tan(kTeleportAngle / 2)^2 (tan(0.05) = 0.05004170837553879...).
 constexpr double kTanHalfTeleportAngle2 = 0.05004170837553879 * 0.05004170837553879;
 
-// Per entry with std::isfinite and |x| < kHuge (NaN fails both): Eigen's allFinite (x - x == x -
-// x) and lpNorm were left as calls in the per-body checks.
-template <class V>
-bool finite(const V& v) {
-  for (int i = 0; i < v.size(); ++i)
-    if (!std::isfinite(v(i))) return false;
-  return true;
-}
 // 0 when every entry of v is finite, else NaN (x - x is NaN for an inf or NaN x, +0 otherwise;
 // a sum with a NaN is NaN): the test of a body's 13 state entries as subtractions and additions
 // and one branch instead of a test and branch per entry.
@@ -53,19 +43,23 @@ double nanUnlessFinite(const V& v) {
   for (int i = 1; i < v.size(); ++i) z += v(i) - v(i);
   return z;
 }
-bool finiteAndBounded(const Eigen::Vector3d& v) {
-  return std::abs(v(0)) < kHuge && std::abs(v(1)) < kHuge && std::abs(v(2)) < kHuge;
-}
 
 }  // namespace
 
 World::World(const PhysicsParams& params)
-    : params_(params), solver_(makeConstraintSolver(params.solver)), reduced_(makeReducedSystem(params.solver)) {
+    : params_(params),
+      solver_(makeConstraintSolver(params.solver)),
+      reduced_(makeReducedSystem(params.solver)),
+      scheme_(makeIntegratorScheme(params.integrator)) {
   if (std::string e = validate(params_); !e.empty()) fail(e);
 }
 
+World::~World() = default;
+World::World(World&&) noexcept = default;
+World& World::operator=(World&&) noexcept = default;
+
 void World::fail(std::string message) {
-  if (status_.empty()) status_ = std::move(message);
+  if (state_.status.empty()) state_.status = std::move(message);
 }
 
 int World::addDynamicBody(RigidBody body) {
@@ -85,7 +79,7 @@ int World::addKinematicBody(KinematicMotion motion, std::string name) {
   body.kind = RigidBody::Kind::Kinematic;
   body.name = std::move(name);
   body.motion = std::move(motion);
-  if (body.motion) body.setKinematicState(body.motion(time_));
+  if (body.motion) body.setKinematicState(body.motion(state_.time));
   bodies_.push_back(std::move(body));
   return static_cast<int>(bodies_.size()) - 1;
 }
@@ -125,14 +119,14 @@ void World::step() {
   if (params_.tolerance > 0.0) {
     // Accuracy asked for: start from the last dt's count (coarser when it was well inside the
     // tolerance: a second-order substep's error grows ~8x when h doubles), split by step doubling.
-    int n = std::max(params_.substeps, tolerance_substeps_);
+    int n = std::max(params_.substeps, state_.tolerance_substeps);
     const double h = params_.dt / n;
     for (int i = 0; i < n && ok(); ++i) advanceToTolerance(h, 0);
     // A local error of order p + 1 grows 2^(p+1) x when the substep doubles: coarser only when
     // that (with a margin of 2) still meets the tolerance.
     const int coarse = std::max(1, last_substeps_ / 2);
     const double growth = 2.0 * std::ldexp(1.0, methodOrder() + 1);
-    tolerance_substeps_ = last_error_ < params_.tolerance / growth ? std::max(1, coarse / 2) : coarse;
+    state_.tolerance_substeps = last_error_ < params_.tolerance / growth ? std::max(1, coarse / 2) : coarse;
     return;
   }
   // Enough substeps that the fastest body turns at most max_step_rotation per substep at the
@@ -147,7 +141,7 @@ void World::step() {
   // count (once). A count from the start alone is not time-symmetric, and a reversible method
   // with such steps loses its bounded energy error: the whipping chain's energy fell 0.05 % of E0
   // per simulated second. With both ends, 0.06-0.33 % after 60 s (docs/STABILITY.md).
-  const bool symmetric = theta > 0.0 && params_.integrator == Integrator::Rattle && !reduced_;
+  const bool symmetric = theta > 0.0 && scheme_->symmetricCount() && !reduced_;
   if (symmetric) saveStateInto(dt_start_);
   for (bool redone = false;; redone = true) {
     const double h = params_.dt / n;
@@ -171,8 +165,7 @@ void World::substep(double h, int depth) {
   // when the substep can be undone: a contact set may report an impact inside it, the rotation
   // limit may split it, RATTLE or implicit Euler may fail and ask for halves. Otherwise a step
   // that fails has stopped the world, and nothing is restored.
-  const bool undoable = !contacts_.empty() || splitsOnRotation(params_) || params_.integrator == Integrator::Rattle ||
-                        params_.integrator == Integrator::ImplicitEuler;
+  const bool undoable = !contacts_.empty() || splitsOnRotation(params_) || scheme_->mayFail();
   if (undoable) snapshotInto(start);
   const bool stepped = takeStep(h);
   if (stepped && depth < kMaxSplits && impactInside()) {
@@ -200,33 +193,9 @@ void World::substep(double h, int depth) {
 bool World::takeStep(double h) {
   split_reason_.clear();
   if (reduced_) {
-    reducedStep(h);  // featherstone: one joint-space step replaces the stages below
-  } else if (params_.integrator == Integrator::Rattle) {
-    // RATTLE evaluates the forces at t itself (its first kick) and needs no acceleration-level
-    // solve: its position multipliers start from the last step's (warm start). Only when there
-    // are none for these rows (first step, a contact added or dropped rows, a restored state
-    // from before any step) the joint-force solve at t seeds them, as every step used to.
-    updateKinematicBodies(time_);  // prescribed bodies: pose, velocity, acceleration at t
-    followTeleports(h);            // a prescribed body that jumps within the step carries its chain along
-    if (!warmStartFits()) {
-      applyExternalForces();
-      applyControllerForces();
-      solveJointForces();
-      if (ok()) warm_start_.mu = solver_->lambda();
-    }
-    integrate(h);  // t += h: kick, drift, position solve, kick, velocity solve
-    // After the step: its end state with its end accelerations (the second kick's, which a step
-    // that is later undone takes back with the monitor's snapshot).
-    if (split_reason_.empty()) watchStability(h);
+    reducedStep(h);  // featherstone: one joint-space step replaces the method's stages
   } else {
-    updateKinematicBodies(time_);  // prescribed bodies: pose, velocity, acceleration at t
-    followTeleports(h);            // a prescribed body that jumps within the step carries its chain along
-    applyExternalForces();         // gravity, joint damping, bending springs, air drag
-    applyControllerForces();       // controllers' force laws (none for chains; the hopper's muscles)
-    solveJointForces();            // A lambda = b, F_c = J^T lambda, body accelerations
-    watchStability(h);             // explicit methods: stop when h is beyond the stability limit
-    integrate(h);                  // t += h (RK4 re-runs the four stages above at its stage times)
-    stabilize();                   // projection onto C = 0 and J v = -J_k v_k (when chosen)
+    scheme_->takeStep(*this, h);  // the method's stages (physics/integrator_scheme.cpp)
   }
   if (ok() && split_reason_.empty() && splitsOnRotation(params_)) {
     const double turned = h * maxAngularSpeed();
@@ -285,7 +254,7 @@ void World::followTeleports(double h) {
   for (size_t k = 0; k < bodies_.size(); ++k) {
     const RigidBody& parent = bodies_[k];
     if (parent.isDynamic() || !parent.motion) continue;
-    const KinematicState next = parent.motion(time_ + h);
+    const KinematicState next = parent.motion(state_.time + h);
     const Eigen::Vector3d x_pred = parent.x + h * parent.v + 0.5 * h * h * parent.a;
     const Eigen::Quaterniond q_pred =
         quaternionFromRotationVector(h * parent.w + 0.5 * h * h * parent.alpha) * parent.q;
@@ -324,41 +293,28 @@ void World::followTeleports(double h) {
 }
 
 void World::snapshotInto(Snapshot& s) const {
-  gatherStateInto(s.state);
-  s.time = time_;
-  s.monitor = monitor_;
-  s.warm_start = warm_start_;  // same rows as last time: copied without allocating
+  gatherStateInto(s.bodies);
+  s.world = state_;  // the warm start has the same rows as last time: copied without allocating
 }
 
 void World::restore(const Snapshot& s) {
   gathered_ = false;
-  scatterState(s.state);
-  time_ = s.time;
-  stage_time_ = s.time;
-  monitor_ = s.monitor;
-  // The multipliers of the last step before the snapshot: a force, so as good a guess for a
-  // retry with h / 2 as for h; the undone step's never seed anything.
-  warm_start_ = s.warm_start;
+  scatterState(s.bodies);
+  // Its warm start is the multipliers of the last step before the snapshot: a force, so as good
+  // a guess for a retry with h / 2 as for h; the undone step's never seed anything. Its status
+  // is "": only called on a world that was running when the snapshot was taken.
+  state_ = s.world;
+  stage_time_ = state_.time;
   forces_stale_ = true;
   split_reason_.clear();
-  status_.clear();  // only called on a world that was running when the snapshot was taken
 }
 
-int World::methodOrder() const {
-  switch (params_.integrator) {
-    case Integrator::RK4:
-      return 4;
-    case Integrator::Rattle:
-      return 2;
-    default:
-      return 1;  // symplectic and linearly implicit Euler
-  }
-}
+int World::methodOrder() const { return scheme_->order(); }
 
 bool World::warmStartFits() const {
-  if (!warm_start_.valid || warm_start_.dims.size() != joints_.size()) return false;
+  if (!state_.warm_start.valid || state_.warm_start.dims.size() != joints_.size()) return false;
   for (size_t j = 0; j < joints_.size(); ++j)
-    if (warm_start_.dims[j] != joints_[j]->dimension()) return false;
+    if (state_.warm_start.dims[j] != joints_[j]->dimension()) return false;
   return true;
 }
 
@@ -394,23 +350,23 @@ double World::maxAngularSpeed() const {
 }
 
 void World::watchStability(double h) {
-  if (!ok() || params_.integrator == Integrator::ImplicitEuler) return;
-  const double limit = params_.integrator == Integrator::RK4 ? 2.83 : 2.0;
-  if (params_.integrator == Integrator::SymplecticEuler) {
+  const double limit = scheme_->stabilityLimit();
+  if (!ok() || limit == 0.0) return;  // a method stable for any step is not watched
+  if (scheme_->observesInPlace()) {
     // Read in place: integrate() steps the bodies in place, no gathered copy needed.
-    if (!monitor_.observe(h, bodies_, dynamic_, limit)) return;
+    if (!state_.monitor.observe(h, bodies_, dynamic_, limit)) return;
   } else {
     gatherStateInto(state_scratch_);
     gatherAccelerationsInto(acc_scratch_);
     gathered_ = true;  // integrate() steps from these (nothing moves the bodies in between)
-    if (!monitor_.observe(h, state_scratch_, acc_scratch_, limit)) return;
+    if (!state_.monitor.observe(h, state_scratch_, acc_scratch_, limit)) return;
   }
   char what[160];
   std::snprintf(what, sizeof what,
                 "the step is unstable: h rho = %.3g > %.3g (stiffness estimate rho = %.3g 1/s) and the state "
                 "increments grew %.3gx per step",
-                monitor_.hRho(), limit, monitor_.hRho() / h, monitor_.growth());
-  std::string cause = "an explicit integrator (" + std::string(enumName(params_.integrator)) +
+                state_.monitor.hRho(), limit, state_.monitor.hRho() / h, state_.monitor.growth());
+  std::string cause = "an explicit integrator (" + std::string(enumName(scheme_->kind())) +
                       ") on forces too stiff for the step (stiff springs, servos, stops or damping): reduce dt, raise "
                       "substeps, or use integrator = implicit_euler";
   stop("integrate", what, cause.c_str());
@@ -488,87 +444,40 @@ void World::integrate(double h) {
   const auto timed = clock_.time(Stage::Integrate);
   const bool gathered = std::exchange(gathered_, false);
   if (!ok()) return;
-  if (params_.integrator == Integrator::Rattle || params_.integrator == Integrator::ImplicitEuler) {
-    ConstrainedStep cs{bodies_,
-                       joints_,
-                       system_,
-                       *solver_,
-                       [this](double t) {
-                         updateKinematicBodies(t);
-                         applyExternalForces();
-                         applyControllerForces();
-                         return ok();
-                       },
-                       [this](double t) { updateKinematicBodies(t); }};
-    ConstrainedStepResult r;
-    if (params_.integrator == Integrator::Rattle) {
-      RattleOptions options;
-      options.correct_velocity_forces = rattle_corrector_ && velocityDependentForces();
-      options.work = &rattle_work_;
-      r = rattleStep(time_, h, warm_start_.mu, cs, options);  // mu: the guess in, this step's out
-    } else {
-      r = linearlyImplicitEulerStep(time_, h, cs);
-    }
-    if (!ok()) return;
-    if (r.failed) {
-      split_reason_ = r.problem.data();  // substep() undoes the step and tries two halves
-      return;
-    }
-    if (params_.integrator == Integrator::Rattle) {
-      // The next step's guess. Sized once per row layout: a steady step allocates nothing here.
-      warm_start_.dims.resize(joints_.size());
-      for (size_t j = 0; j < joints_.size(); ++j) warm_start_.dims[j] = joints_[j]->dimension();
-      warm_start_.valid = true;
-      forces_stale_ = true;  // lambda() solves on demand
-    }
-    time_ += h;
-    stage_time_ = time_;
-    checkBodies("integrate", false);
-    return;
+  scheme_->integrate(*this, h, gathered);
+}
+
+ConstrainedStep World::constrainedStep() {
+  return {bodies_,
+          joints_,
+          system_,
+          *solver_,
+          [this](double t) {
+            updateKinematicBodies(t);
+            applyExternalForces();
+            applyControllerForces();
+            return ok();
+          },
+          [this](double t) { updateKinematicBodies(t); }};
+}
+
+bool World::finishConstrainedStep(const ConstrainedStepResult& r, double h) {
+  if (!ok()) return false;
+  if (r.failed) {
+    split_reason_ = r.problem.data();  // substep() undoes the step and tries two halves
+    return false;
   }
-  if (params_.integrator == Integrator::SymplecticEuler) {
-    // In place on the bodies from their accelerations (the joint-force stage's; nothing moved
-    // them since), and checked in the same pass (checkBodies only to say which body and stop).
-    // Its quaternions are unit (normalized by the step). The same operations as stepping a
-    // gathered copy and copying it back.
-    bool fine = true;
-    for (int i : dynamic_) {
-      RigidBody& b = bodies_[i];
-      symplecticEulerStep(h, b.a, b.alpha, b.state());
-      fine = fine && finiteAndBounded(b.x) && finite(b.q.coeffs()) && finiteAndBounded(b.v) && finiteAndBounded(b.w);
-    }
-    time_ += h;
-    stage_time_ = time_;
-    if (!fine) checkBodies("integrate", false);
-    return;
-  }
-  State& state = state_scratch_;
-  if (!gathered) {
-    gatherStateInto(state);
-    gatherAccelerationsInto(acc_scratch_);
-  }
-  switch (params_.integrator) {
-    case Integrator::RK4:
-      rk4Step(
-          time_, h, acc_scratch_, [this](double t, const State& s, Accelerations& out) { accelerationsAt(t, s, out); },
-          state);
-      break;
-    default:
-      break;
-  }
-  if (!ok()) return;  // a stage evaluation stopped the world
-  time_ += h;
-  stage_time_ = time_;
-  scatterState(state);
+  state_.time += h;
+  stage_time_ = state_.time;
   checkBodies("integrate", false);
+  return true;
 }
 
 void World::stabilize() {
-  // RATTLE keeps positions and velocities on the joints by construction. Nothing to do: not timed.
-  if (!ok() || !split_reason_.empty() || params_.integrator == Integrator::Rattle) return;
+  if (!ok() || !split_reason_.empty()) return;
   if (params_.stabilization != Stabilization::Projection || joints_.empty()) return;
   const auto timed = clock_.time(Stage::Stabilize);
-  updateKinematicBodies(time_);
+  updateKinematicBodies(state_.time);
   const ProjectionResult r = projectPositions(bodies_, joints_, system_, *solver_);
   if (!r.problem.empty() || !(r.error < 1e-6)) {
     char buf[96];
@@ -615,15 +524,15 @@ void World::reducedStep(double h) {
                            }};
   std::string e = reduced_->build(bodies_, joints_);
   if (e.empty()) {
-    e = h > 0.0 ? reduced_->step(time_, h, params_.integrator, bodies_, hooks)
-                : reduced_->evaluate(time_, bodies_, hooks);
+    e = h > 0.0 ? reduced_->step(state_.time, h, scheme_->kind(), bodies_, hooks)
+                : reduced_->evaluate(state_.time, bodies_, hooks);
   }
   if (!e.empty()) {
     return stop("reduced step", e, "the scene needs what reduced coordinates cannot express (docs/SOLVERS.md)");
   }
   if (!ok() || h == 0.0) return;
-  time_ += h;
-  stage_time_ = time_;
+  state_.time += h;
+  stage_time_ = state_.time;
   checkBodies("reduced step", false);
 }
 
@@ -641,7 +550,7 @@ void World::accelerationsAt(double t, const State& state, Accelerations& out) {
 void World::evaluate() {
   if (!ok()) return;
   if (reduced_) return reducedStep(0.0);  // featherstone: ABA at the current state
-  updateKinematicBodies(time_);
+  updateKinematicBodies(state_.time);
   applyExternalForces();
   applyControllerForces();
   solveJointForces();
@@ -649,7 +558,7 @@ void World::evaluate() {
 
 void World::projectVelocities() {
   if (!ok()) return;
-  updateKinematicBodies(time_);
+  updateKinematicBodies(state_.time);
   if (std::string e = projectVelocitiesOntoJoints(); !e.empty())
     stop("velocity projection", e, "redundant or duplicate joints");
 }
@@ -671,29 +580,22 @@ World::SavedState World::saveState() const {
 void World::saveStateInto(SavedState& s) const {
   s.bodies.resize(bodies_.size());  // the storage s already has: no allocation once sized
   for (size_t i = 0; i < bodies_.size(); ++i) s.bodies[i] = bodies_[i].state();
-  s.time = time_;
   s.controllers.resize(controllers_.size());
   for (size_t i = 0; i < controllers_.size(); ++i) s.controllers[i] = controllers_[i]->saveState();
   s.contacts.resize(contacts_.size());
   for (size_t i = 0; i < contacts_.size(); ++i) s.contacts[i] = contacts_[i]->saveState();
-  s.monitor = monitor_;
-  s.warm_start = warm_start_;
-  s.tolerance_substeps = tolerance_substeps_;
-  s.status = status_;
+  s.world = state_;
 }
 
 void World::restoreState(const SavedState& s) {
   gathered_ = false;
   for (size_t i = 0; i < bodies_.size() && i < s.bodies.size(); ++i) bodies_[i].state() = s.bodies[i];
-  time_ = stage_time_ = s.time;
   for (size_t i = 0; i < controllers_.size() && i < s.controllers.size(); ++i)
     controllers_[i]->restoreState(s.controllers[i]);
   for (size_t i = 0; i < contacts_.size() && i < s.contacts.size(); ++i) contacts_[i]->restoreState(s.contacts[i]);
-  monitor_ = s.monitor;
-  warm_start_ = s.warm_start;
+  state_ = s.world;
+  stage_time_ = state_.time;
   forces_stale_ = true;
-  tolerance_substeps_ = s.tolerance_substeps;
-  status_ = s.status;
   split_reason_.clear();
 }
 

@@ -28,6 +28,11 @@ namespace ponyhop {
 class World {
  public:
   explicit World(const PhysicsParams& params);  // bad params: !ok(), status() says why
+  // Defined where the integrator schemes are complete (world.cpp); a World moves (Sim keeps one
+  // by value) and is not copied.
+  ~World();
+  World(World&&) noexcept;
+  World& operator=(World&&) noexcept;
 
   // Building. Each returns the new index.
   int addDynamicBody(RigidBody body);
@@ -84,17 +89,24 @@ class World {
     bool valid = false;
   };
 
-  // A complete snapshot: every body's state, the time, the controllers' and contact sets' own
-  // state and the step control's; restoreState(saveState()) continues bit for bit as before.
-  struct SavedState {
-    std::vector<BodyState> bodies;
+  // What a step carries to the next besides the bodies' and the controllers' and contact sets'
+  // own state: the time, the step control's and the integrator's memory, the status. World keeps
+  // it as one member (state_), so a snapshot is one assignment.
+  struct StepState {
     double time = 0.0;
-    std::vector<std::any> controllers;
-    std::vector<std::any> contacts;
     StabilityMonitor monitor;
     WarmStart warm_start;
-    int tolerance_substeps = 0;
-    std::string status;  // "" while running; a restore of a running state revives a stopped world
+    int tolerance_substeps = 0;  // tolerance mode: substeps to start the next dt with
+    std::string status;          // "" while running; a restore of a running state revives a stopped world
+  };
+
+  // A complete snapshot: every body's state, the controllers' and contact sets' own state and
+  // the world's; restoreState(saveState()) continues bit for bit as before.
+  struct SavedState {
+    std::vector<BodyState> bodies;
+    std::vector<std::any> controllers;
+    std::vector<std::any> contacts;
+    StepState world;
   };
   SavedState saveState() const;
   // The same into storage `s` already has (step() keeps one per world: no allocation per dt
@@ -102,10 +114,10 @@ class World {
   void saveStateInto(SavedState& s) const;
   void restoreState(const SavedState& s);
 
-  double time() const { return time_; }
+  double time() const { return state_.time; }
   const PhysicsParams& params() const { return params_; }
-  bool ok() const { return status_.empty(); }
-  const std::string& status() const { return status_; }
+  bool ok() const { return state_.status.empty(); }
+  const std::string& status() const { return state_.status; }
 
   int bodyCount() const { return static_cast<int>(bodies_.size()); }
   RigidBody& body(int i) { return bodies_[i]; }
@@ -140,6 +152,16 @@ class World {
   double constraintPower() const;
 
  private:
+  // The integrators behind one interface (physics/integrator_scheme.h), chosen once from
+  // params.integrator: each owns its stages of a substep and says what step control it needs.
+  class IntegratorScheme;
+  class ForceStagesScheme;
+  class SymplecticEulerScheme;
+  class Rk4Scheme;
+  class RattleScheme;
+  class ImplicitEulerScheme;
+  static std::unique_ptr<IntegratorScheme> makeIntegratorScheme(Integrator kind);
+
   // The stages of a step, in the method's order.
   void think();
   void updateKinematicBodies(double t);
@@ -151,6 +173,11 @@ class World {
   void resolveContacts();
   bool impactInside() const;   // any contact set's impact within the substep just taken
   void reducedStep(double h);  // featherstone: replaces joint forces + integrate + stabilize
+  // What a constrained integrator (RATTLE, implicit Euler) is lent for one step, and the end of
+  // such a step: false when it failed (split_reason_ set) or the world stopped; else t += h and
+  // the bodies checked.
+  ConstrainedStep constrainedStep();
+  bool finishConstrainedStep(const ConstrainedStepResult& r, double h);
 
   void substep(double h, int depth = 0);
   void advanceToTolerance(double h, int depth);
@@ -158,15 +185,15 @@ class World {
   void watchStability(double h);
   void followTeleports(double h);
   double maxAngularSpeed() const;
-  bool warmStartFits() const;            // warm_start_ belongs to the current joint rows
+  bool warmStartFits() const;            // state_.warm_start belongs to the current joint rows
   bool velocityDependentForces() const;  // any force element or controller reads velocities
+  // A substep's start: the dynamic bodies' states and the world's (a rejected step's warm start
+  // must not seed the retry).
   struct Snapshot {
-    State state;
-    double time = 0.0;
-    StabilityMonitor monitor;
-    WarmStart warm_start;  // a rejected step's multipliers must not seed the retry
+    State bodies;
+    StepState world;
   };
-  Snapshot snapshot() const { return {gatherState(), time_, monitor_, warm_start_}; }
+  Snapshot snapshot() const { return {gatherState(), state_}; }
   // The same into `s`, reusing its storage (substep(): a steady step allocates nothing).
   void snapshotInto(Snapshot& s) const;
   void restore(const Snapshot& s);
@@ -182,39 +209,45 @@ class World {
   bool checkForces(const RigidBody& b);  // applyExternalForces: stops the world when b's state or forces are not finite
   void stop(const char* stage, const std::string& what, const char* cause);
 
+  // Parameters.
   PhysicsParams params_;
+  bool rattle_corrector_ = true;
+
+  // The model: bodies (their state included: RigidBody::state()), joints, forces, controllers,
+  // contact sets, and the methods that move them.
   std::vector<RigidBody> bodies_;
   std::vector<int> dynamic_;  // indices of the dynamic bodies, in state order
   Constraints joints_;
   ForceElements forces_;
   std::vector<std::shared_ptr<Controller>> controllers_;
   std::vector<std::shared_ptr<ContactSet>> contacts_;
+  double potential_reference_ = 0.0;
   std::unique_ptr<ConstraintSolver> solver_;
   std::unique_ptr<ArticulatedSystem> reduced_;  // featherstone only
+  std::unique_ptr<IntegratorScheme> scheme_;
+
+  // The state (besides the bodies'): what saveState() keeps.
+  StepState state_;
+
+  // Scratch: work space and what one step tells the next stage (a steady step allocates nothing).
   ConstraintSystem system_;
-  double time_ = 0.0;
-  double stage_time_ = 0.0;  // time of the force evaluation in progress (RK4 stages)
-  double potential_reference_ = 0.0;
-  std::string status_;
-  StageClock clock_;  // per-stage timing (stageTimes())
-  // Step control (docs/STABILITY.md).
-  StabilityMonitor monitor_;
-  std::string split_reason_;  // set by a stage that wants the substep split ("" = fine)
-  int last_substeps_ = 0;
-  double last_error_ = 0.0;
-  int tolerance_substeps_ = 0;            // tolerance mode: substeps to start the next dt with
-  int tolerance_misses_ = 0;              // substeps accepted above the tolerance at the deepest split
+  double stage_time_ = 0.0;               // time of the force evaluation in progress (RK4 stages)
+  std::string split_reason_;              // set by a stage that wants the substep split ("" = fine)
   std::vector<Snapshot> substep_starts_;  // substep()'s snapshot per split depth
   SavedState dt_start_;                   // step(): the dt's start, for RATTLE's redo at the end's count
-  WarmStart warm_start_;                  // RATTLE: the last step's position multipliers
   RattleWork rattle_work_;                // RATTLE: the step's work space (sized once)
-  bool rattle_corrector_ = true;
   // The bodies moved since the last acceleration-level solve (a RATTLE step, a restore):
   // lambda() runs it on demand.
   bool forces_stale_ = false;
   State state_scratch_;  // watchStability() and integrate()
   Accelerations acc_scratch_;
   bool gathered_ = false;  // watchStability() filled the scratch just before integrate()
+
+  // Diagnostics.
+  StageClock clock_;  // per-stage timing (stageTimes())
+  int last_substeps_ = 0;
+  double last_error_ = 0.0;
+  int tolerance_misses_ = 0;  // substeps accepted above the tolerance at the deepest split
 };
 
 }  // namespace ponyhop

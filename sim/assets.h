@@ -8,7 +8,7 @@
 #include <optional>
 #include <string>
 
-#include "physics/keyframes.h"
+#include "physics/models/keyframes.h"
 #include "sim/mesh_data.h"
 #include "sim/scene.h"
 

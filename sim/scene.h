@@ -8,13 +8,13 @@
 #include <string>
 #include <vector>
 
-#include "physics/chain_params.h"
-#include "physics/head_collisions.h"
-#include "physics/hopper_params.h"
-#include "physics/keyframe_params.h"
+#include "physics/models/chain_params.h"
+#include "physics/models/head_collisions.h"
+#include "physics/models/hopper_params.h"
+#include "physics/models/keyframe_params.h"
+#include "physics/models/terrain.h"
 #include "physics/physics_params.h"
 #include "physics/reflect.h"
-#include "physics/terrain.h"
 
 namespace ponyhop {
 
@@ -297,7 +297,7 @@ struct CollisionSection : HeadCollisionParams {
   }
 };
 
-// Boxes on the ground (physics/terrain.h): steps, and slopes as tilted boxes. The hoppers' toes
+// Boxes on the ground (physics/models/terrain.h): steps, and slopes as tilted boxes. The hoppers' toes
 // stand on them; with collision.ground their bodies and legs meet them too. Drawn as boxes.
 struct TerrainSection {
   std::vector<TerrainBox> boxes;

@@ -9,7 +9,7 @@
 #include <sstream>
 #include <type_traits>
 
-#include "physics/hopper.h"
+#include "physics/models/hopper.h"
 #include "sim/data_dir.h"
 #include "sim/input_file.h"
 

@@ -2,9 +2,9 @@
 
 #include <cmath>
 
-#include "physics/anchor_motion.h"
-#include "physics/hopper_collisions.h"
-#include "physics/keyframes.h"
+#include "physics/models/anchor_motion.h"
+#include "physics/models/hopper_collisions.h"
+#include "physics/models/keyframes.h"
 #include "sim/head_fit.h"
 #include "sim/scene_io.h"
 
@@ -21,7 +21,7 @@ Sim::Sim(const Scene& scene, const AssetLoader* assets) : scene_(scene), world_(
 }
 
 // The ponytail against the head: the head's triangles in its body frame make the distance grid
-// (physics/head_collisions.h), each link's capsule as drawn collides with it, the root link is held
+// (physics/models/head_collisions.h), each link's capsule as drawn collides with it, the root link is held
 // by a swing cone.
 // collision.ground: the hoppers' bodies and legs against the plane z = 0 and against each other,
 // in the same set (the same solve) as the head's contacts when there are both.

@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "physics/chain.h"
 #include "physics/collisions.h"
-#include "physics/hopper.h"
+#include "physics/models/chain.h"
+#include "physics/models/hopper.h"
 #include "physics/world.h"
 #include "sim/assets.h"
 #include "sim/scene.h"

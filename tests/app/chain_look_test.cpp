@@ -12,7 +12,7 @@
 #include "app/presets.h"
 #include "common/run_util.h"
 #include "engine/asset_loader.h"
-#include "physics/chain.h"
+#include "physics/models/chain.h"
 #include "sim/scene_io.h"
 #include "sim/sim.h"
 

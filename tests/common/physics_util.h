@@ -8,8 +8,8 @@
 #include <cmath>
 #include <vector>
 
-#include "physics/chain.h"
-#include "physics/hopper.h"
+#include "physics/models/chain.h"
+#include "physics/models/hopper.h"
 #include "physics/world.h"
 
 namespace ponyhop::testing {

@@ -14,8 +14,8 @@
 
 #include "engine/asset_loader.h"
 #include "engine/mesh.h"
-#include "physics/head_collisions.h"
 #include "physics/mesh_sdf.h"
+#include "physics/models/head_collisions.h"
 #include "physics/shapes.h"
 #include "sim/scene_io.h"
 #include "sim/sim.h"

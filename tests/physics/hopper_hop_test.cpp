@@ -10,7 +10,7 @@
 #include <numbers>
 
 #include "common/physics_util.h"
-#include "physics/hopper.h"
+#include "physics/models/hopper.h"
 
 namespace ponyhop {
 namespace {

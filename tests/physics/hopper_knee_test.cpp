@@ -5,8 +5,8 @@
 
 #include <random>
 
-#include "physics/contact.h"
-#include "physics/hopper.h"
+#include "physics/models/hopper.h"
+#include "physics/models/hopper_foot.h"
 #include "physics/prismatic_joint.h"
 
 namespace ponyhop {

@@ -1,4 +1,4 @@
-// The toe's friction in the solve (physics/contact.h): a hopper thrown sideways onto a slippery
+// The toe's friction in the solve (physics/models/hopper_foot.h): a hopper thrown sideways onto a slippery
 // floor lands sliding. The landing's impulse comes from one cone problem (normal and friction
 // together), so it removes energy and never turns the slip around; from the landing on, kinetic
 // friction mu N acts with the normal force N of the same joint-force solve (no step without
@@ -9,7 +9,7 @@
 #include <cstdio>
 
 #include "common/physics_util.h"
-#include "physics/hopper.h"
+#include "physics/models/hopper.h"
 
 namespace ponyhop {
 namespace {

@@ -1,7 +1,7 @@
-// The head's keyframe track (physics/keyframes.h): analytic derivatives against finite
+// The head's keyframe track (physics/models/keyframes.h): analytic derivatives against finite
 // differences, C2 continuity across keys, interpolation, loop seams, clamping, unwrapping of
 // spins, input validation, and the shipped clips (assets/animations/*.json).
-#include "physics/keyframes.h"
+#include "physics/models/keyframes.h"
 
 #include <gtest/gtest.h>
 

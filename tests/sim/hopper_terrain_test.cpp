@@ -1,4 +1,4 @@
-// Terrain (physics/terrain.h): the ground's tangent plane under a point, and the hopper of
+// Terrain (physics/models/terrain.h): the ground's tangent plane under a point, and the hopper of
 // assets/scenes/hopper_terrain.json running up a slope, across a plateau, down a step and over a
 // low step: its toe stands on the boxes (never in them) and it gets to the far side upright.
 #include <gtest/gtest.h>
@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <numbers>
 
-#include "physics/terrain.h"
+#include "physics/models/terrain.h"
 #include "sim/scene_io.h"
 #include "sim/sim.h"
 

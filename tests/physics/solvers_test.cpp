@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "common/physics_util.h"
-#include "physics/chain.h"
 #include "physics/dense_solver.h"
-#include "physics/hopper.h"
+#include "physics/models/chain.h"
+#include "physics/models/hopper.h"
 #include "physics/spherical_joint.h"
 #include "physics/tree_solver.h"
 

@@ -1,4 +1,4 @@
-#include "physics/contact.h"
+#include "physics/models/hopper_foot.h"
 
 #include <cmath>
 

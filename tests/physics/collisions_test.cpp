@@ -1,6 +1,8 @@
 // Contacts and limits in the solve (physics/collisions.h) against analytic answers: a bounce to
 // e^2 of the height, stick and slide on a slope at atan(mu), a capsule resting for 60 s, no energy
 // gain at inelastic impacts (a free body and a chain), and joint limits that hold.
+#include "physics/collisions.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,8 +10,7 @@
 #include <memory>
 #include <numbers>
 
-#include "physics/chain.h"
-#include "physics/collisions.h"
+#include "physics/models/chain.h"
 #include "physics/world.h"
 
 namespace ponyhop {

@@ -6,8 +6,8 @@
 // The anchor does not rotate.
 #pragma once
 
-#include "physics/chain_params.h"
 #include "physics/kinematic.h"
+#include "physics/models/chain_params.h"
 
 namespace ponyhop {
 

@@ -1,4 +1,4 @@
-#include "physics/keyframes.h"
+#include "physics/models/keyframes.h"
 
 #include <Eigen/Sparse>
 #include <algorithm>

@@ -8,7 +8,7 @@
 #include <numbers>
 #include <vector>
 
-#include "physics/chain.h"
+#include "physics/models/chain.h"
 
 namespace ponyhop {
 namespace {

@@ -1,7 +1,7 @@
 // The hopper's body and legs as collision shapes (physics/shapes.h), as they are drawn
 // (engine/scene_draw.cpp): the body's main hull a capsule along its x axis and its two side pods
 // tapered capsules beside it, the upper leg and the foot's rod tapered capsules. The toe
-// sphere keeps its own ground contact (physics/contact.h, GroundContact): the foot's capsule stops
+// sphere keeps its own ground contact (physics/models/hopper_foot.h, GroundContact): the foot's capsule stops
 // two toe radii above the toe's centre, so the two never touch the ground at the same place.
 #pragma once
 
@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "physics/collisions.h"
-#include "physics/hopper.h"
+#include "physics/models/hopper.h"
 
 namespace ponyhop {
 

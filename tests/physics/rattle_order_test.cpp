@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "common/physics_util.h"
-#include "physics/chain.h"
-#include "physics/hopper.h"
+#include "physics/models/chain.h"
+#include "physics/models/hopper.h"
 
 namespace ponyhop {
 namespace {

@@ -8,8 +8,8 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "physics/chain.h"
 #include "physics/constraint.h"
+#include "physics/models/chain.h"
 #include "physics/tree_solver.h"
 
 #if defined(__SANITIZE_ADDRESS__)

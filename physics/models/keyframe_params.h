@@ -1,5 +1,5 @@
 // Keyframes of a kinematic body (the head): poses at times. The curve through them is built by
-// physics/keyframes.h (C2 in position and orientation, so accelerations are continuous).
+// physics/models/keyframes.h (C2 in position and orientation, so accelerations are continuous).
 #pragma once
 
 #include <Eigen/Core>

@@ -1,6 +1,8 @@
 // The canonical chain (8 identical links of 5 cm, released horizontally from a fixed anchor)
 // against what is known: energy conservation, convergence order, joint drift under projection,
 // workless joints, Galilean invariance, Kelvin's minimum-energy start.
+#include "physics/models/chain.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,7 +10,6 @@
 #include <vector>
 
 #include "common/physics_util.h"
-#include "physics/chain.h"
 #include "physics/spherical_joint.h"
 #include "physics/stability_monitor.h"
 

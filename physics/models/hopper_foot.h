@@ -1,6 +1,6 @@
 // The foot against the ground: an active-set Lagrange-multiplier contact (in the spirit of the
 // method, exact; why this and not a stiff spring: docs/HOPPER.md). The ground is the plane z = 0,
-// or a terrain of boxes on it (physics/terrain.h) met through the tangent plane under the toe,
+// or a terrain of boxes on it (physics/models/terrain.h) met through the tangent plane under the toe,
 // n . y = level (n = +z, level = 0 on the plane; the formulas below are written for it).
 //
 // The foot's toe is a sphere (centre c fixed in the foot, radius rho). Its contact is one
@@ -15,7 +15,7 @@
 //   Slide  C = n . c - level - rho (1 row, the normal force N); kinetic friction mu N against the
 //          slip direction acts at the contact point (KineticFriction) with the N of the same
 //          joint-force solve: the solve is linear in the friction's magnitude, so two solves give
-//          the consistent N exactly (slideForces in contact.cpp).
+//          the consistent N exactly (slideForces in hopper_foot.cpp).
 //
 // GroundContact decides the mode after every step (World's contact stage):
 //   touchdown  Off and the sphere reaches the plane moving down: positions projected onto C = 0
@@ -52,7 +52,7 @@
 #include "physics/constraint.h"
 #include "physics/controller.h"
 #include "physics/force_elements.h"
-#include "physics/terrain.h"
+#include "physics/models/terrain.h"
 #include "physics/world.h"
 
 namespace ponyhop {
@@ -167,7 +167,7 @@ class GroundContact final : public ContactSet {
   void checkSlide(World& world, int row);
   // Slide: the normal force N and the kinetic friction mu N solved together at the current state.
   void slideForces(World& world);
-  // The touchdown impulse with friction in the same solve (contact.cpp): applied to the
+  // The touchdown impulse with friction in the same solve (hopper_foot.cpp): applied to the
   // velocities; `sticks` when it stops the slip inside the cone.
   struct Impact {
     Eigen::Vector3d slip = Eigen::Vector3d::Zero();      // tangential velocity of the contact point after

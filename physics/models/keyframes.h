@@ -24,8 +24,8 @@
 #include <string>
 #include <vector>
 
-#include "physics/keyframe_params.h"
 #include "physics/kinematic.h"
+#include "physics/models/keyframe_params.h"
 
 namespace ponyhop {
 

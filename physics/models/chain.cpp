@@ -1,15 +1,29 @@
-#include "physics/chain.h"
+#include "physics/models/chain.h"
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 
-#include "physics/anchor_motion.h"
 #include "physics/force_elements.h"
+#include "physics/models/anchor_motion.h"
 #include "physics/spherical_joint.h"
 #include "physics/validate.h"
 
 namespace ponyhop {
+
+std::string validate(const ChainParams& p, const std::string& prefix) {
+  if (std::string e = checkRanges(p, prefix); !e.empty()) return e;
+  if (!(p.links >= 1)) return prefix + ".links must be at least 1";
+  if (!(p.length > 0.0) || !(p.mass > 0.0) || !(p.radius > 0.0) || !(p.taper > 0.0)) {
+    return prefix + ".length, .mass, .radius and .taper must be positive";
+  }
+  if (!(p.direction.norm() > 1e-9)) {
+    return prefix + ".direction = (0, 0, 0): must be a non-zero vector (the chain's initial direction)";
+  }
+  return "";
+}
+
+std::string validate(const AnchorParams& p, const std::string& prefix) { return checkRanges(p, prefix); }
 
 namespace {
 

@@ -1,7 +1,7 @@
 // The ground: the plane z = 0 and boxes fixed in the world standing on it or in it (a step is a
 // box, a slope a tilted box), taken together as one solid, their union. Eigen only.
 //
-// The hopper's toe (physics/contact.h, GroundContact) asks it for the tangent plane under the toe:
+// The hopper's toe (physics/models/hopper_foot.h, GroundContact) asks it for the tangent plane under the toe:
 // the nearest solid's signed distance, its outward normal and the plane's level n . y = level. The
 // union's signed distance is the least of the solids' (exact outside the union, which is where a
 // contact is looked for). The plane z = 0 answers first on a tie, with n = +z and level 0 exactly,

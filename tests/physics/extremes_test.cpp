@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "physics/chain.h"
-#include "physics/hopper.h"
+#include "physics/models/chain.h"
+#include "physics/models/hopper.h"
 
 namespace ponyhop {
 namespace {
@@ -202,7 +202,7 @@ TEST(PhysicsExtremes, ShakingAndWhirlingHead) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The hopper (physics/hopper.h): World::step runs its Think, then the stages, at the hopper scene's
+// The hopper (physics/models/hopper.h): World::step runs its Think, then the stages, at the hopper scene's
 // dt = 1 ms. Joint bound: hip and knee error below 1e-9 m.
 
 struct HopperRun {

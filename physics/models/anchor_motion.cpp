@@ -1,4 +1,4 @@
-#include "physics/anchor_motion.h"
+#include "physics/models/anchor_motion.h"
 
 #include <cmath>
 #include <numbers>

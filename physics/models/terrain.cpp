@@ -1,4 +1,4 @@
-#include "physics/terrain.h"
+#include "physics/models/terrain.h"
 
 #include <cmath>
 #include <numbers>

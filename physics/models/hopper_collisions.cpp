@@ -1,4 +1,4 @@
-#include "physics/hopper_collisions.h"
+#include "physics/models/hopper_collisions.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>

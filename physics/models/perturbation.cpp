@@ -1,4 +1,4 @@
-#include "physics/perturbation.h"
+#include "physics/models/perturbation.h"
 
 #include <cmath>
 

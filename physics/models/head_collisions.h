@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "physics/chain.h"
 #include "physics/collisions.h"
+#include "physics/models/chain.h"
 
 namespace ponyhop {
 

@@ -1,6 +1,8 @@
 // Reduced coordinates (physics.solver = featherstone): ABA, RNEA and CRBA checked against each
 // other and against the multiplier solvers; joints held exactly; plain messages for what it
 // cannot express.
+#include "physics/featherstone.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
@@ -8,8 +10,7 @@
 #include <vector>
 
 #include "common/physics_util.h"
-#include "physics/chain.h"
-#include "physics/featherstone.h"
+#include "physics/models/chain.h"
 #include "physics/prismatic_joint.h"
 #include "physics/spherical_joint.h"
 

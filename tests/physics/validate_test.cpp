@@ -1,13 +1,14 @@
 // Physics refuses nonsense with a message that names the field and the allowed range, and a
 // world that goes wrong stops with a status naming the time, the stage and the likely cause.
+#include "physics/validate.h"
+
 #include <gtest/gtest.h>
 
 #include <limits>
 #include <string>
 
-#include "physics/chain.h"
+#include "physics/models/chain.h"
 #include "physics/spherical_joint.h"
-#include "physics/validate.h"
 
 namespace ponyhop {
 namespace {

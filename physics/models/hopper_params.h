@@ -1,6 +1,6 @@
 // The Raibert hopper's parameters (plain data, defaults in the spirit of Raibert's machines:
 // a 10 kg body, a 1 kg leg of 0.8 m, a leg spring that gives about 0.2 s of stance) and its
-// commands. The state machine, the controller and the contact live in physics/hopper.h.
+// commands. The state machine, the controller and the contact live in physics/models/hopper.h.
 #pragma once
 
 #include <Eigen/Core>
@@ -104,7 +104,7 @@ struct HopperParams {
   // Ground contact (plane z = 0).
   double friction = 1.0;       // Coulomb mu
   double twist_radius = 0.02;  // m, torsional friction limit = mu * normal force * twist_radius
-  // m, touchdowns are located within the step to this depth (physics/contact.h); 0: at the end
+  // m, touchdowns are located within the step to this depth (physics/models/hopper_foot.h); 0: at the end
   // of the step in which they happen
   double impact_tolerance = 1e-4;
 

@@ -1,4 +1,4 @@
-#include "physics/hopper.h"
+#include "physics/models/hopper.h"
 
 #include <algorithm>
 #include <cmath>

@@ -3,7 +3,7 @@
 // upper leg on a prismatic knee, hopping on the ground plane z = 0.
 //
 //   body ── hip: SphericalJoint (3 rows) ── upper leg ── knee: PrismaticJoint (5 rows) ── foot
-//   foot ── ground: GroundContact (0, 1, 3 or 4 rows: physics/contact.h)
+//   foot ── ground: GroundContact (0, 1, 3 or 4 rows: physics/models/hopper_foot.h)
 //
 // Control follows the method's split (seed 000, "Think" / "ComputeControllerForces"):
 //   Hopper::think(world)   once per step, first in World::step(): the state machine over the hop
@@ -22,9 +22,9 @@
 #include <memory>
 #include <string>
 
-#include "physics/contact.h"
 #include "physics/controller.h"
-#include "physics/hopper_params.h"
+#include "physics/models/hopper_foot.h"
+#include "physics/models/hopper_params.h"
 #include "physics/world.h"
 
 namespace ponyhop {
@@ -86,7 +86,7 @@ class Hopper final : public Controller {
   // a controller (think + muscles) and its contact as a contact set: world.step() then runs it.
   // Invalid params: the world stops with the message (world.status()), nothing is built, and
   // built() is false.
-  // The toe meets `terrain` (physics/terrain.h), or the plane z = 0 when it is null.
+  // The toe meets `terrain` (physics/models/terrain.h), or the plane z = 0 when it is null.
   static std::shared_ptr<Hopper> add(World& world, const HopperParams& params,
                                      std::shared_ptr<const Terrain> terrain = nullptr);
   Hopper(Key, World& world, const HopperParams& params, std::shared_ptr<const Terrain> terrain);
@@ -114,11 +114,9 @@ class Hopper final : public Controller {
   // ("hopper.command.height = 9: must be ..."), leaving the command unchanged.
   std::string setCommand(const HopperCommand& command);
   bool inContact() const { return contact_->inContact(); }
-  int hops() const { return mem_.hops; }  // liftoffs so far
-  double measuredStanceTime() const { return mem_.stance_time; }
-  double lastApex() const { return mem_.last_apex; }                         // m, body height at the last apex
-  double thrust() const { return mem_.thrust; }                              // m, last thrust setpoint extension
-  Eigen::Vector2d desiredVelocity() const { return mem_.desired_velocity; }  // m/s, slewed command
+  int hops() const { return mem_.hops; }              // liftoffs so far
+  double lastApex() const { return mem_.last_apex; }  // m, body height at the last apex
+  double thrust() const { return mem_.thrust; }       // m, last thrust setpoint extension
 
   LegState leg(const World& world) const { return legState(model_, world.bodies()); }
   Eigen::Vector3d footPoint(const World& world) const { return contact_->point(world); }

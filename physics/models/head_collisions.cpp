@@ -1,4 +1,4 @@
-#include "physics/head_collisions.h"
+#include "physics/models/head_collisions.h"
 
 #include <mutex>
 #include <numbers>
