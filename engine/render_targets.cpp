@@ -62,51 +62,55 @@ void Renderer::Impl::ensureTargets(int w, int h, int samples, bool post) {
     glBindFramebuffer(GL_FRAMEBUFFER, post_src_fbo);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, post_src_tex, 0);
   }
-  if (samples == 1) {
-    if (!surf_fbo) {
-      glGenFramebuffers(1, &surf_fbo);
-      glGenTextures(1, &surf_tex);
-      glGenTextures(1, &key_tex);
-      glGenTextures(1, &rest_tex);
-    }
-    // Full float: the shadow search sees exactly the position the forward shader has, and the
-    // radiance is combined as the forward shader combines it.
-    for (GLuint t : {surf_tex, key_tex, rest_tex}) {
-      glBindTexture(GL_TEXTURE_2D, t);
-      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
-      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    }
-    glBindFramebuffer(GL_FRAMEBUFFER, surf_fbo);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, surf_tex, 0);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, key_tex, 0);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, rest_tex, 0);
-    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
-    glDrawBuffers(3, bufs);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, msaa_depth);
-    if (!ground_lo_fbo) {
-      glGenFramebuffers(1, &ground_up_fbo);
-      glGenFramebuffers(1, &ground_lo_fbo);
-      glGenTextures(1, &ground_lo_tex);
-      glGenRenderbuffers(1, &ground_lo_depth);
-    }
-    ground_lo_w = (w + 1) / 2;
-    ground_lo_h = (h + 1) / 2;
-    glBindTexture(GL_TEXTURE_2D, ground_lo_tex);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, ground_lo_w, ground_lo_h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
-    linearClampToEdge();
-    glBindFramebuffer(GL_FRAMEBUFFER, ground_lo_fbo);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, ground_lo_tex, 0);
-    glBindRenderbuffer(GL_RENDERBUFFER, ground_lo_depth);
-    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT16, ground_lo_w, ground_lo_h);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, ground_lo_depth);
-    glBindFramebuffer(GL_FRAMEBUFFER, ground_up_fbo);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, main_color_tex, 0);
-  }
+  if (samples == 1) ensureSingleSampleTargets(w, h);
   target_w = w;
   target_h = h;
   target_samples = samples;
   target_post = post;
+}
+
+// Beside a single-sample main target: the deferred shading's surface targets, sharing its depth
+// buffer, and the half-resolution ground with the target that upsamples it into the main colour.
+void Renderer::Impl::ensureSingleSampleTargets(int w, int h) {
+  if (!surf_fbo) {
+    glGenFramebuffers(1, &surf_fbo);
+    glGenTextures(1, &surf_tex);
+    glGenTextures(1, &key_tex);
+    glGenTextures(1, &rest_tex);
+  }
+  // Full float: the shadow search sees exactly the position the forward shader has, and the
+  // radiance is combined as the forward shader combines it.
+  for (GLuint t : {surf_tex, key_tex, rest_tex}) {
+    glBindTexture(GL_TEXTURE_2D, t);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, surf_fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, surf_tex, 0);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, key_tex, 0);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, rest_tex, 0);
+  const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+  glDrawBuffers(3, bufs);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, msaa_depth);
+  if (!ground_lo_fbo) {
+    glGenFramebuffers(1, &ground_up_fbo);
+    glGenFramebuffers(1, &ground_lo_fbo);
+    glGenTextures(1, &ground_lo_tex);
+    glGenRenderbuffers(1, &ground_lo_depth);
+  }
+  ground_lo_w = (w + 1) / 2;
+  ground_lo_h = (h + 1) / 2;
+  glBindTexture(GL_TEXTURE_2D, ground_lo_tex);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, ground_lo_w, ground_lo_h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+  linearClampToEdge();
+  glBindFramebuffer(GL_FRAMEBUFFER, ground_lo_fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, ground_lo_tex, 0);
+  glBindRenderbuffer(GL_RENDERBUFFER, ground_lo_depth);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT16, ground_lo_w, ground_lo_h);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, ground_lo_depth);
+  glBindFramebuffer(GL_FRAMEBUFFER, ground_up_fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, main_color_tex, 0);
 }
 
 void Renderer::Impl::ensureShadowMap(int size) {

@@ -95,12 +95,8 @@ Renderer::~Renderer() {
   if (I.queries[0][0]) glDeleteQueries(2 * Impl::kPasses, &I.queries[0][0]);
 }
 
-bool Renderer::init(std::string* err) {
-  if (!glCreateProgram) {
-    if (err) *err = "Renderer::init: GL is not loaded (call loadGL or create a HeadlessContext first)";
-    return false;
-  }
-  Impl& I = *impl_;
+// Compiles and links every program; false + message at the first that fails.
+bool Renderer::Impl::buildPrograms(std::string* err) {
   using namespace shaders;
   struct P {
     GLuint* out;
@@ -110,40 +106,44 @@ bool Renderer::init(std::string* err) {
     const char* defines = nullptr;
   };
   const P progs[] = {
-      {&I.prog_mesh, "mesh", kMeshVS, kLitFS},
-      {&I.prog_mesh_mat, "mesh with materials", kMeshMatVS, kMeshMatFS},
-      {&I.prog_hull, "hull", kCapsuleVS, kLitFS},
-      {&I.prog_ground, "ground", kGroundVS, kGroundFS},
-      {&I.prog_ground_shadow, "ground shadow", kFullscreenVS, kGroundShadowFS},
-      {&I.prog_lines, "lines", kLinesVS, kLinesFS},
-      {&I.prog_mesh_depth, "mesh depth", kMeshVS, kDepthFS},
-      {&I.prog_hull_depth, "hull depth", kCapsuleVS, kDepthFS},
-      {&I.prog_post, "post AA", kFullscreenVS, kPostAaFS},
-      {&I.prog_bg, "background", kFullscreenVS, kBackgroundFS},
-      {&I.prog_hair, "hair", kHairVS, kHairFS},
-      {&I.prog_hair_depth, "hair depth", kHairVS, kDepthFS},
-      {&I.prog_mesh_split, "mesh (deferred)", kMeshVS, kLitFS, kSplitLightDefine},
-      {&I.prog_mesh_mat_split, "mesh with materials (deferred)", kMeshMatVS, kMeshMatFS, kSplitLightDefine},
-      {&I.prog_hull_split, "hull (deferred)", kCapsuleVS, kLitFS, kSplitLightDefine},
-      {&I.prog_hair_split, "hair (deferred)", kHairVS, kHairFS, kSplitLightDefine},
-      {&I.prog_deferred, "deferred shading", kFullscreenVS, kDeferredFS},
-      {&I.prog_deferred_class, "deferred shading (lit and unlit)", kFullscreenVS, kDeferredFS, kShadowClassifyDefine},
-      {&I.prog_ground_up, "ground (upsampled)", kGroundUpVS, kGroundUpFS},
-      {&I.prog_ground_near, "ground (near)", kGroundVS, kGroundFS, kGroundNearDefine},
-      {&I.prog_ground_near_lit, "ground (near, lit)", kGroundVS, kGroundFS, kGroundNearLitDefine},
-      {&I.prog_ground_shadow_class, "ground shadow (classify)", kFullscreenVS, kGroundShadowFS, kShadowClassifyDefine},
-      {&I.prog_post_class, "post AA (edges)", kFullscreenVS, kPostAaFS, kPostEdgesDefine}};
+      {&prog_mesh, "mesh", kMeshVS, kLitFS},
+      {&prog_mesh_mat, "mesh with materials", kMeshMatVS, kMeshMatFS},
+      {&prog_hull, "hull", kCapsuleVS, kLitFS},
+      {&prog_ground, "ground", kGroundVS, kGroundFS},
+      {&prog_ground_shadow, "ground shadow", kFullscreenVS, kGroundShadowFS},
+      {&prog_lines, "lines", kLinesVS, kLinesFS},
+      {&prog_mesh_depth, "mesh depth", kMeshVS, kDepthFS},
+      {&prog_hull_depth, "hull depth", kCapsuleVS, kDepthFS},
+      {&prog_post, "post AA", kFullscreenVS, kPostAaFS},
+      {&prog_bg, "background", kFullscreenVS, kBackgroundFS},
+      {&prog_hair, "hair", kHairVS, kHairFS},
+      {&prog_hair_depth, "hair depth", kHairVS, kDepthFS},
+      {&prog_mesh_split, "mesh (deferred)", kMeshVS, kLitFS, kSplitLightDefine},
+      {&prog_mesh_mat_split, "mesh with materials (deferred)", kMeshMatVS, kMeshMatFS, kSplitLightDefine},
+      {&prog_hull_split, "hull (deferred)", kCapsuleVS, kLitFS, kSplitLightDefine},
+      {&prog_hair_split, "hair (deferred)", kHairVS, kHairFS, kSplitLightDefine},
+      {&prog_deferred, "deferred shading", kFullscreenVS, kDeferredFS},
+      {&prog_deferred_class, "deferred shading (lit and unlit)", kFullscreenVS, kDeferredFS, kShadowClassifyDefine},
+      {&prog_ground_up, "ground (upsampled)", kGroundUpVS, kGroundUpFS},
+      {&prog_ground_near, "ground (near)", kGroundVS, kGroundFS, kGroundNearDefine},
+      {&prog_ground_near_lit, "ground (near, lit)", kGroundVS, kGroundFS, kGroundNearLitDefine},
+      {&prog_ground_shadow_class, "ground shadow (classify)", kFullscreenVS, kGroundShadowFS, kShadowClassifyDefine},
+      {&prog_post_class, "post AA (edges)", kFullscreenVS, kPostAaFS, kPostEdgesDefine}};
   for (const P& p : progs) {
     if (!(*p.out = buildProgram(p.name, p.vs, p.fs, err, p.defines))) return false;
-    I.programs.push_back(*p.out);
+    programs.push_back(*p.out);
   }
+  return true;
+}
 
+// The primitives' templates, the raw-depth sampler and the streamed vertex arrays (lines, hair).
+void Renderer::Impl::makeStaticGeometry() {
   // Hull template: 24 slices x 8 rings per cap (768 triangles); instanced. Smooth at the sizes
   // links have on screen (tens of pixels); the normals are exact, only the outline is polygonal.
   // The shadow pass draws a coarser one, 16 slices x 4 rings (256 triangles): llvmpipe's cost
   // there is per triangle, and its outline stays within 2 % of the radius of the true one (about
   // a shadow texel for the hopper's body), inside it, so that no surface shadows itself.
-  glGenBuffers(1, &I.hull_instances);
+  glGenBuffers(1, &hull_instances);
   const auto makeHullVao = [&](int slices, int rings, GLuint& vao, GLuint& vbo, GLuint& ebo) {
     const HullTemplate ht = makeHullTemplate(slices, rings);
     glGenVertexArrays(1, &vao);
@@ -158,7 +158,7 @@ bool Renderer::init(std::string* err) {
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
     glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(ht.indices.size() * sizeof(uint32_t)), ht.indices.data(),
                  GL_STATIC_DRAW);
-    glBindBuffer(GL_ARRAY_BUFFER, I.hull_instances);
+    glBindBuffer(GL_ARRAY_BUFFER, hull_instances);
     const GLsizei stride = sizeof(HullInstance);
     const struct {
       GLuint index;
@@ -175,24 +175,24 @@ bool Renderer::init(std::string* err) {
     }
     return ht.indices.size();
   };
-  const size_t hull_indices = makeHullVao(24, 8, I.hull_vao, I.hull_vbo, I.hull_ebo);
-  I.hull_index_count = GLsizei(hull_indices);
-  I.hull_triangles = hull_indices / 3;
-  I.hull_shadow_index_count = GLsizei(makeHullVao(16, 4, I.hull_shadow_vao, I.hull_shadow_vbo, I.hull_shadow_ebo));
+  const size_t hull_indices = makeHullVao(24, 8, hull_vao, hull_vbo, hull_ebo);
+  hull_index_count = GLsizei(hull_indices);
+  hull_triangles = hull_indices / 3;
+  hull_shadow_index_count = GLsizei(makeHullVao(16, 4, hull_shadow_vao, hull_shadow_vbo, hull_shadow_ebo));
 
-  glGenSamplers(1, &I.raw_depth_sampler);
-  glSamplerParameteri(I.raw_depth_sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  glSamplerParameteri(I.raw_depth_sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  glSamplerParameteri(I.raw_depth_sampler, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glSamplerParameteri(I.raw_depth_sampler, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  glSamplerParameteri(I.raw_depth_sampler, GL_TEXTURE_COMPARE_MODE, GL_NONE);
+  glGenSamplers(1, &raw_depth_sampler);
+  glSamplerParameteri(raw_depth_sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glSamplerParameteri(raw_depth_sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glSamplerParameteri(raw_depth_sampler, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glSamplerParameteri(raw_depth_sampler, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glSamplerParameteri(raw_depth_sampler, GL_TEXTURE_COMPARE_MODE, GL_NONE);
 
-  glGenVertexArrays(1, &I.empty_vao);  // core profile: a draw needs a VAO even without attributes
+  glGenVertexArrays(1, &empty_vao);  // core profile: a draw needs a VAO even without attributes
 
-  glGenVertexArrays(1, &I.lines_vao);
-  glBindVertexArray(I.lines_vao);
-  glGenBuffers(1, &I.lines_vbo);
-  glBindBuffer(GL_ARRAY_BUFFER, I.lines_vbo);
+  glGenVertexArrays(1, &lines_vao);
+  glBindVertexArray(lines_vao);
+  glGenBuffers(1, &lines_vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, lines_vbo);
   glEnableVertexAttribArray(0);
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(LineVertex), nullptr);
   glEnableVertexAttribArray(1);
@@ -200,12 +200,12 @@ bool Renderer::init(std::string* err) {
                         reinterpret_cast<const void*>(offsetof(LineVertex, color)));
 
   // Hair: positions, tangents, normals, colours and (half width, occlusion) per vertex, streamed.
-  glGenVertexArrays(1, &I.hair_vao);
-  glBindVertexArray(I.hair_vao);
-  glGenBuffers(1, &I.hair_vbo);
-  glBindBuffer(GL_ARRAY_BUFFER, I.hair_vbo);
-  glGenBuffers(1, &I.hair_ebo);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, I.hair_ebo);
+  glGenVertexArrays(1, &hair_vao);
+  glBindVertexArray(hair_vao);
+  glGenBuffers(1, &hair_vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, hair_vbo);
+  glGenBuffers(1, &hair_ebo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, hair_ebo);
   const size_t hair_attr[] = {offsetof(HairVertex, pos), offsetof(HairVertex, tangent), offsetof(HairVertex, normal),
                               offsetof(HairVertex, color), offsetof(HairVertex, half_width)};
   for (GLuint a = 0; a < 5; ++a) {
@@ -214,7 +214,16 @@ bool Renderer::init(std::string* err) {
                           reinterpret_cast<const void*>(hair_attr[a]));
   }
   glBindVertexArray(0);
+}
 
+bool Renderer::init(std::string* err) {
+  if (!glCreateProgram) {
+    if (err) *err = "Renderer::init: GL is not loaded (call loadGL or create a HeadlessContext first)";
+    return false;
+  }
+  Impl& I = *impl_;
+  if (!I.buildPrograms(err)) return false;
+  I.makeStaticGeometry();
   I.box_mesh = upload(makeBoxMesh(Eigen::Vector3f(1, 1, 1))).id;
   {
     const std::string name = glRendererName();
@@ -229,6 +238,7 @@ bool Renderer::init(std::string* err) {
   }
   return true;
 }
+
 // ---------------------------------------------------------------------------------------------
 // [SECTION] The draw list
 

@@ -201,6 +201,10 @@ struct Renderer::Impl {
   void endPass(Pass p, RenderStats& st);
   void collectGpuTimes(RenderStats& st);
 
+  // Construction (renderer.cpp).
+  bool buildPrograms(std::string* err);
+  void makeStaticGeometry();
+
   // Planning (frame_plan.cpp).
   FramePlan planFrame() const;
   void planShadows(FramePlan& f) const;
@@ -219,6 +223,7 @@ struct Renderer::Impl {
 
   // Targets (render_targets.cpp).
   void ensureTargets(int w, int h, int samples, bool post);
+  void ensureSingleSampleTargets(int w, int h);  // with ensureTargets(w, h, 1, post)
   void ensureShadowMap(int size);
   void ensureGroundShadow(int size);
   void bindShadowTextures(bool ground_shadow);  // units 0, 1: the shadow map; 2: the ground's
