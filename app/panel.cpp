@@ -1,3 +1,11 @@
+// Index of this file:
+// [SECTION] Helpers: field defaults, JSON, sliders, the velocity pad
+// [SECTION] FieldWidgets and the section visitors: one widget per field
+// [SECTION] PanelContext: the ImGui context, its font and input
+// [SECTION] Panel: state, layout and build()
+// [SECTION] Panel: the parts of the panel
+// [SECTION] Panel: keys, mouse, the camera and the view's overlay
+
 #include "app/panel.h"
 
 #include <imgui.h>
@@ -18,6 +26,9 @@
 
 namespace ponyhop {
 namespace {
+
+// ---------------------------------------------------------------------------------------------
+// [SECTION] Helpers: field defaults, JSON, sliders, the velocity pad
 
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
@@ -227,6 +238,7 @@ Eigen::Vector3d closestOnSegment(const Eigen::Vector3d& o, const Eigen::Vector3d
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
+// [SECTION] FieldWidgets and the section visitors: one widget per field
 // The reflect() visitor that draws one widget per field.
 
 class FieldWidgets {
@@ -474,6 +486,7 @@ class NestedSection {
 };
 
 // ---------------------------------------------------------------------------------------------
+// [SECTION] PanelContext: the ImGui context, its font and input
 
 PanelContext::PanelContext(float font_px) {
   IMGUI_CHECKVERSION();
@@ -539,6 +552,7 @@ void feedInput(const UiInput& in) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// [SECTION] Panel: state, layout and build()
 
 Panel::Panel(LiveSim& sim) : sim_(sim), preset_path_(sim.applied().path) {
   camera_ = cameraAt(sim_.applied().camera, 0.0);
@@ -617,6 +631,9 @@ void Panel::build(const PanelLayout& layout, bool advance) {
   }
   drawViewOverlay(layout);
 }
+
+// ---------------------------------------------------------------------------------------------
+// [SECTION] Panel: the parts of the panel
 
 void Panel::drawPlayback() {
   const float w = ImGui::GetFontSize() * 4.6f;
@@ -891,6 +908,9 @@ void Panel::drawCameraTools() {
     ImGui::TextDisabled("Drag the view to orbit; right-drag pans; wheel zooms");
   }
 }
+
+// ---------------------------------------------------------------------------------------------
+// [SECTION] Panel: keys, mouse, the camera and the view's overlay
 
 void Panel::handleKeys() {
   ImGuiIO& io = ImGui::GetIO();

@@ -1,3 +1,16 @@
+// The GLSL sources of the renderer's programs (engine/shaders.h names them) and buildProgram.
+// Every fragment shader is compiled after kCommonFS; what each program draws: docs/RENDERING.md.
+//
+// Index of this file:
+// [SECTION] Common fragment code: lights, shadows, tone mapping, the radiance's two parts
+// [SECTION] Meshes and hulls (spheres, capsules)
+// [SECTION] Hair
+// [SECTION] The ground, the deferred shading, the upsampled ground, the background, the ground's shadow
+// [SECTION] Post-process anti-aliasing
+// [SECTION] The full-screen triangle
+// [SECTION] Debug lines, depth only
+// [SECTION] Compiling and linking
+
 #include "engine/shaders.h"
 
 #include <glad/gl.h>
@@ -8,6 +21,7 @@
 namespace ponyhop::shaders {
 
 // ---------------------------------------------------------------------------------------------
+// [SECTION] Common fragment code: lights, shadows, tone mapping, the radiance's two parts
 // Shared by the lit and ground fragment shaders: lights, shadow lookup, tone mapping, sRGB, the
 // background gradient (so that the ground can fade into exactly the colour behind it).
 static const char* const kCommonFS = R"GLSL(
@@ -210,6 +224,7 @@ void shadeTerms(vec3 P, vec3 N, vec3 albedo, float specular, float shininess, fl
   "#endif\n"
 
 // ---------------------------------------------------------------------------------------------
+// [SECTION] Meshes and hulls (spheres, capsules)
 const char* const kMeshVS = R"GLSL(
 layout(location = 0) in vec3 a_pos;
 layout(location = 1) in vec3 a_normal;
@@ -344,6 +359,7 @@ void main() {
 )GLSL";
 
 // ---------------------------------------------------------------------------------------------
+// [SECTION] Hair
 // Hair (engine/hair.h): strand vertices sit on the strand's centre line and are pushed sideways by
 // their signed half width, across the strand and the view (a ribbon that always faces the camera,
 // or the light in the shadow pass); tube vertices (half width 0) stay where they are.
@@ -424,12 +440,13 @@ void main() {
 )GLSL";
 
 // ---------------------------------------------------------------------------------------------
+// [SECTION] The ground, the deferred shading, the upsampled ground, the background, the ground's shadow
 // The ground: a square on the plane z = u_groundZ around the point looked at, as wide as the fade,
 // drawn after the objects. Its depth comes from rasterization, so the early depth test skips every
 // pixel an object covers (no shading wasted), and it still hides whatever is below the ground (its
 // fragments are nearer there). The background gradient fills what is left (kBackgroundFS at the
 // far plane), after it. Single-sample frames shade it at half resolution, alone, before the
-// objects (kGroundUpFS, renderer.cpp).
+// objects (kGroundUpFS, render_passes.cpp).
 const char* const kGroundVS = R"GLSL(
 uniform mat4 u_viewProj;
 uniform mat4 u_lightViewProj;
@@ -486,7 +503,7 @@ vec3 linearToSrgbFast(vec3 c) {
 
 // Compiled with GROUND_NEAR: for the part of the ground nearer the fade's centre than its start
 // (f = 0: no fade, no background); with GROUND_LIT as well: where the shadow texture is 1 (sh = 1).
-// The same colours, for less work per pixel (renderer.cpp draws each part with its program).
+// The same colours, for less work per pixel (drawGroundParts in render_passes.cpp draws each part with its program).
 void main() {
   vec3 P = v_world;
 #ifdef GROUND_NEAR
@@ -552,7 +569,7 @@ void main() {
 #ifdef SHADOW_CLASSIFY
   // The first of two passes: finish the pixels whose shadow is known without the filter (no key
   // light at all, or nothing above the surface: fully lit) and leave the others, by discarding
-  // them, to the second pass, the whole shadowFactor() (renderer.cpp).
+  // them, to the second pass, the whole shadowFactor() (deferredLightPass).
   if (max(key.r, max(key.g, key.b)) > 0.0 && !nothingAbove(s.xyz, unpackNormal(s.w))) discard;
   o_color = vec4(linearToSrgb(toneMap(key + rest)), 1.0);
 #else
@@ -562,7 +579,7 @@ void main() {
 )GLSL";
 
 // The ground shaded at half resolution (over the background), brought to full resolution
-// (renderer.cpp): before the objects, over the whole frame, a bilinear tap of it per pixel at the
+// (upsampleGroundPass): before the objects, over the whole frame, a bilinear tap of it per pixel at the
 // same place in the frame. The texture coordinate is a plain input, nothing computed from it.
 const char* const kGroundUpVS = R"GLSL(
 out vec2 v_uv;
@@ -615,6 +632,7 @@ void main() {
 )GLSL";
 
 // ---------------------------------------------------------------------------------------------
+// [SECTION] Post-process anti-aliasing
 // Post-process anti-aliasing of the finished (display-encoded) frame, after the idea of Lottes'
 // FXAA: where the local luma contrast is high, the edge's direction is estimated from the 2x2
 // corner lumas and the pixel is replaced by bilinear taps along that edge; a 4-tap average is
@@ -662,6 +680,7 @@ void main() {
 )GLSL";
 
 // ---------------------------------------------------------------------------------------------
+// [SECTION] The full-screen triangle
 const char* const kFullscreenVS = R"GLSL(
 void main() {
   vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
@@ -670,6 +689,7 @@ void main() {
 )GLSL";
 
 // ---------------------------------------------------------------------------------------------
+// [SECTION] Debug lines, depth only
 const char* const kLinesVS = R"GLSL(
 layout(location = 0) in vec3 a_pos;
 layout(location = 1) in vec3 a_color;
@@ -692,6 +712,7 @@ void main() {}
 )GLSL";
 
 // ---------------------------------------------------------------------------------------------
+// [SECTION] Compiling and linking
 static GLuint compile(GLenum stage, const char* const* parts, int count, const char* name, std::string* err) {
   GLuint s = glCreateShader(stage);
   glShaderSource(s, count, parts, nullptr);

@@ -308,7 +308,7 @@ TEST(Renderer, ACasterGoneSinceTheLastFrameLeavesNoShadow) {
 }
 
 // The shadow map has no more texels than the frame shows over the casters (light.shadow_match,
-// resolutionMatchedShadowSize in renderer.cpp): fewer for a small or distant view, all of
+// resolutionMatchedShadowSize in frame_plan.cpp): fewer for a small or distant view, all of
 // shadow_size for a close one or with hair, never fewer than 512 nor more than shadow_size, half in
 // draft; off, always shadow_size. And the matched map's picture passes the snapshot comparator
 // against the full map's.
@@ -394,7 +394,7 @@ TEST(Renderer, ShadowMapMatchesTheFrame) {
 }
 
 // A single-sample frame draws the rows above the horizon with the background's own pass rather
-// than the half-resolution ground's upsampling (renderer.cpp, sky_row): they must be the
+// than the half-resolution ground's upsampling (frame_plan.cpp, FramePlan::sky_row): they must be the
 // background a frame without a ground has, and the frame must have no seam where the two meet:
 // down every column the colour changes smoothly from the sky into the ground.
 TEST(Renderer, TheSkyAboveTheHorizonIsTheBackgroundWithoutASeam) {
@@ -426,7 +426,7 @@ TEST(Renderer, TheSkyAboveTheHorizonIsTheBackgroundWithoutASeam) {
   EXPECT_LT(worst_step, 4.5) << "a seam between the sky and the ground";
 }
 
-// A single-sample frame shades its objects deferred, in two passes (renderer.cpp): the pixels that
+// A single-sample frame shades its objects deferred, in two passes (deferredLightPass): the pixels that
 // need no shadow filter (fully lit, or no key light) first, then the filter on the rest. The
 // shadow on an object must come out as the forward shading (4x MSAA) computes it, pixel centre
 // for pixel centre: lit, penumbra and umbra of a sphere's shadow on a box's top.

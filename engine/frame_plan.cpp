@@ -1,0 +1,396 @@
+// FramePlan: what endFrame decides once, before it draws (engine/renderer_impl.h). Then the
+// rectangles that passes are cut to: the screen rectangles of the objects, the texel box of the
+// casters in the ground's shadow texture, and the pixel rectangle of the ground that it shadows.
+//
+// Index of this file:
+// [SECTION] The light's frustum and the shadow map's size
+// [SECTION] The plan
+// [SECTION] Where the passes run: screen and texel rectangles
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "engine/renderer_impl.h"
+
+namespace ponyhop {
+
+// ---------------------------------------------------------------------------------------------
+// [SECTION] The light's frustum and the shadow map's size
+
+namespace {
+
+// The fewest texels a side resolutionMatchedShadowSize() gives a shadow map.
+constexpr int kMinMatchedShadowSize = 512;
+
+Eigen::Matrix4d lookAlong(const Eigen::Vector3d& dir) {
+  // Rotation-only view matrix of a camera at the origin looking along `dir` (z up when possible).
+  Eigen::Vector3d f = dir.normalized();
+  Eigen::Vector3d up = std::abs(f.z()) > 0.99 ? Eigen::Vector3d(0, 1, 0) : Eigen::Vector3d(0, 0, 1);
+  Eigen::Vector3d s = f.cross(up).normalized();
+  Eigen::Vector3d u = s.cross(f);
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.block<1, 3>(0, 0) = s.transpose();
+  m.block<1, 3>(1, 0) = u.transpose();
+  m.block<1, 3>(2, 0) = -f.transpose();
+  return m;
+}
+
+Eigen::Matrix4d ortho(double l, double r, double b, double t, double n, double f) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m(0, 0) = 2.0 / (r - l);
+  m(1, 1) = 2.0 / (t - b);
+  m(2, 2) = -2.0 / (f - n);
+  m(0, 3) = -(r + l) / (r - l);
+  m(1, 3) = -(t + b) / (t - b);
+  m(2, 3) = -(f + n) / (f - n);
+  return m;
+}
+
+// Fits the light's orthographic box to the casters and to their shadows on the ground: the points
+// are the bounds' corners and those corners pushed along the light onto the ground (z = ground_z).
+// The square extent
+// is rounded up to steps of 2^(1/4) and the centre snapped to whole texels, so that a moving scene
+// changes the shadow map's texel grid rarely and only by whole texels (no crawling edges).
+LightFrustum fitLightFrustum(const Eigen::Vector3d& dir, const Eigen::AlignedBox3d& casters, int size,
+                             double softness_texels, double ground_z) {
+  LightFrustum lf;
+  const Eigen::Matrix4d V = lookAlong(dir);
+  const Eigen::Matrix3d R = V.block<3, 3>(0, 0);
+  Eigen::AlignedBox3d ls;  // light space
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d c = casters.corner(Eigen::AlignedBox3d::CornerType(i));
+    ls.extend(R * c);
+    const double above = c.z() - ground_z;
+    if (dir.z() < -1e-3 && above > 0.0) ls.extend(R * (c + dir * (above / -dir.z())));
+  }
+  double extent = std::max(ls.sizes().x(), ls.sizes().y());
+  extent = std::max(extent, 1e-3);
+  // Margin for the PCF kernel and the normal offset (a few texels).
+  extent *= 1.0 + (4.0 + 2.0 * softness_texels) / double(size);
+  extent = std::pow(2.0, std::ceil(std::log2(extent) * 4.0) / 4.0);
+  const double texel = extent / double(size);
+  Eigen::Vector2d center = 0.5 * (ls.min().head<2>() + ls.max().head<2>());
+  center = (center / texel).array().round().matrix() * texel;
+  const double depth_margin = 0.05 * std::max(ls.sizes().z(), extent) + 1e-3;
+  const double n = -ls.max().z() - depth_margin, f = -ls.min().z() + depth_margin;
+  const Eigen::Matrix4d P =
+      ortho(center.x() - extent / 2, center.x() + extent / 2, center.y() - extent / 2, center.y() + extent / 2, n, f);
+  lf.view_proj = P * V;
+  lf.texel_world = texel;
+  lf.depth_range = f - n;
+  return lf;
+}
+
+// The shadow map's side for a frame (light.shadow_match; draft takes half): as many texels as the
+// frame can show, at most `max_size`. A texel finer than a screen pixel adds nothing the picture
+// can hold (the soft filter averages over several texels anyway), while every texel costs the
+// clear, the casters' depth and the ground's shadow texture. The finest pixel is at the nearest
+// point of the casters and of their shadows on the ground (a box's nearest depth is at a corner),
+// where one pixel spans 2 z tan(fov / 2) / height metres; the side is the light frustum's extent
+// at `max_size` over that, rounded up to a step of 2^(1/4) (few distinct sizes, each reallocation
+// rare), and never below `min_size`: small frames keep the goldens' look (320x180) and thin parts
+// keep their shadows. Stateless: a frame gets the same map whatever was drawn before it.
+int resolutionMatchedShadowSize(const Camera& cam, int height, const Eigen::Vector3d& light_dir,
+                                const Eigen::AlignedBox3d& casters, double ground_z, double extent, int min_size,
+                                int max_size) {
+  const Eigen::Vector3d fwd = (cam.target - cam.eye).normalized();
+  double z = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d c = casters.corner(Eigen::AlignedBox3d::CornerType(i));
+    z = std::min(z, (c - cam.eye).dot(fwd));
+    const double above = c.z() - ground_z;
+    if (light_dir.z() < -1e-3 && above > 0.0)
+      z = std::min(z, (c + light_dir * (above / -light_dir.z()) - cam.eye).dot(fwd));
+  }
+  const double pixel = 2.0 * z * std::tan(0.5 * cam.fov * M_PI / 180.0) / double(std::max(height, 1));
+  if (!(pixel > 0.0) || !std::isfinite(pixel)) return max_size;  // a caster at or behind the eye
+  const double texels = extent / pixel;
+  if (texels >= double(max_size)) return max_size;
+  const int stepped = int(std::ceil(std::pow(2.0, std::ceil(std::log2(std::max(texels, 1.0)) * 4.0) / 4.0)));
+  return std::clamp(stepped, std::min(min_size, max_size), max_size);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// [SECTION] The plan
+
+FramePlan Renderer::Impl::planFrame() const {
+  FramePlan f;
+  f.w = std::clamp(params.width, 1, 16384);
+  f.h = std::clamp(params.height, 1, 16384);
+  // Quality: draft drops anti-aliasing and takes a half-size shadow map (512 at the default 1024)
+  // with a plain filter.
+  f.draft = params.quality == RenderQuality::Draft;
+  const bool aa = !f.draft && params.samples > 1;
+  f.msaa = aa && params.antialias == AntiAlias::Msaa;
+  f.post = aa && !f.msaa;
+  f.samples = f.msaa ? std::clamp(params.samples, 1, std::max(max_samples, 1)) : 1;
+  planShadows(f);
+  planView(f);
+  planPasses(f);
+  return f;
+}
+
+// The casters (every draw, or setShadowBounds), the light's direction, the shadow map's side
+// (matched to the frame unless there is hair), the shadow filter's radius and the light's frustum.
+void Renderer::Impl::planShadows(FramePlan& f) const {
+  f.casters = have_shadow_bounds ? shadow_bounds : draw_bounds;
+  Eigen::Vector3d ld = light.direction;
+  if (ld.norm() < 1e-9) ld = Eigen::Vector3d(-0.5, 0.6, -1.0);
+  f.light_dir = ld.normalized();
+  f.shadows_on = !f.casters.isEmpty() && light.intensity > 0.0;
+  if (!f.shadows_on) return;
+  const int max_size = std::clamp(light.shadow_size, 64, 8192);
+  const double extent =
+      fitLightFrustum(f.light_dir, f.casters, max_size, light.shadow_softness, params.ground_height).texel_world *
+      double(max_size);
+  // Not with hair: a strand is thinner than a texel (drawn a texel wide), and its shadow is the
+  // share of texels its depth covers, which depends on the texel's size whatever the pixel's
+  // (the chain's shadow on the ground at 1920x1080 came out lighter and grainy on a map of 609
+  // texels, whose texels were still a tenth of a pixel there).
+  const bool match = light.shadow_match && hair_draws.empty();
+  const int size = !match ? max_size
+                          : resolutionMatchedShadowSize(camera, f.h, f.light_dir, f.casters, params.ground_height,
+                                                        extent, kMinMatchedShadowSize, max_size);
+  f.shadow_size = f.draft ? std::max(256, size / 2) : size;
+  const int unmatched = f.draft ? std::max(256, max_size / 2) : max_size;
+  // (at most 8 texels, the widest the margins around the casters allow: only a shadow_size
+  // above 4096 matched down to 512 reaches it)
+  f.softness_texels =
+      std::min(std::clamp(light.shadow_softness, 0.0, 8.0) * double(unmatched) / double(f.shadow_size), 8.0);
+  f.frustum = fitLightFrustum(f.light_dir, f.casters, f.shadow_size, f.softness_texels, params.ground_height);
+}
+
+// The ground's fade, the near and far planes, the camera's and the light's matrices.
+void Renderer::Impl::planView(FramePlan& f) const {
+  const Camera& cam = camera;
+  const double D = std::max((cam.target - cam.eye).norm(), 1e-3);
+  // Ground fade measured from the point looked at: fully visible nearby, gone into the haze far.
+  f.fade_start = 2.0 * D + 1.0;
+  f.fade_end = 6.0 * D + 3.0;
+  f.ground_half = f.fade_end * 1.05;
+  double znear = cam.znear, zfar = cam.zfar;
+  if (znear <= 0.0) {
+    double nearest = D;
+    if (!draw_bounds.isEmpty()) nearest = std::sqrt(draw_bounds.squaredExteriorDistance(cam.eye));
+    if (params.ground) nearest = std::min(nearest, std::max(cam.eye.z() - params.ground_height, 0.0));
+    znear = std::clamp(0.5 * nearest, 0.002 * D + 1e-4, 0.05 * D + 0.01);
+  }
+  if (zfar <= 0.0) {
+    zfar = (cam.eye - cam.target).norm() + f.ground_half * 1.5 + 1.0;
+    if (!draw_bounds.isEmpty())
+      for (int i = 0; i < 8; ++i)
+        zfar = std::max(zfar, 1.1 * (draw_bounds.corner(Eigen::AlignedBox3d::CornerType(i)) - cam.eye).norm());
+  }
+  f.view_proj = (cam.projection(double(f.w) / double(f.h), znear, zfar) * cam.view()).cast<float>();
+  f.light_vp = f.frustum.view_proj.cast<float>();
+  f.normal_offset = float(1.5 * f.frustum.texel_world);
+}
+
+// Which of the main pass's parts run and how: the half-resolution ground and the sky row above
+// it, deferred shadows, the colour clear, the objects' clip plane.
+void Renderer::Impl::planPasses(FramePlan& f) const {
+  const Camera& cam = camera;
+  // Single-sample frames: the ground is shaded at half resolution (a quarter of the pixels) and
+  // upsampled bilinearly after the objects. Everything on it is smooth at the pixel scale: the
+  // shadow (a soft texture), the lighting, the fade, the background it fades into; the checker is
+  // box-filtered over the half-resolution pixel, so its edges stay anti-aliased, a pixel softer.
+  // It is most of a final frame's per-pixel shading, and llvmpipe pays for every pixel it shades.
+  // The upsampling is also the frame's background: one full-screen copy before the objects, into
+  // a target without a depth buffer, instead of the ground square (with its depth test and
+  // writes) and the background after them (see docs/RENDERING.md, Passes). What the ground hid,
+  // the object parts on its far side, is clipped at its plane instead (gl_ClipDistance in the
+  // objects' vertex shaders). ensureTargets makes the half-resolution target with every
+  // single-sample one.
+  f.half_ground = params.ground && f.samples == 1;
+  // Above the horizon there is no ground, only the background: those rows get the background's
+  // own full-screen pass (as a frame without a ground does) instead of the bilinear tap of a
+  // half-resolution copy of it, which costs llvmpipe more per pixel (docs/RENDERING.md, Passes);
+  // and the half-resolution target needs no background there. sky_row: the first pixel row (from
+  // the bottom) left to the background, 2 rows above the horizon's (the bilinear footprint: no
+  // tap below it reaches a texel with ground); h: no split (transparent, the eye below the
+  // ground, a rolled, upside-down or straight-down view, the horizon out of the frame).
+  f.sky_row = f.h;
+  if (f.half_ground && !params.transparent && cam.eye.z() > params.ground_height &&
+      cam.up.normalized().z() > 1.0 - 1e-9) {  // upright: neither rolled nor upside down
+    Eigen::Vector3d fwd = cam.target - cam.eye;
+    fwd.z() = 0.0;
+    if (fwd.norm() > 1e-9) {
+      // Every horizontal direction projects onto one row when the camera does not roll.
+      const Eigen::Vector4d c = f.view_proj.cast<double>() * Eigen::Vector4d(fwd.x(), fwd.y(), 0.0, 0.0);
+      if (c.w() > 1e-9) {
+        const double row = (c.y() / c.w() * 0.5 + 0.5) * f.h;
+        if (row > -4.0 && row < f.h - 4.0) f.sky_row = std::clamp(int(std::ceil(row)) + 2, 0, f.h);
+      }
+    }
+  }
+  const bool has_objects = !mesh_draws.empty() || !hulls.empty() || !hair_draws.empty();
+  // Deferred shading on a single-sample target: llvmpipe shades whole blocks of pixels, so on a
+  // mesh of small triangles a shadow search per fragment runs several times per covered pixel
+  // (and again for every hidden layer drawn first). Instead: 1) the objects, their lit shaders
+  // writing the visible surface (position, normal) and the two parts of its radiance into three
+  // targets, with the main depth buffer; 2) the shadow and the finished colour once per pixel of
+  // that surface. The objects are rasterized once, as without shadows. (ensureTargets makes the
+  // surface targets with every single-sample target.)
+  f.deferred = f.shadows_on && has_objects && f.samples == 1;
+  // The colour needs no clear unless the background is left out (transparent): the objects, then
+  // the ground and the background where the depth is still the cleared 1, write every pixel (what
+  // the clear cost: docs/RENDERING.md, Passes). Deferred: the surface targets are read only where
+  // an object is, and the colour target is another one. Over the half-resolution ground, its
+  // upsampling has written every pixel already, transparent or not.
+  f.clear_color = params.transparent && !f.half_ground;
+  // Over the half-resolution ground: clip away what is on the ground's far side from the eye (the
+  // ground square is not in the depth buffer to hide it). Otherwise the plane is 0 (nothing
+  // clipped): llvmpipe clips by gl_ClipDistance even with GL_CLIP_DISTANCE0 disabled
+  // (Renderer.TheGroundHidesWhatIsBelowIt, with MSAA).
+  f.clip_side = !f.half_ground ? 0.0f : cam.eye.z() >= params.ground_height ? 1.0f : -1.0f;
+}
+
+// ---------------------------------------------------------------------------------------------
+// [SECTION] Where the passes run: screen and texel rectangles
+
+// The pixel rectangles that the draw list and the debug lines cover in the main pass, each grown
+// by the post filter's reach (its taps go 4 px along an edge): one per draw (its bounding box,
+// projected), merged while a merge adds no more pixels than the two overlap or than a few 16x16
+// blocks. The full-screen passes that only matter where an object is (the deferred shading, the
+// post filter) run scissored to each: llvmpipe pays for every block a triangle covers, even where
+// the early depth test then rejects it, and a hopper's body, leg and hair fill a third of their
+// common box. False when they cover nearly the whole frame anyway, or a point is behind the eye
+// (its projection is not bounded).
+bool Renderer::Impl::screenRects(const Eigen::Matrix4f& view_proj, int w, int h, std::vector<PixelRect>& out) const {
+  out.clear();
+  if (draw_bounds.isEmpty() && lines.empty()) return false;
+  constexpr int kReach = 6;
+  double x0 = 1e30, y0 = 1e30, x1 = -1e30, y1 = -1e30;
+  const auto add = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector4f c = view_proj * Eigen::Vector4f(float(p.x()), float(p.y()), float(p.z()), 1.0f);
+    if (!(c.w() > 1e-6f)) return false;
+    const double x = (0.5 * c.x() / c.w() + 0.5) * w, y = (0.5 * c.y() / c.w() + 0.5) * h;
+    x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    return true;
+  };
+  const auto emit = [&] {
+    const PixelRect r{std::clamp(int(std::floor(x0)) - kReach, 0, w), std::clamp(int(std::floor(y0)) - kReach, 0, h),
+                      std::clamp(int(std::ceil(x1)) + kReach, 0, w), std::clamp(int(std::ceil(y1)) + kReach, 0, h)};
+    if (r.x1 > r.x0 && r.y1 > r.y0) out.push_back(r);
+    x0 = y0 = 1e30;
+    x1 = y1 = -1e30;
+  };
+  // Many draws (a long chain of links): their union, as one.
+  const bool one = part_bounds.size() > 64;
+  const Eigen::AlignedBox3d* parts = one ? &draw_bounds : part_bounds.data();
+  for (size_t k = 0, n = one ? 1 : part_bounds.size(); k < n; ++k) {
+    const Eigen::AlignedBox3d& b = parts[k];
+    if (b.isEmpty()) continue;
+    for (int i = 0; i < 8; ++i)
+      if (!add(b.corner(Eigen::AlignedBox3d::CornerType(i)))) return false;
+    emit();
+  }
+  if (!lines.empty()) {
+    for (const LineVertex& v : lines)
+      if (!add(Eigen::Vector3d(v.pos[0], v.pos[1], v.pos[2]))) return false;
+    emit();
+  }
+  const auto unite = [](const PixelRect& a, const PixelRect& b) {
+    return PixelRect{std::min(a.x0, b.x0), std::min(a.y0, b.y0), std::max(a.x1, b.x1), std::max(a.y1, b.y1)};
+  };
+  const auto overlap = [](const PixelRect& a, const PixelRect& b) {
+    const int64_t dx = std::min(a.x1, b.x1) - std::max(a.x0, b.x0), dy = std::min(a.y1, b.y1) - std::max(a.y0, b.y0);
+    return dx > 0 && dy > 0 ? dx * dy : int64_t(0);
+  };
+  for (bool merged = true; merged;) {
+    merged = false;
+    for (size_t i = 0; i < out.size() && !merged; ++i)
+      for (size_t j = i + 1; j < out.size() && !merged; ++j) {
+        const PixelRect u = unite(out[i], out[j]);
+        // Merged when the union adds no more pixels than the pair shades twice, or than 8 blocks.
+        if (u.area() - (out[i].area() + out[j].area() - overlap(out[i], out[j])) <=
+            std::max<int64_t>(overlap(out[i], out[j]), 8 * 256)) {
+          out[i] = u;
+          out.erase(out.begin() + std::ptrdiff_t(j));
+          merged = true;
+        }
+      }
+  }
+  int64_t covered = 0;
+  for (const PixelRect& r : out) covered += r.area();
+  return !out.empty() && covered < int64_t(w) * h * 9 / 10;  // else: no gain
+}
+
+// The texel box [x0, x1) x [y0, y1) of a size x size texture over the light's square that holds
+// everything drawn into the shadow map, seen along the light, grown by `margin_m` metres: meshes
+// by their transformed bounding boxes, hulls by their spheres, hair by its vertices and ribbon
+// half widths. False when nothing casts.
+bool Renderer::Impl::casterTexelBox(const Eigen::Matrix4d& light_vp, double margin_m, int size, int box[4]) const {
+  // For the orthographic light, light-space x and y are affine in the point and metres map to
+  // the same number of texels on both axes.
+  const Eigen::Matrix<double, 2, 4> A = light_vp.topRows<2>() * (0.5 * size);
+  const double per_m = A.block<1, 3>(0, 0).norm();
+  double x0 = 1e30, y0 = 1e30, x1 = -1e30, y1 = -1e30;
+  const auto add = [&](const Eigen::Vector3d& p, double r) {
+    const Eigen::Vector2d t = A.leftCols<3>() * p + A.col(3) + Eigen::Vector2d::Constant(0.5 * size);
+    const double rt = r * per_m;
+    x0 = std::min(x0, t.x() - rt);
+    x1 = std::max(x1, t.x() + rt);
+    y0 = std::min(y0, t.y() - rt);
+    y1 = std::max(y1, t.y() + rt);
+  };
+  for (const MeshDraw& d : mesh_draws) {
+    const Eigen::AlignedBox3d& b = meshes[size_t(d.mesh)].bbox;
+    if (b.isEmpty()) continue;
+    const Eigen::Matrix4d M = d.model.cast<double>();
+    for (int i = 0; i < 8; ++i) add((M * b.corner(Eigen::AlignedBox3d::CornerType(i)).homogeneous()).head<3>(), 0.0);
+  }
+  for (const HullInstance& h : hulls) {
+    add(Eigen::Vector3d(h.p0r0[0], h.p0r0[1], h.p0r0[2]), std::abs(double(h.p0r0[3])));
+    add(Eigen::Vector3d(h.p1r1[0], h.p1r1[1], h.p1r1[2]), std::abs(double(h.p1r1[3])));
+  }
+  const double min_half = 0.5 * frustum.texel_world;  // drawHairs' minimum half width in this pass
+  for (const HairVertex& v : hair_vertices)
+    add(Eigen::Vector3d(v.pos[0], v.pos[1], v.pos[2]), std::max(std::abs(double(v.half_width)), min_half));
+  if (x0 > x1) return false;
+  const double m = margin_m * per_m;
+  box[0] = std::clamp(int(std::floor(x0 - m)), 0, size);
+  box[1] = std::clamp(int(std::floor(y0 - m)), 0, size);
+  box[2] = std::clamp(int(std::ceil(x1 + m)), 0, size);
+  box[3] = std::clamp(int(std::ceil(y1 + m)), 0, size);
+  return box[2] > box[0] && box[3] > box[1];
+}
+
+bool Renderer::Impl::groundShadowRect(const Eigen::Matrix4f& view_proj, int w, int h, PixelRect& rect,
+                                      bool& whole) const {
+  whole = false;
+  if (!ground_shadow_boxed || ground_shadow_size <= 0) return false;
+  // The box's corners, a texel further out (the bilinear footprint), on the ground: the light ray
+  // through each (as kGroundShadowFS finds it) meets the plane there.
+  const Eigen::Matrix4d inv = frustum.view_proj.inverse();
+  const double gs = double(ground_shadow_size), g = params.ground_height;
+  const double xs[2] = {double(ground_shadow_box[0] - 1), double(ground_shadow_box[2] + 1)};
+  const double ys[2] = {double(ground_shadow_box[1] - 1), double(ground_shadow_box[3] + 1)};
+  double x0 = 1e30, y0 = 1e30, x1 = -1e30, y1 = -1e30;
+  for (double tx : xs)
+    for (double ty : ys) {
+      const Eigen::Vector2d ndc(tx / gs * 2.0 - 1.0, ty / gs * 2.0 - 1.0);
+      const Eigen::Vector4d a4 = inv * Eigen::Vector4d(ndc.x(), ndc.y(), -1.0, 1.0);
+      const Eigen::Vector4d b4 = inv * Eigen::Vector4d(ndc.x(), ndc.y(), 1.0, 1.0);
+      const Eigen::Vector3d a = a4.head<3>() / a4.w(), b = b4.head<3>() / b4.w();
+      if (std::abs(b.z() - a.z()) < 1e-12) return whole = true;
+      const Eigen::Vector3d P = a + (b - a) * ((g - a.z()) / (b.z() - a.z()));
+      const Eigen::Vector4d c = view_proj.cast<double>() * P.homogeneous();
+      if (c.w() < 1e-6) return whole = true;  // behind the eye: not bounded on screen
+      const double px = (c.x() / c.w() * 0.5 + 0.5) * w, py = (c.y() / c.w() * 0.5 + 0.5) * h;
+      x0 = std::min(x0, px);
+      x1 = std::max(x1, px);
+      y0 = std::min(y0, py);
+      y1 = std::max(y1, py);
+    }
+  rect.x0 = std::clamp(int(std::floor(x0)) - 1, 0, w);
+  rect.y0 = std::clamp(int(std::floor(y0)) - 1, 0, h);
+  rect.x1 = std::clamp(int(std::ceil(x1)) + 1, 0, w);
+  rect.y1 = std::clamp(int(std::ceil(y1)) + 1, 0, h);
+  return rect.x1 > rect.x0 && rect.y1 > rect.y0;
+}
+
+}  // namespace ponyhop

@@ -1,0 +1,618 @@
+// The passes of Renderer::endFrame, one function each, in the order it runs them, and the drawing
+// they share. What each pass does and why: docs/RENDERING.md, Passes.
+//
+// Index of this file:
+// [SECTION] Uniforms and draws shared by the passes
+// [SECTION] The frame's streamed data
+// [SECTION] Shadow passes: the shadow map, the ground's shadow texture
+// [SECTION] The ground and the background
+// [SECTION] The objects and their deferred shadows
+// [SECTION] Debug lines
+// [SECTION] Anti-aliasing
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/renderer_impl.h"
+
+namespace ponyhop {
+
+// ---------------------------------------------------------------------------------------------
+// [SECTION] Uniforms and draws shared by the passes
+
+// The ground's shadow texture has shadow_size / this texels a side (groundShadowPass).
+constexpr int kGroundShadowDivisor = 4;
+// Angular radius of the key light (rad) for the penumbra of the soft shadows.
+constexpr double kKeyLightAngularRadius = 1.5 * 3.14159265358979 / 180.0;
+// Widest penumbra (and blocker search radius) of the soft shadows, m; at least 2 texels, at most
+// 48 (setCommonUniforms).
+constexpr double kMaxPenumbraMetres = 0.03;
+
+static GLint loc(GLuint prog, const char* name) { return glGetUniformLocation(prog, name); }
+static void setMat4(GLuint prog, const char* name, const Eigen::Matrix4f& m) {
+  glUniformMatrix4fv(loc(prog, name), 1, GL_FALSE, m.data());  // Eigen is column-major, as GL
+}
+static void setVec3(GLuint prog, const char* name, const Eigen::Vector3f& v) {
+  glUniform3f(loc(prog, name), v.x(), v.y(), v.z());
+}
+
+void Renderer::Impl::setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_proj, const Eigen::Matrix4f& light_vp,
+                                       float normal_offset, bool shadows_on) {
+  glUseProgram(prog);
+  setMat4(prog, "u_viewProj", view_proj);
+  setMat4(prog, "u_lightViewProj", light_vp);
+  setVec3(prog, "u_eye", camera.eye.cast<float>());
+  Eigen::Vector3d ld = light.direction;
+  if (ld.norm() < 1e-9) ld = Eigen::Vector3d(-0.5, 0.6, -1.0);
+  ld.normalize();
+  setVec3(prog, "u_lightDir", ld.cast<float>());
+  const Eigen::Vector3f key = srgbToLinear(light.color.cast<float>()) * float(light.intensity);
+  setVec3(prog, "u_lightColor", key);
+  // Fill: from behind the camera, a little above and to the side, so faces toward the viewer
+  // that the key misses are not flat.
+  Eigen::Vector3d view = (camera.target - camera.eye);
+  if (view.norm() < 1e-9) view = Eigen::Vector3d(0, 1, 0);
+  view.normalize();
+  Eigen::Vector3d side = view.cross(Eigen::Vector3d::UnitZ());
+  if (side.norm() < 1e-6) side = Eigen::Vector3d::UnitX();
+  side.normalize();
+  const Eigen::Vector3d fill_dir = (view + 0.35 * side - 0.35 * Eigen::Vector3d::UnitZ()).normalized();
+  setVec3(prog, "u_fillDir", fill_dir.cast<float>());
+  setVec3(prog, "u_fillColor", Eigen::Vector3f(0.85f, 0.9f, 1.0f) * float(light.fill));
+  const Eigen::Vector3f sky = srgbToLinear(params.background.cast<float>());
+  setVec3(prog, "u_skyAmbient", sky * float(light.ambient));
+  setVec3(prog, "u_groundAmbient",
+          srgbToLinear(params.ground_color.cast<float>()).cwiseProduct(Eigen::Vector3f(1.0f, 0.95f, 0.9f)) *
+              float(light.ambient) * 0.45f);
+  glUniform1f(loc(prog, "u_exposure"), 0.6f);
+  glUniform1i(loc(prog, "u_shadowMap"), 0);
+  glUniform1f(loc(prog, "u_shadowTexel"), 1.0f / float(std::max(shadow_size, 1)));
+  glUniform1f(loc(prog, "u_shadowSoftness"), float(softness_texels));
+  glUniform1f(loc(prog, "u_normalOffset"), normal_offset);
+  glUniform1i(loc(prog, "u_shadowsOn"), shadows_on ? 1 : 0);
+  glUniform1i(loc(prog, "u_shadowDraft"), draft ? 1 : 0);
+  glUniform1i(loc(prog, "u_shadowDepth"), 1);
+  glUniform1f(loc(prog, "u_lightDepthRange"), float(frustum.depth_range));
+  glUniform1f(loc(prog, "u_texelWorld"), float(std::max(frustum.texel_world, 1e-9)));
+  // The sun is 0.27 deg in radius; a softer 1.5 deg reads better at the scale of a head.
+  glUniform1f(loc(prog, "u_penumbraSlope"), float(std::tan(kKeyLightAngularRadius)));
+  glUniform1f(loc(prog, "u_maxPenumbraTexels"),
+              float(std::clamp(kMaxPenumbraMetres / std::max(frustum.texel_world, 1e-9), 2.0, 48.0)));
+  const Eigen::Vector3f top = params.background.cast<float>().cwiseMax(0.0f).cwiseMin(1.0f);
+  // Brighter, slightly warm towards the horizon: reads as sky haze; the ground fades into it.
+  const Eigen::Vector3f bottom = top + (Eigen::Vector3f(0.97f, 0.96f, 0.94f) - top) * 0.55f;
+  setVec3(prog, "u_bgTop", top);
+  setVec3(prog, "u_bgBottom", bottom);
+  glUniform2f(loc(prog, "u_viewport"), float(target_w), float(target_h));
+}
+
+// Back faces of a closed mesh are culled: the mesh's own winding and a mirroring model matrix
+// decide which side is the back. Open meshes are drawn from both sides (they may be seen, or
+// cast, through their holes).
+static void cullFor(const GpuMesh& g, const Eigen::Matrix4f& model) {
+  if (g.closed == 0) {
+    glDisable(GL_CULL_FACE);
+    return;
+  }
+  const bool mirrored = model.topLeftCorner<3, 3>().determinant() < 0.0f;
+  glEnable(GL_CULL_FACE);
+  glCullFace((g.closed > 0) != mirrored ? GL_BACK : GL_FRONT);
+}
+
+// Meshes with their file's materials (main pass): one draw per part, its texture on unit 2.
+void Renderer::Impl::drawMaterialMeshes(GLuint p) {
+  bool used = false;
+  for (const MeshDraw& d : mesh_draws) {
+    const GpuMesh& g = meshes[size_t(d.mesh)];
+    if (!g.materials) continue;
+    if (!used) {
+      glUseProgram(p);
+      glUniform1i(loc(p, "u_baseTex"), 2);
+      used = true;
+    }
+    glUniformMatrix4fv(loc(p, "u_model"), 1, GL_FALSE, d.model.data());
+    glUniformMatrix3fv(loc(p, "u_normalMat"), 1, GL_FALSE, d.normal.data());
+    const Eigen::Vector3f c = srgbToLinear(d.material.color);
+    glUniform4f(loc(p, "u_colorSpec"), c.x(), c.y(), c.z(), d.material.specular);
+    glUniform2f(loc(p, "u_shinRim"), d.material.shininess, d.material.rim);
+    glBindVertexArray(g.vao);
+    cullFor(g, d.model);
+    for (const MeshPart& part : g.parts) {
+      const bool tex = part.texture >= 0 && size_t(part.texture) < g.textures.size();
+      glUniform1i(loc(p, "u_hasTex"), tex ? 1 : 0);
+      glActiveTexture(GL_TEXTURE2);
+      glBindTexture(GL_TEXTURE_2D, tex ? g.textures[size_t(part.texture)] : 0);
+      glDrawElements(GL_TRIANGLES, GLsizei(part.count), GL_UNSIGNED_INT,
+                     reinterpret_cast<const void*>(size_t(part.first) * sizeof(uint32_t)));
+    }
+    glActiveTexture(GL_TEXTURE0);
+  }
+  glDisable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
+}
+
+void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj,
+                                  bool depth_only) {
+  if (!mesh_draws.empty()) {
+    glUseProgram(mesh_prog);
+    if (depth_only) setMat4(mesh_prog, "u_viewProj", view_proj);
+    const GLint l_model = loc(mesh_prog, "u_model"), l_normal = loc(mesh_prog, "u_normalMat"),
+                l_cs = loc(mesh_prog, "u_colorSpec"), l_sr = loc(mesh_prog, "u_shinRim");
+    for (const MeshDraw& d : mesh_draws) {
+      const GpuMesh& g = meshes[size_t(d.mesh)];
+      if (g.materials && !depth_only) continue;  // below, with their own program
+      glUniformMatrix4fv(l_model, 1, GL_FALSE, d.model.data());
+      glUniformMatrix3fv(l_normal, 1, GL_FALSE, d.normal.data());
+      const Eigen::Vector3f c = srgbToLinear(d.material.color);
+      glUniform4f(l_cs, c.x(), c.y(), c.z(), d.material.specular);
+      glUniform2f(l_sr, d.material.shininess, d.material.rim);
+      glBindVertexArray(g.vao);
+      cullFor(g, d.model);
+      glDrawElements(GL_TRIANGLES, g.index_count, GL_UNSIGNED_INT, nullptr);
+    }
+    glDisable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
+  }
+  if (!depth_only) drawMaterialMeshes(mesh_prog == prog_mesh_split ? prog_mesh_mat_split : prog_mesh_mat);
+  if (!hulls.empty()) {
+    glUseProgram(hull_prog);
+    if (depth_only) setMat4(hull_prog, "u_viewProj", view_proj);
+    glBindVertexArray(depth_only ? hull_shadow_vao : hull_vao);
+    // Hulls are closed and wound counter-clockwise: cull their back faces in both passes (half
+    // the rasterization; the front faces alone give the nearest depth seen from the light).
+    glEnable(GL_CULL_FACE);
+    glDrawElementsInstanced(GL_TRIANGLES, depth_only ? hull_shadow_index_count : hull_index_count, GL_UNSIGNED_INT,
+                            nullptr, GLsizei(hulls.size()));
+    glDisable(GL_CULL_FACE);
+  }
+  glBindVertexArray(0);
+}
+
+// Hair ribbons face the camera in the main pass and the light in the shadow pass; a strand is
+// drawn at least about one pixel (or one shadow texel) wide so that it neither breaks up nor
+// flickers.
+void Renderer::Impl::drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only, const Eigen::Vector3d& light_dir,
+                               GLuint prog) {
+  if (hair_draws.empty()) return;
+  const GLuint p = depth_only ? prog_hair_depth : prog ? prog : prog_hair;
+  glUseProgram(p);
+  setMat4(p, "u_viewProj", view_proj);
+  if (depth_only) {
+    glUniform1i(loc(p, "u_faceLight"), 1);
+    setVec3(p, "u_faceDir", light_dir.cast<float>());
+    glUniform2f(loc(p, "u_minHalfWidth"), float(0.5 * frustum.texel_world), 0.0f);
+  } else {
+    glUniform1i(loc(p, "u_faceLight"), 0);
+    const double per_metre = std::tan(0.5 * camera.fov * 3.14159265358979 / 180.0) / double(std::max(target_h, 1));
+    glUniform2f(loc(p, "u_minHalfWidth"), 0.0f, float(per_metre));
+  }
+  glBindVertexArray(hair_vao);
+  const GLint l_shading = loc(p, "u_hairShading");
+  for (const HairDraw& d : hair_draws) {
+    glUniform2f(l_shading, d.shading.highlight, d.shading.shift);
+    const size_t first = depth_only ? d.shadow_first : d.first, count = depth_only ? d.shadow_count : d.count;
+    glDrawElements(GL_TRIANGLES, GLsizei(count), GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(first * sizeof(uint32_t)));
+  }
+  glBindVertexArray(0);
+}
+
+// A full-screen program in two passes over the bound target, whose depth buffer is scratch:
+// `first` writes the pixels it can decide and depth 0 at the others (gl_FragDepth); `second`, the
+// costly one, then runs under the far-plane triangle with depth test GREATER, on those pixels
+// only. llvmpipe runs both sides of a shader's branches, but its early depth test does skip
+// blocks before shading. `first` = 0: `second` alone, everywhere. Leaves the depth test on with
+// LESS and depth writes on.
+static void drawFullscreenTwoPass(GLuint vao, GLuint first, GLuint second) {
+  glBindVertexArray(vao);
+  glEnable(GL_DEPTH_TEST);
+  glDepthMask(GL_TRUE);
+  glDepthFunc(GL_ALWAYS);
+  if (first) {
+    glUseProgram(first);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDepthFunc(GL_GREATER);
+  }
+  glDepthMask(GL_FALSE);
+  glUseProgram(second);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glDepthMask(GL_TRUE);
+  glDepthFunc(GL_LESS);
+  glBindVertexArray(0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// [SECTION] The frame's streamed data
+
+// Uploads this frame's instance data once; both passes use it.
+void Renderer::Impl::uploadFrameData() {
+  if (!hulls.empty()) {
+    glBindBuffer(GL_ARRAY_BUFFER, hull_instances);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(hulls.size() * sizeof(HullInstance)), hulls.data(), GL_STREAM_DRAW);
+  }
+  if (!hair_draws.empty()) {
+    glBindVertexArray(hair_vao);
+    glBindBuffer(GL_ARRAY_BUFFER, hair_vbo);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(hair_vertices.size() * sizeof(HairVertex)), hair_vertices.data(),
+                 GL_STREAM_DRAW);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(hair_indices.size() * sizeof(uint32_t)), hair_indices.data(),
+                 GL_STREAM_DRAW);
+    glBindVertexArray(0);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// [SECTION] Shadow passes: the shadow map, the ground's shadow texture
+
+// Depth of the casters seen from the key light, into the map of the plan's size.
+void Renderer::Impl::shadowMapPass(const FramePlan& f) {
+  ensureShadowMap(f.shadow_size);
+  softness_texels = f.softness_texels;
+  frustum = f.frustum;
+  glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+  glViewport(0, 0, shadow_size, shadow_size);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glClear(GL_DEPTH_BUFFER_BIT);
+  glDisable(GL_CULL_FACE);  // open meshes cast from both sides (closed ones cull their back faces)
+  // Slope-scaled bias in the depth pass (steep surfaces need more), plus the small normal offset
+  // at lookup in the shader: together no acne, and the offset is too small to detach contact
+  // shadows (no peter-panning).
+  glEnable(GL_POLYGON_OFFSET_FILL);
+  glPolygonOffset(1.5f, 2.0f);
+  drawGeometry(prog_mesh_depth, prog_hull_depth, f.light_vp, true);
+  drawHairs(f.light_vp, true, f.light_dir);
+  glDisable(GL_POLYGON_OFFSET_FILL);
+}
+
+// The ground's shadow once per frame into a texture over the shadow map's square, instead of a
+// blocker search + PCF per screen pixel of ground: the ground receives nothing else, and a soft
+// shadow needs far fewer texels than the screen has ground pixels.
+void Renderer::Impl::groundShadowPass(const FramePlan& f) {
+  const LightFrustum& lf = frustum;
+  const int gs = std::max(64, shadow_size / kGroundShadowDivisor);
+  ensureGroundShadow(gs);
+  glBindFramebuffer(GL_FRAMEBUFFER, ground_shadow_fbo);
+  glViewport(0, 0, gs, gs);
+  bindShadowTextures(false);  // the ground texture is the target here
+  // Only the texels near a caster are shaded: a texel whose taps find no blocker is fully lit
+  // (1), as the cleared texture is. The box holds the casters seen along the light, grown by
+  // the widest reach of the taps (the blocker search's kMaxPenumbraMetres, at least 2 texels;
+  // draft's 8 texels at most), a texel of bilinear footprint, the normal offset (2.25
+  // texels) and two ground texels: the texture is the same as with every texel shaded.
+  glClearColor(1.0f, 0.0f, 0.0f, 1.0f);
+  glDepthMask(GL_TRUE);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  const double ground_texel = lf.texel_world * double(shadow_size) / double(gs);
+  int* box = ground_shadow_box;
+  ground_shadow_boxed =
+      casterTexelBox(lf.view_proj, kMaxPenumbraMetres + 12.0 * lf.texel_world + 2.0 * ground_texel, gs, box);
+  if (ground_shadow_boxed) {
+    const Eigen::Matrix4f lvp = lf.view_proj.cast<float>();
+    for (GLuint p : {prog_ground_shadow_class, prog_ground_shadow}) {
+      setCommonUniforms(p, lvp, lvp, float(1.5 * lf.texel_world), true);
+      setMat4(p, "u_invLightViewProj", lf.view_proj.inverse().cast<float>());
+      glUniform1f(loc(p, "u_groundZ"), float(params.ground_height));
+      glUniform2f(loc(p, "u_groundShadowSize"), float(gs), float(gs));
+    }
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(box[0], box[1], box[2] - box[0], box[3] - box[1]);
+    // The blocker search writes the fully lit and umbra texels, the filter runs on the
+    // others (draft has no search: one pass).
+    drawFullscreenTwoPass(empty_vao, f.draft ? 0 : prog_ground_shadow_class, prog_ground_shadow);
+    glDisable(GL_SCISSOR_TEST);
+  }
+  glDepthMask(GL_TRUE);
+}
+
+// ---------------------------------------------------------------------------------------------
+// [SECTION] The ground and the background
+
+// The ground square into the bound target of vw x vh pixels, in parts, each with the least its
+// pixels need (the colours are the same): the square inside the circle where the fade starts,
+// without the fade (GROUND_NEAR), and without the shadow lookup outside the pixel rectangle of
+// the shadow texture's shaded texels (GROUND_LIT); then the ring around it to the edge, with
+// both. Most ground pixels are in the square, and the shadows in a small part of it. Leaves the
+// empty VAO bound.
+void Renderer::Impl::drawGroundParts(const FramePlan& f, int vw, int vh) {
+  const Camera& cam = camera;
+  for (GLuint p : {prog_ground, prog_ground_near, prog_ground_near_lit}) {
+    setFrameUniforms(p, f);
+    glUniform3f(loc(p, "u_quadCenter"), float(cam.target.x()), float(cam.target.y()), float(params.ground_height));
+    glUniform1f(loc(p, "u_quadHalf"), float(f.ground_half));
+    glUniform1f(loc(p, "u_quadInner"), 0.0f);
+    glUniform1i(loc(p, "u_transparent"), params.transparent ? 1 : 0);
+    setVec3(p, "u_groundAlbedo", srgbToLinear(params.ground_color.cast<float>()));
+    glUniform1f(loc(p, "u_gridSpacing"), float(std::max(params.grid_spacing, 0.0)));
+    glUniform3f(loc(p, "u_fadeCenter"), float(cam.target.x()), float(cam.target.y()), 0.0f);
+    glUniform2f(loc(p, "u_fade"), float(f.fade_start), float(f.fade_end));
+    glUniform1i(loc(p, "u_groundShadow"), 2);
+    glUniform2f(loc(p, "u_viewport"), float(vw), float(vh));
+  }
+  glBindVertexArray(empty_vao);
+  const float inner = float(f.fade_start / std::sqrt(2.0) * 0.999);
+  PixelRect sr{};
+  bool whole = false;
+  const bool boxed = f.shadows_on && groundShadowRect(f.view_proj, vw, vh, sr, whole);
+  for (GLuint p : {prog_ground_near, prog_ground_near_lit}) {
+    glUseProgram(p);
+    glUniform1f(loc(p, "u_quadHalf"), inner);
+  }
+  if (!boxed || whole) {
+    glUseProgram(boxed ? prog_ground_near : prog_ground_near_lit);
+    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+  } else {
+    glEnable(GL_SCISSOR_TEST);
+    glUseProgram(prog_ground_near);
+    glScissor(sr.x0, sr.y0, sr.x1 - sr.x0, sr.y1 - sr.y0);
+    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    glUseProgram(prog_ground_near_lit);
+    const PixelRect around[4] = {
+        {0, 0, vw, sr.y0}, {0, sr.y1, vw, vh}, {0, sr.y0, sr.x0, sr.y1}, {sr.x1, sr.y0, vw, sr.y1}};
+    for (const PixelRect& a : around) {
+      if (a.area() <= 0) continue;
+      glScissor(a.x0, a.y0, a.x1 - a.x0, a.y1 - a.y0);
+      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    }
+    glDisable(GL_SCISSOR_TEST);
+  }
+  glUseProgram(prog_ground);
+  glUniform1f(loc(prog_ground, "u_quadInner"), inner);
+  glDrawArrays(GL_TRIANGLE_STRIP, 0, 10);
+}
+
+// The ground, then the background around it, in a half-size texture with a depth buffer of its
+// own (no object in it): the texels around the ground's edge hold the background it fades into
+// (or alpha 0 when transparent), so the upsampled edge blends into what is drawn beside it.
+// First, before the objects: llvmpipe finishes a framebuffer's drawing at every switch, and this
+// order has one switch fewer.
+void Renderer::Impl::halfGroundPass(const FramePlan& f, RenderStats& st) {
+  bindShadowTextures(true);
+  glBindFramebuffer(GL_FRAMEBUFFER, ground_lo_fbo);
+  glViewport(0, 0, ground_lo_w, ground_lo_h);
+  glClearColor(0, 0, 0, 0);
+  glEnable(GL_DEPTH_TEST);  // (without a shadow pass before it, the state is what the last frame left)
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  drawGroundParts(f, ground_lo_w, ground_lo_h);
+  if (!params.transparent) {
+    setFrameUniforms(prog_bg, f);
+    glUniform2f(loc(prog_bg, "u_viewport"), float(ground_lo_w), float(ground_lo_h));
+    glDepthFunc(GL_LEQUAL);  // the far plane, where the depth is still the cleared 1
+    glDepthMask(GL_FALSE);
+    // Only the rows the upsampling below sky_row reads (its pixel row y taps rows y / 2 and
+    // y / 2 + 1 at most).
+    const int lo_rows = std::min(ground_lo_h, f.sky_row / 2 + 2);
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(0, 0, ground_lo_w, lo_rows);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDisable(GL_SCISSOR_TEST);
+    glDepthMask(GL_TRUE);
+    glDepthFunc(GL_LESS);
+  }
+  glBindVertexArray(0);
+  ++st.draw_calls;
+}
+
+// The half-resolution ground, a bilinear tap of it per pixel, over the frame below sky_row (the
+// objects are drawn over it); above it the background's own pass.
+void Renderer::Impl::upsampleGroundPass(const FramePlan& f, RenderStats& st) {
+  const int w = f.w, h = f.h;
+  glBindFramebuffer(GL_FRAMEBUFFER, ground_up_fbo);
+  glDisable(GL_DEPTH_TEST);
+  const GLuint u = prog_ground_up;
+  glUseProgram(u);
+  glActiveTexture(GL_TEXTURE7);
+  glBindTexture(GL_TEXTURE_2D, ground_lo_tex);
+  glActiveTexture(GL_TEXTURE0);
+  glUniform1i(loc(u, "u_groundLo"), 7);
+  glBindVertexArray(empty_vao);
+  glEnable(GL_SCISSOR_TEST);
+  glScissor(0, 0, w, f.sky_row);
+  glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+  if (f.sky_row < h) {
+    // Its other uniforms are this frame's already: the half-resolution background set them (a
+    // split needs an opaque frame, which draws it).
+    glUseProgram(prog_bg);
+    glUniform2f(loc(prog_bg, "u_viewport"), float(w), float(h));
+    glScissor(0, f.sky_row, w, h - f.sky_row);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    ++st.draw_calls;
+  }
+  glDisable(GL_SCISSOR_TEST);
+  glBindVertexArray(0);
+  glActiveTexture(GL_TEXTURE7);
+  glBindTexture(GL_TEXTURE_2D, 0);  // a render target again next frame
+  glActiveTexture(GL_TEXTURE0);
+  ++st.draw_calls;
+}
+
+// Without the half-resolution ground: the ground after the objects (the early depth test skips
+// the pixels they cover, and its nearer fragments still hide whatever is below it). It writes its
+// depth, so that the background, last, fills only the pixels nothing was drawn on (none when
+// transparent: alpha 0 there).
+void Renderer::Impl::groundAndBackgroundPass(const FramePlan& f, RenderStats& st) {
+  glBindVertexArray(empty_vao);
+  if (params.ground) {
+    drawGroundParts(f, f.w, f.h);
+    ++st.draw_calls;
+  }
+  if (!params.transparent) {
+    glDepthFunc(GL_LEQUAL);  // the far plane, where the depth is still the cleared 1
+    glDepthMask(GL_FALSE);
+    setFrameUniforms(prog_bg, f);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDepthMask(GL_TRUE);
+    glDepthFunc(GL_LESS);
+    ++st.draw_calls;
+  }
+  glBindVertexArray(0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// [SECTION] The objects and their deferred shadows
+
+// Meshes, hulls and hair into the main target, lit and shadowed; deferred (FramePlan::deferred),
+// into the surface targets with their shadows left to deferredLightPass.
+void Renderer::Impl::objectsPass(const FramePlan& f, RenderStats& st) {
+  glDepthMask(GL_TRUE);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  const GLuint mesh_prog = f.deferred ? prog_mesh_split : prog_mesh;
+  const GLuint mesh_mat_prog = f.deferred ? prog_mesh_mat_split : prog_mesh_mat;
+  const GLuint hull_prog = f.deferred ? prog_hull_split : prog_hull;
+  const GLuint hair_prog = f.deferred ? prog_hair_split : prog_hair;
+  glBindFramebuffer(GL_FRAMEBUFFER, f.deferred ? surf_fbo : msaa_fbo);
+  glClearColor(0, 0, 0, params.transparent ? 0 : 1);
+  glClear(!f.deferred && f.clear_color ? GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT : GL_DEPTH_BUFFER_BIT);
+  bindShadowTextures(true);
+  for (GLuint p : {mesh_prog, mesh_mat_prog, hull_prog, hair_prog}) {
+    setFrameUniforms(p, f);
+    glUniform4f(loc(p, "u_clipPlane"), 0.0f, 0.0f, f.clip_side, -f.clip_side * float(params.ground_height));
+  }
+  if (f.half_ground) glEnable(GL_CLIP_DISTANCE0);
+  drawGeometry(mesh_prog, hull_prog, f.view_proj, false);
+  drawHairs(f.view_proj, false, f.light_dir, hair_prog);
+  glDisable(GL_CLIP_DISTANCE0);
+  st.draw_calls += int(hair_draws.size());
+  for (const HairDraw& d : hair_draws) st.triangles += d.count / 3;
+  st.draw_calls += int(mesh_draws.size()) + (hulls.empty() ? 0 : 1);
+  for (const MeshDraw& d : mesh_draws) st.triangles += size_t(meshes[size_t(d.mesh)].index_count / 3);
+  st.triangles += hulls.size() * hull_triangles;
+}
+
+// The shadow and the finished colour once per pixel of the objects' visible surface, from the
+// surface targets into the main target.
+void Renderer::Impl::deferredLightPass(const FramePlan& f, RenderStats& st) {
+  glBindFramebuffer(GL_FRAMEBUFFER, msaa_fbo);
+  if (f.clear_color) glClear(GL_COLOR_BUFFER_BIT);  // FramePlan::clear_color
+  const GLuint targets[] = {surf_tex, key_tex, rest_tex};
+  for (int i = 0; i < 3; ++i) {
+    glActiveTexture(GLenum(GL_TEXTURE4 + i));
+    glBindTexture(GL_TEXTURE_2D, targets[i]);
+  }
+  glActiveTexture(GL_TEXTURE0);
+  for (GLuint p : {prog_deferred_class, prog_deferred}) {
+    setFrameUniforms(p, f);
+    glUniform1i(loc(p, "u_surface"), 4);
+    glUniform1i(loc(p, "u_key"), 5);
+    glUniform1i(loc(p, "u_rest"), 6);
+  }
+  // Two passes, each a full-screen triangle just short of the far plane (glDepthRange) with
+  // depth test GREATER: it passes where an object is. The first finishes the pixels whose
+  // shadow needs no filter (no key light, or nothing above the surface: nothingAbove()) and
+  // moves their depth to the triangle's, discarding the others; the second, the whole
+  // shadowFactor(), then runs only where an object's depth is left: llvmpipe tests depth
+  // before the shader (a discarding shader keeps the early test when it writes no stencil), so
+  // the filter costs nothing where it is not needed. Just short of the far plane, so that the
+  // background drawn after the objects at the far plane (without a ground) leaves them alone.
+  glDepthRange(0.0, 1.0 - std::ldexp(1.0, -19));
+  glDepthFunc(GL_GREATER);
+  glBindVertexArray(empty_vao);
+  const bool boxed = screenRects(f.view_proj, f.w, f.h, rects);
+  if (boxed) glEnable(GL_SCISSOR_TEST);
+  for (GLuint p : {prog_deferred_class, prog_deferred}) {
+    glUseProgram(p);
+    glDepthMask(p == prog_deferred_class ? GL_TRUE : GL_FALSE);
+    if (boxed) {
+      for (const PixelRect& r : rects) {
+        glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+      }
+    } else {
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+    }
+  }
+  glDisable(GL_SCISSOR_TEST);
+  glDepthRange(0.0, 1.0);
+  glBindVertexArray(0);
+  glDepthMask(GL_TRUE);
+  for (int i = 0; i < 3; ++i) {  // they are render targets again next frame
+    glActiveTexture(GLenum(GL_TEXTURE4 + i));
+    glBindTexture(GL_TEXTURE_2D, 0);
+  }
+  glActiveTexture(GL_TEXTURE0);
+  glDepthFunc(GL_LESS);
+  st.draw_calls += 2;
+}
+
+// ---------------------------------------------------------------------------------------------
+// [SECTION] Debug lines
+
+// Debug lines (the drag line, render.colliders) over the picture: no depth test.
+void Renderer::Impl::linesPass(const FramePlan& f, RenderStats& st) {
+  glDisable(GL_DEPTH_TEST);
+  glUseProgram(prog_lines);
+  setMat4(prog_lines, "u_viewProj", f.view_proj);
+  glBindVertexArray(lines_vao);
+  glBindBuffer(GL_ARRAY_BUFFER, lines_vbo);
+  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(lines.size() * sizeof(LineVertex)), lines.data(), GL_STREAM_DRAW);
+  glDrawArrays(GL_LINES, 0, GLsizei(lines.size()));
+  glEnable(GL_DEPTH_TEST);
+  glBindVertexArray(0);
+  ++st.draw_calls;
+}
+
+// ---------------------------------------------------------------------------------------------
+// [SECTION] Anti-aliasing
+
+// Into the output target: the MSAA resolve, or the post-process filter.
+void Renderer::Impl::antiAliasPass(const FramePlan& f) {
+  const int w = f.w, h = f.h;
+  if (f.msaa) {
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, msaa_fbo);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, resolve_fbo);
+    glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    return;
+  }
+  // The filter runs only over the screen rectangles of what was drawn (objects, hair, lines),
+  // grown by its reach; the background and the ground around them have no edges to smooth (the
+  // checker is box-filtered, the shadows soft) and are copied as they are. Then the frame stays
+  // where it is and is filtered in place there, from a copy of the rectangles and of what the
+  // filter's taps reach around them (5 px: 4 along an edge, and a texel of bilinear footprint),
+  // instead of a copy of the whole frame.
+  const bool boxed = screenRects(f.view_proj, w, h, rects);
+  GLuint source = main_color_tex;
+  output_fbo = resolve_fbo;
+  if (boxed) {
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, msaa_fbo);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, post_src_fbo);
+    constexpr int kReach = 6;
+    for (const PixelRect& r : rects) {
+      const int x0 = std::max(r.x0 - kReach, 0), y0 = std::max(r.y0 - kReach, 0);
+      const int x1 = std::min(r.x1 + kReach, w), y1 = std::min(r.y1 + kReach, h);
+      glBlitFramebuffer(x0, y0, x1, y1, x0, y0, x1, y1, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    }
+    source = post_src_tex;
+    output_fbo = msaa_fbo;  // its depth buffer is done with: the filter marks edges in it
+    glEnable(GL_SCISSOR_TEST);
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, output_fbo);
+  glActiveTexture(GL_TEXTURE3);
+  glBindTexture(GL_TEXTURE_2D, source);
+  glActiveTexture(GL_TEXTURE0);
+  for (GLuint p : {prog_post_class, prog_post}) {
+    glUseProgram(p);
+    glUniform1i(loc(p, "u_frame"), 3);
+    glUniform2f(loc(p, "u_texel"), 1.0f / float(w), 1.0f / float(h));
+  }
+  // The first pass copies the pixels without an edge, the filter runs on the others (where
+  // rectangles overlap, the second one's passes redo the same pixels with the same result).
+  if (boxed) {
+    for (const PixelRect& r : rects) {
+      glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+      drawFullscreenTwoPass(empty_vao, prog_post_class, prog_post);
+    }
+  } else {
+    drawFullscreenTwoPass(empty_vao, prog_post_class, prog_post);
+  }
+  glActiveTexture(GL_TEXTURE3);
+  glBindTexture(GL_TEXTURE_2D, 0);  // the main pass renders into it next frame
+  glActiveTexture(GL_TEXTURE0);
+  glEnable(GL_DEPTH_TEST);
+  glDisable(GL_SCISSOR_TEST);
+}
+
+}  // namespace ponyhop

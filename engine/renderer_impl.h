@@ -1,0 +1,255 @@
+// The renderer's inside, shared by the files that implement engine/renderer.h (not part of the
+// engine's interface): the GL objects and the frame's draw list (Renderer::Impl), and FramePlan,
+// everything endFrame decides once before it draws.
+//
+//   renderer.cpp        the public class: init, the draw list, the endFrame driver, read-back
+//   frame_plan.cpp      FramePlan: sizes, the shadow map and the light's frustum, the matrices,
+//                       which passes run; the screen and texel rectangles the passes are cut to
+//   render_passes.cpp   one function per pass, and the drawing they share
+//   render_targets.cpp  the framebuffers and their textures, (re)allocated when a size changes
+//   mesh_upload.cpp     meshes into vertex arrays (Renderer::upload, release)
+#pragma once
+
+#include <glad/gl.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "engine/renderer.h"
+
+namespace ponyhop {
+
+inline float srgbToLinear(float c) {
+  c = std::clamp(c, 0.0f, 1.0f);
+  return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+inline Eigen::Vector3f srgbToLinear(const Eigen::Vector3f& c) {
+  return {srgbToLinear(c.x()), srgbToLinear(c.y()), srgbToLinear(c.z())};
+}
+
+struct GpuMesh {
+  GLuint vao = 0, vbo = 0, ebo = 0;
+  GLsizei index_count = 0;
+  Eigen::AlignedBox3d bbox;
+  // With the file's materials (MeshData::colors): drawn by prog_mesh_mat, part by part.
+  bool materials = false;
+  // closedOrientation(): +1/-1 closed (back faces culled in both passes), 0 open (both sides drawn).
+  int closed = 0;
+  std::vector<MeshPart> parts;
+  std::vector<GLuint> textures;
+};
+
+struct MeshDraw {
+  int mesh;
+  Eigen::Matrix4f model;
+  Eigen::Matrix3f normal;
+  Material material;
+};
+
+// Per-instance data of the hull (sphere/capsule) draw: matches the attributes of kCapsuleVS.
+struct HullInstance {
+  float p0r0[4];
+  float p1r1[4];
+  float color_spec[4];
+  float shin_rim[2];
+};
+
+// One hair draw: a range of the frame's hair indices, another for the shadow pass
+// (HairMesh::shadow_indices), and its shading constants.
+struct HairDraw {
+  size_t first = 0, count = 0;
+  size_t shadow_first = 0, shadow_count = 0;
+  HairShading shading;
+};
+
+struct LineVertex {
+  float pos[3];
+  float color[3];
+};
+
+// Orthographic light frustum fitted to a set of points, with texel snapping.
+struct LightFrustum {
+  Eigen::Matrix4d view_proj = Eigen::Matrix4d::Identity();
+  double texel_world = 0.0;  // m per shadow texel
+  double depth_range = 1.0;  // m between the near and far planes
+};
+
+// What endFrame decides before it draws (Renderer::Impl::planFrame), from the draw list, the
+// camera, the light and the render parameters; the passes only read it.
+struct FramePlan {
+  // The output: size, quality, anti-aliasing.
+  int w = 1, h = 1;
+  bool draft = false;  // RenderQuality::Draft
+  bool msaa = false;   // a multisampled target, resolved by a blit
+  bool post = false;   // a single-sample target, then the post-process filter
+  int samples = 1;     // the main target's samples (1: single-sample)
+  // The key light's shadow. shadow_size, softness_texels and frustum only when shadows_on.
+  Eigen::Vector3d light_dir = Eigen::Vector3d(0, 0, -1);  // unit, from the light
+  Eigen::AlignedBox3d casters;
+  bool shadows_on = false;
+  int shadow_size = 0;           // the shadow map's side this frame (texels)
+  double softness_texels = 0.0;  // Impl::softness_texels
+  LightFrustum frustum;          // identity when !shadows_on
+  // The view: the ground's fade (m from the point looked at) and the matrices.
+  double fade_start = 0.0, fade_end = 0.0, ground_half = 0.0;
+  Eigen::Matrix4f view_proj = Eigen::Matrix4f::Identity();
+  Eigen::Matrix4f light_vp = Eigen::Matrix4f::Identity();
+  float normal_offset = 0.0f;  // the shadow lookup's offset along the normal, m
+  // Which passes run, and how.
+  bool half_ground = false;  // the ground at half resolution, upsampled before the objects
+  int sky_row = 1;           // the first pixel row (from the bottom) left to the background's pass
+  bool deferred = false;     // the objects' shadows in a pass of their own (deferredLightPass)
+  bool clear_color = false;  // the colour target needs a clear (nothing else writes every pixel)
+  float clip_side = 0.0f;    // the objects' clip plane at the ground: +1 / -1 the eye's side, 0 none
+};
+
+struct Renderer::Impl {
+  // Programs.
+  GLuint prog_mesh = 0, prog_hull = 0, prog_ground = 0, prog_ground_shadow = 0, prog_lines = 0;
+  GLuint prog_mesh_depth = 0, prog_hull_depth = 0, prog_post = 0, prog_bg = 0;
+  GLuint prog_hair = 0, prog_hair_depth = 0;
+  GLuint prog_mesh_mat = 0;
+  std::vector<GLuint> programs;  // every program above, for the destructor
+  // Deferred shading (single-sample targets with shadows): the lit programs writing the visible
+  // surface and the two parts of its radiance (SPLIT_LIGHT), and the pass that shadows and
+  // finishes each visible pixel once.
+  GLuint prog_mesh_split = 0, prog_mesh_mat_split = 0, prog_hull_split = 0, prog_hair_split = 0;
+  GLuint prog_deferred = 0, prog_deferred_class = 0;
+  GLuint prog_ground_up = 0;            // the half-resolution ground, upsampled (kGroundUpFS)
+  GLuint prog_ground_near = 0;          // kGroundFS where nothing fades (GROUND_NEAR)
+  GLuint prog_ground_near_lit = 0;      // ... and nothing is shadowed (GROUND_LIT)
+  GLuint prog_ground_shadow_class = 0;  // the ground shadow's first pass (shadowClass)
+  GLuint prog_post_class = 0;           // the post filter's first pass (edge or not)
+  // Static geometry.
+  GLuint hull_vao = 0, hull_vbo = 0, hull_ebo = 0, hull_instances = 0;
+  GLsizei hull_index_count = 0;
+  // The coarser template the shadow pass draws the hulls with (the same instances).
+  GLuint hull_shadow_vao = 0, hull_shadow_vbo = 0, hull_shadow_ebo = 0;
+  GLsizei hull_shadow_index_count = 0;
+  size_t hull_triangles = 0;
+  GLuint empty_vao = 0;
+  GLuint lines_vao = 0, lines_vbo = 0;
+  GLuint hair_vao = 0, hair_vbo = 0, hair_ebo = 0;
+  std::vector<GpuMesh> meshes;  // index = MeshHandle::id; vao == 0: released
+  int box_mesh = -1;
+  // Targets.
+  // Main pass target: MSAA renderbuffers (samples > 1, antialias = msaa) or a single-sample colour
+  // texture (read by the post-process filter, or directly without anti-aliasing).
+  GLuint msaa_fbo = 0, msaa_color = 0, msaa_depth = 0, main_color_tex = 0;
+  GLuint resolve_fbo = 0, resolve_color = 0;
+  GLuint resolve_depth = 0;  // marks the pixels the post filter has an edge at
+  GLuint output_fbo = 0;     // where the finished frame is: resolve_fbo; msaa_fbo without AA or filtered in place
+  // The post filter over rectangles: a copy of them (and around them, as far as its taps reach)
+  // that it reads while it writes the main target in place (antiAliasPass).
+  GLuint post_src_fbo = 0, post_src_tex = 0;
+  bool target_post = false;
+  // With a single-sample target: position + normal of the visible surface, and the key light's
+  // part of its radiance before the shadow and the rest (kDeferredFS), sharing the main depth
+  // buffer.
+  GLuint surf_fbo = 0, surf_tex = 0, key_tex = 0, rest_tex = 0;
+  // With a single-sample target: the ground (over the background) at half resolution.
+  GLuint ground_lo_fbo = 0, ground_lo_tex = 0, ground_lo_depth = 0;
+  GLuint ground_up_fbo = 0;  // main_color_tex without a depth buffer
+  int ground_lo_w = 0, ground_lo_h = 0;
+  GLuint shadow_fbo = 0, shadow_tex = 0;
+  GLuint raw_depth_sampler = 0;                         // reads shadow_tex without comparison (blocker search)
+  GLuint ground_shadow_fbo = 0, ground_shadow_tex = 0;  // R8, shadowFactor on the ground plane
+  GLuint ground_shadow_depth = 0;                       // marks the texels that need the filter
+  int ground_shadow_size = 0;
+  // This frame's texels of the ground's shadow texture that are not 1 (lit) lie in this box
+  // [x0, x1) x [y0, y1) (casterTexelBox); none when !ground_shadow_boxed.
+  bool ground_shadow_boxed = false;
+  int ground_shadow_box[4] = {0, 0, 0, 0};
+  // The last frame with shadows' light frustum and filter radius (setCommonUniforms reads them).
+  LightFrustum frustum;
+  int target_w = 0, target_h = 0, target_samples = -1, shadow_size = 0;
+  // The shadow filter's least radius in this frame's texels: light.shadow_softness texels of the
+  // map shadow_size would have, unmatched (resolutionMatchedShadowSize), so that a matched map
+  // blurs no wider than the full one.
+  double softness_texels = 0.0;
+  int max_samples = 1;
+  // The frame being built.
+  Camera camera;
+  LightParams light;
+  RenderParams params;
+  bool have_shadow_bounds = false;
+  Eigen::AlignedBox3d shadow_bounds;
+  Eigen::AlignedBox3d draw_bounds;
+  std::vector<Eigen::AlignedBox3d> part_bounds;  // one box per mesh, hull and hair draw (screenRects)
+  std::vector<MeshDraw> mesh_draws;
+  std::vector<HullInstance> hulls;
+  std::vector<LineVertex> lines;
+  std::vector<HairVertex> hair_vertices;
+  std::vector<uint32_t> hair_indices;
+  std::vector<HairDraw> hair_draws;
+  bool in_frame = false;
+  bool draft = false;  // this frame is RenderQuality::Draft
+  // Per-pass timing (RenderStats): software rasterizers are timed with glFinish + the wall clock,
+  // hardware GPUs with GL_TIME_ELAPSED queries, double-buffered and read one frame late.
+  enum Pass { kShadowPass, kMainPass, kResolvePass, kPasses };
+  bool software_gl = true;
+  GLuint queries[2][kPasses] = {};
+  int queries_pending[2] = {0, 0};  // bit p: pass p's query of that slot awaits reading
+  int query_frame = 0;
+  std::chrono::steady_clock::time_point pass_t0;
+  void beginPass(Pass p);
+  void endPass(Pass p, RenderStats& st);
+  void collectGpuTimes(RenderStats& st);
+
+  // Construction (renderer.cpp).
+  bool buildPrograms(std::string* err);
+  void makeStaticGeometry();
+
+  // Planning (frame_plan.cpp).
+  FramePlan planFrame() const;
+  void planShadows(FramePlan& f) const;
+  void planView(FramePlan& f) const;
+  void planPasses(FramePlan& f) const;
+  struct PixelRect {
+    int x0, y0, x1, y1;  // [x0, x1) x [y0, y1)
+    int64_t area() const { return int64_t(x1 - x0) * (y1 - y0); }
+  };
+  bool screenRects(const Eigen::Matrix4f& view_proj, int w, int h, std::vector<PixelRect>& rects) const;
+  std::vector<PixelRect> rects;  // scratch of the passes (kept: no allocation per frame)
+  bool casterTexelBox(const Eigen::Matrix4d& light_vp, double margin_m, int size, int box[4]) const;
+  // The pixel rectangle (of a w x h viewport) outside which the ground is lit: its shadow texture
+  // reads 1 there. False: none (nothing shadowed); `whole` set when it cannot be bounded.
+  bool groundShadowRect(const Eigen::Matrix4f& view_proj, int w, int h, PixelRect& rect, bool& whole) const;
+
+  // Targets (render_targets.cpp).
+  void ensureTargets(int w, int h, int samples, bool post);
+  void ensureSingleSampleTargets(int w, int h);  // with ensureTargets(w, h, 1, post)
+  void ensureShadowMap(int size);
+  void ensureGroundShadow(int size);
+  void bindShadowTextures(bool ground_shadow);  // units 0, 1: the shadow map; 2: the ground's
+
+  // The passes, in the order endFrame runs them (render_passes.cpp).
+  void uploadFrameData();
+  void shadowMapPass(const FramePlan& f);
+  void groundShadowPass(const FramePlan& f);
+  void halfGroundPass(const FramePlan& f, RenderStats& st);
+  void upsampleGroundPass(const FramePlan& f, RenderStats& st);
+  void objectsPass(const FramePlan& f, RenderStats& st);
+  void deferredLightPass(const FramePlan& f, RenderStats& st);
+  void groundAndBackgroundPass(const FramePlan& f, RenderStats& st);
+  void linesPass(const FramePlan& f, RenderStats& st);
+  void antiAliasPass(const FramePlan& f);
+  // What the passes share.
+  void setCommonUniforms(GLuint prog, const Eigen::Matrix4f& view_proj, const Eigen::Matrix4f& light_vp,
+                         float normal_offset, bool shadows_on);
+  void setFrameUniforms(GLuint prog, const FramePlan& f) {
+    setCommonUniforms(prog, f.view_proj, f.light_vp, f.normal_offset, f.shadows_on);
+  }
+  void drawGroundParts(const FramePlan& f, int vw, int vh);
+  void drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj, bool depth_only);
+  // prog: the program for the main pass's camera-facing ribbons (0: prog_hair).
+  void drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only, const Eigen::Vector3d& light_dir, GLuint prog = 0);
+  void drawMaterialMeshes(GLuint prog);
+};
+
+}  // namespace ponyhop
