@@ -1,4 +1,4 @@
-// PNG output. stb_image_write's own deflate is slow (the GUIDE measured ~2x a 720p render), so
+// PNG output. stb_image_write's own deflate is slow (about 2x the render time of a 720p frame on 2 cores), so
 // frame_writer.cpp compiles stb_image_write privately (static symbols, no clash with libstb.a)
 // with its compressor routed to zlib's compress2 at a fast level, and FrameWriter encodes on
 // worker threads so that encoding overlaps rendering.

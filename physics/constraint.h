@@ -1,5 +1,5 @@
 // A bilateral (equality) constraint C(q) = 0 between two bodies, in maximal coordinates
-// (Hecker, seed 000, "Math to the Rescue"):
+// (Hecker lecture, "Math to the Rescue"):
 //
 //   C(q) = 0,   C' = J q' = 0,   C'' = J q'' + J' q' = 0,
 //   q'' = M^-1 (F_ext + J^T lambda)   =>   (J M^-1 J^T) lambda = -J' q' - J M^-1 F_ext.

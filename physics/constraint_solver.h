@@ -3,7 +3,7 @@
 //   A lambda = b,   A = J M^-1 J^T (over the dynamic bodies),
 //   b = -J'q' - J_d M^-1 F_ext - J_k acc_k - (2 alpha C' + beta^2 C)
 //
-// (Hecker, seed 000, "Math to the Rescue"; J_d M^-1 F_ext includes the gyroscopic term, J_k
+// (Hecker lecture, "Math to the Rescue"; J_d M^-1 F_ext includes the gyroscopic term, J_k
 // acc_k are the kinematic bodies' known accelerations, the last bracket is Baumgarte's
 // stabilization C'' + 2 alpha C' + beta^2 C = 0). Then F_c = J^T lambda on the dynamic bodies.
 //

@@ -1,5 +1,5 @@
 // What acts on a world besides its joints and force elements, called by World::step at the
-// method's places (Hecker, seed 000, "Simulation Loop - Control"):
+// method's places (Hecker lecture, "Simulation Loop - Control"):
 //
 //   Controller   think(world)            once per step, before anything moves: a state machine
 //                                        that changes only setpoints (the hopper's Think);

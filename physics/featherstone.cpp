@@ -466,7 +466,7 @@ void ArticulatedSystem::jointKinematics(const std::vector<RigidBody>& bodies, st
 }
 
 // ---------------------------------------------------------------------------------------------
-// ABA (Featherstone; seed 001: "a = f + b ... Invert f = I^A a + p^A ... Propagate I^A, p^A
+// ABA (Featherstone 2008; John survey: "a = f + b ... Invert f = I^A a + p^A ... Propagate I^A, p^A
 // inward ... Solve for q'' ... Propagate a outward"):
 //   pass 1 (forward kinematics): writeState() and jointKinematics().
 //   pass 2 (leaves to root): I^A_i = M_i + sum_c X_c^T I^a_c X_c,  p^A_i = b_i + sum_c X_c^T p^a_c,
@@ -661,7 +661,7 @@ void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorX
   }
 }
 
-// RNEA (seed 001: "propagate velocities and accelerations outward, forces inward"):
+// RNEA (John survey: "propagate velocities and accelerations outward, forces inward"):
 //   A_i = X A_p + S u' + c,  F_i = M_i A_i + b_i + sum_c X_c^T F_c,  tau_i = S^T F_i.
 Eigen::VectorXd ArticulatedSystem::inverseDynamics(const std::vector<RigidBody>& bodies,
                                                    const Eigen::VectorXd& udot) const {
@@ -685,7 +685,7 @@ Eigen::VectorXd ArticulatedSystem::inverseDynamics(const std::vector<RigidBody>&
   return tau;
 }
 
-// CRBA (seed 001, "Composite Rigid-Body Algorithm"): I^C_i = M_i + sum_c X_c^T I^C_c X_c;
+// CRBA (John survey, "Composite Rigid-Body Algorithm"): I^C_i = M_i + sum_c X_c^T I^C_c X_c;
 // H_ii = S_i^T I^C_i S_i; then F = I^C_i S_i carried toward the root, F <- X_j^T F, gives
 // H_ji = S_j^T F for every ancestor j. H = Phi^T M Phi (Phi: u -> all body twists), so it is
 // symmetric positive definite.

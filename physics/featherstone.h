@@ -1,4 +1,4 @@
-// Reduced (joint) coordinates for tree-shaped systems (Featherstone; seed 001, "Recursive
+// Reduced (joint) coordinates for tree-shaped systems (Featherstone 2008; John survey, "Recursive
 // Newton-Euler", "Composite Rigid-Body", "Articulated-Body Algorithm"): physics.solver =
 // featherstone. The state is kept in joint coordinates, so joints hold by construction (no
 // drift, nothing to stabilize); the maximal-coordinate bodies (x, q, v, w) are written back after

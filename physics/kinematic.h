@@ -1,5 +1,5 @@
 // Kinematic bodies move as prescribed (keyframes, an analytic anchor path). The constraint
-// equations need their velocity AND acceleration (Hecker, seed 000, "Kinematic Control"): a
+// equations need their velocity AND acceleration (Hecker lecture, "Kinematic Control"): a
 // kinematic parent must always carry analytic derivatives consistent with its pose.
 #pragma once
 

@@ -2,7 +2,7 @@
 
 namespace ponyhop {
 
-// Dot-product row (seed 000, "Rotational Constraints": "what force or torque will enforce this?
+// Dot-product row (Hecker lecture, "Rotational Constraints": "what force or torque will enforce this?
 // t in direction of t_a x n_b"; "these dot products differentiate with w").
 //
 //   s fixed in a, t fixed in b (world vectors):  s' = w_a x s,   t' = w_b x t
@@ -13,7 +13,7 @@ namespace ponyhop {
 //   C'' = (alpha_a - alpha_b) . n + (w_a - w_b) . n',   n' = (w_a x s) x t + s x (w_b x t)
 //   J'q' = (w_a - w_b) . ((w_a x s) x t + s x (w_b x t))
 //
-// J^T lambda is a torque lambda n on a and -lambda n on b: along s x t, as the seed says.
+// J^T lambda is a torque lambda n on a and -lambda n on b: along s x t, as the Hecker lecture says.
 JointRow dotRow(const RigidBody& a, const Eigen::Vector3d& s, const RigidBody& b, const Eigen::Vector3d& t) {
   JointRow r;
   const Eigen::Vector3d n = s.cross(t);
@@ -25,7 +25,7 @@ JointRow dotRow(const RigidBody& a, const Eigen::Vector3d& s, const RigidBody& b
   return r;
 }
 
-// Axis row (seed 000: "(R_b - R_a) . n1 = 0 ... forces in direction of n1, n2; n's are local
+// Axis row (Hecker lecture: "(R_b - R_a) . n1 = 0 ... forces in direction of n1, n2; n's are local
 // coordinate frames; contrast with p_a - p_b = 0"). With points on the axis instead of the
 // centres of mass (the same when the centres lie on the axis):
 //

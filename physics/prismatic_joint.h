@@ -1,16 +1,16 @@
 // A prismatic (sliding) joint: body b slides along one axis fixed in body a, without turning
-// relative to it. Five rows, one free degree of freedom: the hopper's knee (Hecker, seed 000,
+// relative to it. Five rows, one free degree of freedom: the hopper's knee (Hecker lecture,
 // "Hopper Knee": "joint subtracts 5 DOF ... 3 rotational, 2 translational").
 //
 // Frames. The joint frame of a (axes x_a, y_a, z_a, z_a the sliding axis, Hecker's t_a) and the
 // joint frame of b (x_b, y_b, z_b, Hecker's n1, n2, ...) are fixed in the bodies; in the rest
 // pose they coincide. p_a and p_b are points fixed in a and b that lie on the sliding axis.
 //
-//   rotational (dot products of body-fixed unit vectors, seed: "t_a . n1 = 0, t_a . n2 = 0,
+//   rotational (dot products of body-fixed unit vectors, Hecker lecture: "t_a . n1 = 0, t_a . n2 = 0,
 //   n3 . n2 = 0"):
 //     C1 = z_a . x_b,   C2 = z_a . y_b        (b's axis stays parallel to a's: 2 rotations)
 //     C3 = x_a . y_b                          (no twist about the axis: the third rotation)
-//   translational (seed: "(R_b - R_a) . n1 = 0, (R_b - R_a) . n2 = 0", n's in a's frame):
+//   translational (Hecker lecture: "(R_b - R_a) . n1 = 0, (R_b - R_a) . n2 = 0", n's in a's frame):
 //     C4 = (p_b - p_a) . x_a,   C5 = (p_b - p_a) . y_a
 //
 // The free coordinate is the slide s = (p_b - p_a) . z_a (slide()), driven by soft constraints

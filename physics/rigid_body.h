@@ -1,8 +1,8 @@
-// A rigid body in maximal coordinates (Hecker, seed 002, Table 1): centre-of-mass position x,
+// A rigid body in maximal coordinates (Hecker article, Table 1): centre-of-mass position x,
 // orientation q (unit quaternion, body to world), linear velocity v, angular velocity w (world
 // frame). Dynamic bodies are moved by forces; kinematic bodies follow a prescribed
 // KinematicMotion and take no constraint force: their known accelerations enter the
-// right-hand side of the constraint equations (seed 000, "Kinematic Control").
+// right-hand side of the constraint equations (Hecker lecture, "Kinematic Control").
 #pragma once
 
 #include <Eigen/Core>

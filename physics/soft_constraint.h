@@ -1,4 +1,4 @@
-// Soft constraints (Hecker, seed 000, "Soft Constraints": damped springs, PDCs, servos):
+// Soft constraints (Hecker lecture, "Soft Constraints": damped springs, PDCs, servos):
 //
 //   f_c = k_s (C - C_d) + k_d (C' - C_d')
 //

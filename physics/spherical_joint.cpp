@@ -4,7 +4,7 @@
 
 namespace ponyhop {
 
-// Hecker, "How to Simulate a Ponytail" (seed 002, Eq. 1-3, 12-14) and seed 000:
+// Hecker article (Eq. 1-3, 12-14) and Hecker lecture:
 //
 //   R_a, R_b   centres of mass (world);   r_a = q_a point_a, r_b = q_b point_b (world-frame arms)
 //   p_a = R_a + r_a,  p_b = R_b + r_b     the joint point as seen from each body

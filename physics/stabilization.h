@@ -1,9 +1,9 @@
 // Keeping joints together: the acceleration-level constraint C'' = 0 holds C only as well as
-// the integrator does, so C drifts (Hecker, seed 000, "Cons: accuracy, stability"). Two cures:
+// the integrator does, so C drifts (Hecker lecture, "Cons: accuracy, stability"). Two cures:
 //
 //  Baumgarte: solve C'' + 2 alpha C' + beta^2 C = 0 instead (gains in PhysicsParams; applied
 //    inside the joint-force stage, see constraint_solver.h).
-//  Projection (post-stabilization, seed 001): after each step, Newton-project the positions
+//  Projection (post-stabilization, John survey; Ascher 1994): after each step, Newton-project the positions
 //    onto C = 0 in the mass metric, then the velocities onto J v = -J_k v_k (the kinematic
 //    bodies' motion is prescribed, so they do not move):
 //      dq = M^-1 J^T (J M^-1 J^T)^-1 (-C)   (repeat until |C| < tolerance),

@@ -1,6 +1,6 @@
-// Wall time spent in each stage of World::step() (GUIDE: "per-stage timings are measured in the
-// program"), so that the bench and the panel can show what each part of a scene costs: a chain
-// without a controller or contacts pays nothing for those stages.
+// Wall time spent in each stage of World::step() (measured in the program, as MuJoCo's
+// mjData.timer is), so that the bench and the panel can show what each part of a scene costs: a
+// chain without a controller or contacts pays nothing for those stages.
 //
 // Times are exclusive: a stage called from inside another (RK4 and RATTLE re-run the force
 // stages at their stage times; featherstone's step calls them at every evaluation) is charged to

@@ -1,5 +1,5 @@
 // Baraff's linear-time Lagrange multipliers (D. Baraff, "Linear-Time Dynamics using Lagrange
-// Multipliers", SIGGRAPH 96 / CMU-RI-TR-95-44; seed 001 "Baraff gives O(N) multiplier method").
+// Multipliers", SIGGRAPH 96 / CMU-RI-TR-95-44; John survey: "Baraff gives O(N) multiplier method").
 //
 // H = [ M  J^T ; J  0 ] (one node per dynamic body, block 6, H_ii = M_i; one node per joint
 // with rows, block m_j, H_jj = 0; an edge body-joint where the joint's Jacobian block is non-zero)

@@ -106,13 +106,13 @@ int World::addForceElement(std::unique_ptr<ForceElement> element) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The step (Hecker, seed 000, "Simulation Loop - Control"; GUIDE: "the step reads like the
-// method"). Each stage does nothing once the world has stopped, and stops it with a message when
-// it produces a non-finite or runaway value.
+// The step (Hecker lecture, "Simulation Loop - Control"), one named stage a line as MuJoCo's
+// mj_step reads. Each stage does nothing once the world has stopped, and stops it with a message
+// when it produces a non-finite or runaway value.
 
 void World::step() {
   if (!ok()) return;
-  think();  // controllers' state machines: setpoints for this step (Think, seed 000)
+  think();  // controllers' state machines: setpoints for this step (Think, Hecker lecture)
   if (!ok()) return;
   last_substeps_ = 0;
   last_error_ = 0.0;
@@ -294,7 +294,7 @@ void World::followTeleports(double h) {
 
 void World::snapshotInto(Snapshot& s) const {
   gatherStateInto(s.bodies);
-  s.world = state_;  // the warm start has the same rows as last time: copied without allocating
+  s.step = state_;  // the warm start has the same rows as last time: copied without allocating
 }
 
 void World::restore(const Snapshot& s) {
@@ -303,7 +303,7 @@ void World::restore(const Snapshot& s) {
   // Its warm start is the multipliers of the last step before the snapshot: a force, so as good
   // a guess for a retry with h / 2 as for h; the undone step's never seed anything. Its status
   // is "": only called on a world that was running when the snapshot was taken.
-  state_ = s.world;
+  state_ = s.step;
   stage_time_ = state_.time;
   forces_stale_ = true;
   split_reason_.clear();
@@ -584,7 +584,7 @@ void World::saveStateInto(SavedState& s) const {
   for (size_t i = 0; i < controllers_.size(); ++i) s.controllers[i] = controllers_[i]->saveState();
   s.contacts.resize(contacts_.size());
   for (size_t i = 0; i < contacts_.size(); ++i) s.contacts[i] = contacts_[i]->saveState();
-  s.world = state_;
+  s.step = state_;
 }
 
 void World::restoreState(const SavedState& s) {
@@ -593,7 +593,7 @@ void World::restoreState(const SavedState& s) {
   for (size_t i = 0; i < controllers_.size() && i < s.controllers.size(); ++i)
     controllers_[i]->restoreState(s.controllers[i]);
   for (size_t i = 0; i < contacts_.size() && i < s.contacts.size(); ++i) contacts_[i]->restoreState(s.contacts[i]);
-  state_ = s.world;
+  state_ = s.step;
   stage_time_ = state_.time;
   forces_stale_ = true;
   split_reason_.clear();

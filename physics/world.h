@@ -1,5 +1,5 @@
 // The simulated world: bodies, joints and force elements, and the step that advances them
-// (Hecker, seed 000, "Simulation Loop - Control"). Parameters come in PhysicsParams; the state
+// (Hecker lecture, "Simulation Loop - Control"). Parameters come in PhysicsParams; the state
 // (bodies, time, status) lives here. Physics never prints: when a step goes wrong, the world
 // stops and status() says when, in which stage, and the likely cause.
 #pragma once
@@ -106,7 +106,7 @@ class World {
     std::vector<BodyState> bodies;
     std::vector<std::any> controllers;
     std::vector<std::any> contacts;
-    StepState world;
+    StepState step;
   };
   SavedState saveState() const;
   // The same into storage `s` already has (step() keeps one per world: no allocation per dt
@@ -191,7 +191,7 @@ class World {
   // must not seed the retry).
   struct Snapshot {
     State bodies;
-    StepState world;
+    StepState step;
   };
   Snapshot snapshot() const { return {gatherState(), state_}; }
   // The same into `s`, reusing its storage (substep(): a steady step allocates nothing).

@@ -1,4 +1,4 @@
-// A chain of rigid links joined by spherical joints (Hecker's ponytail, seed 002): built from
+// A chain of rigid links joined by spherical joints (the Hecker article's ponytail): built from
 // ChainParams, hanging from a parent body (the kinematic head, the anchor of a chain scene, or
 // later the hopper) at a point given in the parent's body frame.
 //

@@ -59,7 +59,7 @@ std::string validate(const HopperParams& p, const std::string& prefix) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Leg length along the knee's free axis (seed 000, "Access to Current State: derived state, e.g.
+// Leg length along the knee's free axis (Hecker lecture, "Access to Current State: derived state, e.g.
 // scalar leg length, and its derivatives"):
 //
 //   z_a  the upper leg's axis (world), from the toe toward the hip
@@ -80,10 +80,10 @@ LegState legState(const HopperModel& m, const std::vector<RigidBody>& bodies) {
   return s;
 }
 
-// ComputeControllerForces (seed 000): soft constraints f = k_s (C - C_d) + k_d (C' - C_d'),
+// ComputeControllerForces (Hecker lecture): soft constraints f = k_s (C - C_d) + k_d (C' - C_d'),
 // each applied along its constraint's Jacobian with equal and opposite parts on the two bodies.
 //
-// 1. Leg spring along the knee's free axis (C = r, C_d = r_set; seed: "knee length: pick good
+// 1. Leg spring along the knee's free axis (C = r, C_d = r_set; Hecker lecture: "knee length: pick good
 //    gains for bouncing, change leg setpoint for length control"), plus end stops at r_min and
 //    r_max written with the smooth ramp (no max):
 //      f = k (r_set - r) - b r'
@@ -92,7 +92,7 @@ LegState legState(const HopperModel& m, const std::vector<RigidBody>& bodies) {
 //    f > 0 extends the leg: -f z_a on the foot, +f z_a on the upper leg, both at the foot's
 //    centre of mass (on the axis, so neither gets a torque).
 // 2. Hip servos, torques only (the hip is a ball joint), on the upper leg (a) and the body (b)
-//    (seed: "roll & pitch: move z_a around in b's coordinate frame using z_a . x_b and
+//    (Hecker lecture: "roll & pitch: move z_a around in b's coordinate frame using z_a . x_b and
 //    z_a . y_b; yaw: x_a . y_b"). For C = s . t, C' = (w_s - w_t) . (s x t) (the dot-product
 //    row of physics/prismatic_joint.cpp), so the torque is -f (s x t) on s's body and +f (s x t)
 //    on t's body:
@@ -265,7 +265,7 @@ Eigen::Vector3d Hopper::centerOfMassVelocity(const World& world) const {
   return (b.mass * b.v + u.mass * u.v + f.mass * f.v) / (b.mass + u.mass + f.mass);
 }
 
-// Think (seed 000): the state machine over the hop; it changes setpoints only.
+// Think (Hecker lecture): the state machine over the hop; it changes setpoints only.
 //
 //   FLIGHT      -> LOADING      touchdown (the contact became active)
 //   LOADING     -> COMPRESSION  r < rest_length - load_depth

@@ -1,11 +1,11 @@
-// The Raibert hopper (Hecker, seed 000, "Hopper Demo"; Raibert, "Legged Robots That Balance"):
+// The Raibert hopper (Hecker lecture, "Hopper Demo"; Raibert, "Legged Robots That Balance"):
 // a massive body, a light upper leg hanging from it by a spherical hip, and a foot sliding in the
 // upper leg on a prismatic knee, hopping on the ground plane z = 0.
 //
 //   body ── hip: SphericalJoint (3 rows) ── upper leg ── knee: PrismaticJoint (5 rows) ── foot
 //   foot ── ground: GroundContact (0, 1, 3 or 4 rows: physics/models/hopper_foot.h)
 //
-// Control follows the method's split (seed 000, "Think" / "ComputeControllerForces"):
+// Control follows the method's split (Hecker lecture, "Think" / "ComputeControllerForces"):
 //   Hopper::think(world)   once per step, first in World::step(): the state machine over the hop
 //                          (FLIGHT, LOADING, COMPRESSION, THRUST, UNLOADING) and Raibert's three
 //                          parts; it only changes setpoints (HopperSetpoints).
@@ -91,7 +91,7 @@ class Hopper final : public Controller {
                                      std::shared_ptr<const Terrain> terrain = nullptr);
   Hopper(Key, World& world, const HopperParams& params, std::shared_ptr<const Terrain> terrain);
 
-  // Think (seed 000): the state machine; World::step calls it once per step, first.
+  // Think (Hecker lecture): the state machine; World::step calls it once per step, first.
   void think(World& world) override;
   // ComputeControllerForces: computeHopperForces with the current setpoints.
   void applyForces(World& world, double t) override;

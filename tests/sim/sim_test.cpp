@@ -96,7 +96,7 @@ TEST(Sim, SnapshotRestoresBitForBitWithTheControllersState) {
   const int hops = sim.hopper()->hops();
   const HopperPhase phase = sim.hopper()->phase();
   sim.restore(snap);
-  EXPECT_DOUBLE_EQ(sim.time(), snap.world.time);
+  EXPECT_DOUBLE_EQ(sim.time(), snap.world.step.time);
   ASSERT_TRUE(sim.advanceTo(1.4)) << sim.status();
   EXPECT_EQ(stateBits(sim.world()), first) << "the replay from the snapshot differs";
   EXPECT_EQ(sim.hopper()->hops(), hops);
