@@ -1,4 +1,4 @@
-// Subcommands of the `ponyhop` executable, one file each (app/cmd_*.cpp).
+// Subcommands of the `ponyhop` executable, one file each (app/cmd_*.cpp; the bench's: bench/commands.h).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -11,10 +11,8 @@ void addSnapshotCommand(CLI::App& app, int& exit_code);  // app/cmd_snapshot.cpp
 void addSceneDocCommand(CLI::App& app, int& exit_code);
 void addRenderCommand(CLI::App& app, int& exit_code);
 void addSimCommand(CLI::App& app, int& exit_code);
-void addExportCommand(CLI::App& app, int& exit_code);       // app/cmd_export.cpp: a glTF bake
-void addVideoCommand(CLI::App& app, int& exit_code);        // app/cmd_video.cpp: frames -> video
-void addBenchCommand(CLI::App& app, int& exit_code);        // app/cmd_bench.cpp: speed against accuracy
-void addBenchRenderCommand(CLI::App& app, int& exit_code);  // app/cmd_bench_render.cpp: render time per pass
+void addExportCommand(CLI::App& app, int& exit_code);  // app/cmd_export.cpp: a glTF bake
+void addVideoCommand(CLI::App& app, int& exit_code);   // app/cmd_video.cpp: frames -> video
 #ifdef PONYHOP_WINDOW
 void addRunCommand(CLI::App& app, int& exit_code);  // app/cmd_run.cpp: the window with the tuning panel
 #endif

@@ -22,7 +22,7 @@
 #include <sstream>
 #include <thread>
 
-#include "app/commands.h"
+#include "bench/commands.h"
 #include "engine/render_session.h"
 #include "sim/scene_io.h"
 
@@ -152,7 +152,7 @@ int runBenchRender(const BenchRenderArgs& args) {
     gl_name = s.glRenderer() + " / " + s.glVersion();
   }
   md << "# Render speed\n\n"
-     << "`ponyhop bench-render` (app/cmd_bench_render.cpp): ms per frame, median of " << args.frames
+     << "`ponyhop bench-render` (bench/cmd_bench_render.cpp): ms per frame, median of " << args.frames
      << " frames after 2 warm-up frames (the configurations take turns frame by frame), on " << u.machine << " with "
      << std::thread::hardware_concurrency() << " hardware threads, " << gl_name
      << ", LP_NUM_THREADS=" << (lp ? lp : "(unset)") << ", load average at the start " << loadAverage() << ".\n\n";
