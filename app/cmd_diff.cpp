@@ -44,7 +44,7 @@ int runDiff(const DiffArgs& args) {
     // Before reading anything: never the golden, never a device, a folder that takes the file.
     try {
       checkOutputFile("--out", args.out, {args.expected, args.actual});
-    } catch (const SceneError& e) {
+    } catch (const InputError& e) {
       std::fprintf(stderr, "ponyhop diff: %s\n", e.what());
       return 2;
     }

@@ -37,11 +37,11 @@ void addRunCommand(CLI::App& app, int& exit_code) {
         char tail = 0;
         if (std::sscanf(args->size.c_str(), "%dx%d%c", &o.width, &o.height, &tail) != 2 || o.width < 320 ||
             o.height < 200 || o.width > 16384 || o.height > 16384) {
-          throw SceneError("--size " + args->size + ": expected WIDTHxHEIGHT of at least 320x200, e.g. 1280x720");
+          throw InputError("--size " + args->size + ": expected WIDTHxHEIGHT of at least 320x200, e.g. 1280x720");
         }
       }
       exit_code = runWindow(scene, o);
-    } catch (const SceneError& e) {
+    } catch (const InputError& e) {
       std::fprintf(stderr, "ponyhop run: %s\n", e.what());
       exit_code = 2;
     }

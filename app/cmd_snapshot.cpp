@@ -22,7 +22,7 @@ int runSnapshotCommand(const SnapshotArgs& args) {
   ShotList list;
   try {
     list = loadShotList(args.list, args.goldens);
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     std::fprintf(stderr, "ponyhop snapshot: %s\n", e.what());
     return 2;
   }

@@ -98,7 +98,7 @@ std::vector<Row> measureAll(const std::string& scene_path, const std::vector<std
   for (int i = 0; i < warmup + frames; ++i) {
     for (Run& r : runs) {
       const double t = i / r.scene.render.fps;
-      if (!r.session->simulateTo(t)) throw SceneError(scene_path + ": the simulation stopped: " + r.session->status());
+      if (!r.session->simulateTo(t)) throw InputError(scene_path + ": the simulation stopped: " + r.session->status());
       const auto t0 = Clock::now();
       r.session->renderFrame(t, rgba);
       const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -133,7 +133,7 @@ int runBenchRender(const BenchRenderArgs& args) {
     int w = 0, h = 0;
     char tail = 0;
     if (std::sscanf(size.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192)
-      throw SceneError("--sizes " + size + ": expected WIDTHxHEIGHT between 16x16 and 8192x8192, e.g. 1280x720");
+      throw InputError("--sizes " + size + ": expected WIDTHxHEIGHT between 16x16 and 8192x8192, e.g. 1280x720");
     sizes.emplace_back(w, h);
   }
   std::vector<Override> overrides;
@@ -233,7 +233,7 @@ void addBenchRenderCommand(CLI::App& app, int& exit_code) {
   cmd->callback([args, &exit_code] {
     try {
       exit_code = runBenchRender(*args);
-    } catch (const SceneError& e) {
+    } catch (const InputError& e) {
       std::fprintf(stderr, "ponyhop bench-render: %s\n", e.what());
       exit_code = 2;
     }
