@@ -136,14 +136,7 @@ void addExportCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--fps", args->fps, "Samples per second (default: render.fps)")->check(CLI::Range(1.0, 1000.0));
   cmd->add_option("--frames", args->frames, "Number of samples (default: render.frames)")
       ->check(CLI::Range(1, 1000000));
-  cmd->callback([args, &exit_code] {
-    try {
-      exit_code = runExport(*args);
-    } catch (const InputError& e) {
-      std::fprintf(stderr, "ponyhop export: %s\n", e.what());
-      exit_code = 2;
-    }
-  });
+  cmd->callback([args, &exit_code] { exit_code = runCommand("export", [&] { return runExport(*args); }); });
 }
 
 }  // namespace ponyhop

@@ -273,14 +273,7 @@ void addRenderCommand(CLI::App& app, int& exit_code) {
                   "Render only frames A to B (A:B, inclusive), byte-identical to a full run's (docs/RENDER_FARM.md)");
   cmd->add_flag("--resume", args->resume, "Keep frames already written whole in --out; render the others");
   cmd->add_flag("--transparent", args->transparent, "No background: PNG frames with alpha (render.transparent)");
-  cmd->callback([args, &exit_code] {
-    try {
-      exit_code = runRender(*args);
-    } catch (const InputError& e) {
-      std::fprintf(stderr, "ponyhop render: %s\n", e.what());
-      exit_code = 2;
-    }
-  });
+  cmd->callback([args, &exit_code] { exit_code = runCommand("render", [&] { return runRender(*args); }); });
 }
 
 }  // namespace ponyhop

@@ -29,7 +29,7 @@ void addRunCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--quality-log", args->window.quality_log,
                   "Write one line per frame: the scene view's quality (draft/final) and why (tests)");
   cmd->callback([args, &exit_code] {
-    try {
+    exit_code = runCommand("run", [&] {
       const Scene scene = args->scene.load();
       WindowOptions o = args->window;
       o.vsync = !args->no_vsync;
@@ -40,11 +40,8 @@ void addRunCommand(CLI::App& app, int& exit_code) {
           throw InputError("--size " + args->size + ": expected WIDTHxHEIGHT of at least 320x200, e.g. 1280x720");
         }
       }
-      exit_code = runWindow(scene, o);
-    } catch (const InputError& e) {
-      std::fprintf(stderr, "ponyhop run: %s\n", e.what());
-      exit_code = 2;
-    }
+      return runWindow(scene, o);
+    });
   });
 }
 

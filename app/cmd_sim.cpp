@@ -285,14 +285,7 @@ void addSimCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--rate", args->rate, "--poses rows at t = k/RATE (interpolated between steps) instead of every step")
       ->check(finiteIn(1e-3, 1e6));
   cmd->add_option("--at", args->at, "--poses rows at these times (s, ascending, interpolated)")->delimiter(',');
-  cmd->callback([args, &exit_code] {
-    try {
-      exit_code = runSim(*args);
-    } catch (const InputError& e) {
-      std::fprintf(stderr, "ponyhop sim: %s\n", e.what());
-      exit_code = 2;
-    }
-  });
+  cmd->callback([args, &exit_code] { exit_code = runCommand("sim", [&] { return runSim(*args); }); });
 }
 
 }  // namespace ponyhop

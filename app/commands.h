@@ -2,6 +2,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <functional>
 
 namespace ponyhop {
 
@@ -16,5 +17,9 @@ void addVideoCommand(CLI::App& app, int& exit_code);   // app/cmd_video.cpp: fra
 #ifdef PONYHOP_WINDOW
 void addRunCommand(CLI::App& app, int& exit_code);  // app/cmd_run.cpp: the window with the tuning panel
 #endif
+
+// A command's body run as every command runs it: bad input (an InputError: a scene, an option, a
+// path) is printed as "ponyhop NAME: message" and gives exit code 2; otherwise the body's code.
+int runCommand(const char* name, const std::function<int()>& body);
 
 }  // namespace ponyhop

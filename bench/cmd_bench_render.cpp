@@ -22,6 +22,7 @@
 #include <sstream>
 #include <thread>
 
+#include "app/commands.h"
 #include "bench/commands.h"
 #include "engine/render_session.h"
 #include "sim/scene_io.h"
@@ -230,14 +231,7 @@ void addBenchRenderCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--set", args->sets, "key=value overrides applied to every configuration (as render --set)");
   cmd->add_option("--out", args->out,
                   "Markdown table to write (default docs/bench/render_table.md; empty: print only)");
-  cmd->callback([args, &exit_code] {
-    try {
-      exit_code = runBenchRender(*args);
-    } catch (const InputError& e) {
-      std::fprintf(stderr, "ponyhop bench-render: %s\n", e.what());
-      exit_code = 2;
-    }
-  });
+  cmd->callback([args, &exit_code] { exit_code = runCommand("bench-render", [&] { return runBenchRender(*args); }); });
 }
 
 }  // namespace ponyhop
