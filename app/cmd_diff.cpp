@@ -42,12 +42,7 @@ int runDiff(const DiffArgs& args) {
   std::string err;
   if (!args.out.empty()) {
     // Before reading anything: never the golden, never a device, a folder that takes the file.
-    try {
-      checkOutputFile("--out", args.out, {args.expected, args.actual});
-    } catch (const SceneError& e) {
-      std::fprintf(stderr, "ponyhop diff: %s\n", e.what());
-      return 2;
-    }
+    checkOutputFile("--out", args.out, {args.expected, args.actual});
   }
   const Image expected = loadPng(args.expected, &err);
   if (expected.empty()) {
@@ -117,7 +112,7 @@ void addDiffCommand(CLI::App& app, int& exit_code) {
       ->check(unitRange("--fade"))
       ->capture_default_str();
   cmd->add_flag("--no-aa", args->no_aa, "Count anti-aliased pixels as differences too");
-  cmd->callback([args, &exit_code] { exit_code = runDiff(*args); });
+  cmd->callback([args, &exit_code] { exit_code = runCommand("diff", [&] { return runDiff(*args); }); });
 }
 
 }  // namespace ponyhop

@@ -88,7 +88,7 @@ int runExport(const ExportArgs& args) {
   if (args.fps > 0.0) scene.render.fps = args.fps;
   if (args.frames > 0) scene.render.frames = args.frames;
   const std::string ext = std::filesystem::path(args.out).extension().string();
-  if (ext != ".glb") throw SceneError("--out " + args.out + ": the bake is written as binary glTF: name it *.glb");
+  if (ext != ".glb") throw InputError("--out " + args.out + ": the bake is written as binary glTF: name it *.glb");
 
   Sim rt(scene, &assimpAssets());
   Bake bake;
@@ -136,14 +136,7 @@ void addExportCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--fps", args->fps, "Samples per second (default: render.fps)")->check(CLI::Range(1.0, 1000.0));
   cmd->add_option("--frames", args->frames, "Number of samples (default: render.frames)")
       ->check(CLI::Range(1, 1000000));
-  cmd->callback([args, &exit_code] {
-    try {
-      exit_code = runExport(*args);
-    } catch (const SceneError& e) {
-      std::fprintf(stderr, "ponyhop export: %s\n", e.what());
-      exit_code = 2;
-    }
-  });
+  cmd->callback([args, &exit_code] { exit_code = runCommand("export", [&] { return runExport(*args); }); });
 }
 
 }  // namespace ponyhop

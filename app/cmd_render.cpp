@@ -98,7 +98,7 @@ int runRender(const RenderArgs& args) {
     int w = 0, h = 0;
     char tail = 0;
     if (std::sscanf(args.size.c_str(), "%dx%d%c", &w, &h, &tail) != 2) {
-      throw SceneError("--size " + args.size + ": expected WIDTHxHEIGHT, e.g. 1280x720");
+      throw InputError("--size " + args.size + ": expected WIDTHxHEIGHT, e.g. 1280x720");
     }
     scene.render.width = w;
     scene.render.height = h;
@@ -114,19 +114,19 @@ int runRender(const RenderArgs& args) {
     const fs::path vdir = fs::weakly_canonical(fs::absolute(fs::path(args.video), ec).parent_path(), ec);
     const fs::path odir = fs::weakly_canonical(fs::absolute(fs::path(out), ec), ec);
     if (vdir == odir || samePath(args.video, out)) {
-      throw SceneError("--video " + args.video + ": is inside the frames folder " + out +
+      throw InputError("--video " + args.video + ": is inside the frames folder " + out +
                        ", which each render replaces whole; put the video beside it");
     }
     if (!ffmpegAvailable())
-      throw SceneError("--video " + args.video + ": ffmpeg is not installed (apt-get install ffmpeg)");
+      throw InputError("--video " + args.video + ": ffmpeg is not installed (apt-get install ffmpeg)");
   }
   std::string video_err;
-  if (!args.video.empty() && videoContainer(args.video, &video_err).empty()) throw SceneError("--video " + video_err);
+  if (!args.video.empty() && videoContainer(args.video, &video_err).empty()) throw InputError("--video " + video_err);
   const bool chunk = !args.range.empty() || args.resume;
   if (chunk && args.ui)
-    throw SceneError("--range/--resume: not with --ui (the panel's plots depend on every frame before)");
+    throw InputError("--range/--resume: not with --ui (the panel's plots depend on every frame before)");
   if (!args.range.empty() && !args.video.empty()) {
-    throw SceneError("--range with --video: a chunk is part of a video; encode the merged folder with `ponyhop video`");
+    throw InputError("--range with --video: a chunk is part of a video; encode the merged folder with `ponyhop video`");
   }
   const FrameRange range =
       args.range.empty() ? FrameRange{0, scene.render.frames - 1} : parseFrameRange(args.range, scene.render.frames);
@@ -273,14 +273,7 @@ void addRenderCommand(CLI::App& app, int& exit_code) {
                   "Render only frames A to B (A:B, inclusive), byte-identical to a full run's (docs/RENDER_FARM.md)");
   cmd->add_flag("--resume", args->resume, "Keep frames already written whole in --out; render the others");
   cmd->add_flag("--transparent", args->transparent, "No background: PNG frames with alpha (render.transparent)");
-  cmd->callback([args, &exit_code] {
-    try {
-      exit_code = runRender(*args);
-    } catch (const SceneError& e) {
-      std::fprintf(stderr, "ponyhop render: %s\n", e.what());
-      exit_code = 2;
-    }
-  });
+  cmd->callback([args, &exit_code] { exit_code = runCommand("render", [&] { return runRender(*args); }); });
 }
 
 }  // namespace ponyhop

@@ -29,7 +29,7 @@ void addRunCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--quality-log", args->window.quality_log,
                   "Write one line per frame: the scene view's quality (draft/final) and why (tests)");
   cmd->callback([args, &exit_code] {
-    try {
+    exit_code = runCommand("run", [&] {
       const Scene scene = args->scene.load();
       WindowOptions o = args->window;
       o.vsync = !args->no_vsync;
@@ -37,14 +37,11 @@ void addRunCommand(CLI::App& app, int& exit_code) {
         char tail = 0;
         if (std::sscanf(args->size.c_str(), "%dx%d%c", &o.width, &o.height, &tail) != 2 || o.width < 320 ||
             o.height < 200 || o.width > 16384 || o.height > 16384) {
-          throw SceneError("--size " + args->size + ": expected WIDTHxHEIGHT of at least 320x200, e.g. 1280x720");
+          throw InputError("--size " + args->size + ": expected WIDTHxHEIGHT of at least 320x200, e.g. 1280x720");
         }
       }
-      exit_code = runWindow(scene, o);
-    } catch (const SceneError& e) {
-      std::fprintf(stderr, "ponyhop run: %s\n", e.what());
-      exit_code = 2;
-    }
+      return runWindow(scene, o);
+    });
   });
 }
 

@@ -101,7 +101,7 @@ int runSummary(const Scene& scene, double duration, const SimArgs& args) {
   // Written to a temporary name and renamed: a failed run never replaces a good CSV.
   const std::string tmp = args.csv + ".partial-" + std::to_string(getpid());
   std::FILE* f = std::fopen(tmp.c_str(), "w");
-  if (!f) throw SceneError("--csv " + args.csv + ": cannot write the file");
+  if (!f) throw InputError("--csv " + args.csv + ": cannot write the file");
   std::fprintf(f, "%s\n", header(rt).c_str());
 
   const long rows = static_cast<long>(std::floor(duration * 1000.0 + 1e-9)) + 1;
@@ -153,10 +153,10 @@ int runSummary(const Scene& scene, double duration, const SimArgs& args) {
   std::error_code ec;
   if (!ok) {
     std::remove(tmp.c_str());
-    throw SceneError("--csv " + args.csv + ": write failed");
+    throw InputError("--csv " + args.csv + ": write failed");
   }
   std::filesystem::rename(tmp, args.csv, ec);
-  if (ec) throw SceneError("--csv " + args.csv + ": " + ec.message());
+  if (ec) throw InputError("--csv " + args.csv + ": " + ec.message());
   std::fprintf(stderr, "sim: %ld rows (%.3f s simulated, dt %.6g s) -> %s\n", rows, duration, scene.physics.dt,
                args.csv.c_str());
   if (const int misses = rt.world().toleranceMisses(); misses > 0) {
@@ -183,7 +183,7 @@ int runPoses(const Scene& scene, double duration, const SimArgs& args) {
   std::vector<double> times = args.at;
   for (size_t i = 0; i < times.size(); ++i) {
     if (!std::isfinite(times[i]) || times[i] < 0.0 || (i > 0 && times[i] < times[i - 1])) {
-      throw SceneError("--at: times must be ascending seconds >= 0");
+      throw InputError("--at: times must be ascending seconds >= 0");
     }
   }
   if (args.rate > 0.0) {
@@ -195,7 +195,7 @@ int runPoses(const Scene& scene, double duration, const SimArgs& args) {
   // concurrent run never replaces a good file.
   const std::string tmp = args.poses + ".partial-" + std::to_string(getpid());
   std::FILE* f = std::fopen(tmp.c_str(), "w");
-  if (!f) throw SceneError("--poses " + args.poses + ": cannot write the file");
+  if (!f) throw InputError("--poses " + args.poses + ": cannot write the file");
   std::fprintf(f, "t,body,name,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz\n");
   const std::vector<std::string> ids = bodyIds(rt.world());
   PoseSampler sampler(rt);
@@ -240,11 +240,11 @@ int runPoses(const Scene& scene, double duration, const SimArgs& args) {
                    args.poses.c_str());
       return 1;
     }
-    throw SceneError("--poses " + args.poses + ": write failed");
+    throw InputError("--poses " + args.poses + ": write failed");
   }
   std::error_code ec;
   std::filesystem::rename(tmp, args.poses, ec);
-  if (ec) throw SceneError("--poses " + args.poses + ": " + ec.message());
+  if (ec) throw InputError("--poses " + args.poses + ": " + ec.message());
   std::fprintf(stderr, "sim: %ld times x %zu bodies -> %s\n", rows, ids.size(), args.poses.c_str());
   return 0;
 }
@@ -253,13 +253,13 @@ int runSim(const SimArgs& args) {
   const Scene scene = args.scene.load();
   const double duration = args.duration >= 0.0 ? args.duration : scene.duration;
   if (!std::isfinite(duration) || duration > 1e6) {
-    throw SceneError("--duration: must be a number of seconds in [0, 1e6]");
+    throw InputError("--duration: must be a number of seconds in [0, 1e6]");
   }
-  if (args.csv.empty() && args.poses.empty()) throw SceneError("nothing to write: give --csv FILE and/or --poses FILE");
+  if (args.csv.empty() && args.poses.empty()) throw InputError("nothing to write: give --csv FILE and/or --poses FILE");
   if (args.poses.empty() && (args.rate > 0.0 || !args.at.empty())) {
-    throw SceneError("--rate and --at choose the times of --poses rows: give --poses FILE");
+    throw InputError("--rate and --at choose the times of --poses rows: give --poses FILE");
   }
-  if (args.rate > 0.0 && !args.at.empty()) throw SceneError("--rate and --at: give one of them");
+  if (args.rate > 0.0 && !args.at.empty()) throw InputError("--rate and --at: give one of them");
   if (!args.csv.empty()) checkOutputFile("--csv", args.csv, sceneInputs(scene));
   if (!args.poses.empty()) checkOutputFile("--poses", args.poses, sceneInputs(scene));
   InterruptGuard interrupt;
@@ -285,14 +285,7 @@ void addSimCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--rate", args->rate, "--poses rows at t = k/RATE (interpolated between steps) instead of every step")
       ->check(finiteIn(1e-3, 1e6));
   cmd->add_option("--at", args->at, "--poses rows at these times (s, ascending, interpolated)")->delimiter(',');
-  cmd->callback([args, &exit_code] {
-    try {
-      exit_code = runSim(*args);
-    } catch (const SceneError& e) {
-      std::fprintf(stderr, "ponyhop sim: %s\n", e.what());
-      exit_code = 2;
-    }
-  });
+  cmd->callback([args, &exit_code] { exit_code = runCommand("sim", [&] { return runSim(*args); }); });
 }
 
 }  // namespace ponyhop

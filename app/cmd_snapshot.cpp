@@ -19,13 +19,7 @@ struct SnapshotArgs {
 };
 
 int runSnapshotCommand(const SnapshotArgs& args) {
-  ShotList list;
-  try {
-    list = loadShotList(args.list, args.goldens);
-  } catch (const SceneError& e) {
-    std::fprintf(stderr, "ponyhop snapshot: %s\n", e.what());
-    return 2;
-  }
+  const ShotList list = loadShotList(args.list, args.goldens);
   SnapshotOptions options = args.options;
   options.ci = inCi();
   return runSnapshots(list, options, stdout, stderr);
@@ -49,7 +43,7 @@ void addSnapshotCommand(CLI::App& app, int& exit_code) {
   cmd->add_flag("--update", args->options.update, "Rewrite the goldens on purpose (refused under CI=true)");
   cmd->add_option("--only", args->options.only, "Only these shots (repeatable)")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  cmd->callback([args, &exit_code] { exit_code = runSnapshotCommand(*args); });
+  cmd->callback([args, &exit_code] { exit_code = runCommand("snapshot", [&] { return runSnapshotCommand(*args); }); });
 }
 
 }  // namespace ponyhop

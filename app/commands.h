@@ -1,7 +1,8 @@
-// Subcommands of the `ponyhop` executable, one file each (app/cmd_*.cpp).
+// Subcommands of the `ponyhop` executable, one file each (app/cmd_*.cpp; the bench's: bench/commands.h).
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <functional>
 
 namespace ponyhop {
 
@@ -11,12 +12,14 @@ void addSnapshotCommand(CLI::App& app, int& exit_code);  // app/cmd_snapshot.cpp
 void addSceneDocCommand(CLI::App& app, int& exit_code);
 void addRenderCommand(CLI::App& app, int& exit_code);
 void addSimCommand(CLI::App& app, int& exit_code);
-void addExportCommand(CLI::App& app, int& exit_code);       // app/cmd_export.cpp: a glTF bake
-void addVideoCommand(CLI::App& app, int& exit_code);        // app/cmd_video.cpp: frames -> video
-void addBenchCommand(CLI::App& app, int& exit_code);        // app/cmd_bench.cpp: speed against accuracy
-void addBenchRenderCommand(CLI::App& app, int& exit_code);  // app/cmd_bench_render.cpp: render time per pass
+void addExportCommand(CLI::App& app, int& exit_code);  // app/cmd_export.cpp: a glTF bake
+void addVideoCommand(CLI::App& app, int& exit_code);   // app/cmd_video.cpp: frames -> video
 #ifdef PONYHOP_WINDOW
 void addRunCommand(CLI::App& app, int& exit_code);  // app/cmd_run.cpp: the window with the tuning panel
 #endif
+
+// A command's body run as every command runs it: bad input (an InputError: a scene, an option, a
+// path) is printed as "ponyhop NAME: message" and gives exit code 2; otherwise the body's code.
+int runCommand(const char* name, const std::function<int()>& body);
 
 }  // namespace ponyhop

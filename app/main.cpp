@@ -5,6 +5,7 @@
 #include <exception>
 
 #include "app/commands.h"
+#include "bench/commands.h"
 #include "sim/data_dir.h"
 
 int main(int argc, char** argv) {

@@ -37,11 +37,11 @@ const char* kindOf(const struct stat& st) {
 void checkWritableFolder(const std::string& option, const std::string& path, const fs::path& folder) {
   std::error_code ec;
   fs::create_directories(folder, ec);
-  if (ec) throw SceneError(option + " " + path + ": cannot create the folder " + folder.string() + ": " + ec.message());
+  if (ec) throw InputError(option + " " + path + ": cannot create the folder " + folder.string() + ": " + ec.message());
   const std::string probe = (folder / (".ponyhop-probe-" + std::to_string(getpid()))).string();
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
   if (fd < 0) {
-    throw SceneError(option + " " + path + ": cannot create files in " + folder.string() + ": " + errnoText());
+    throw InputError(option + " " + path + ": cannot create files in " + folder.string() + ": " + errnoText());
   }
   ::close(fd);
   ::unlink(probe.c_str());
@@ -88,14 +88,14 @@ bool samePath(const std::string& a, const std::string& b) {
 }
 
 void checkOutputFile(const std::string& option, const std::string& path, const std::vector<std::string>& inputs) {
-  if (path.empty()) throw SceneError(option + ": the path must not be empty");
+  if (path.empty()) throw InputError(option + ": the path must not be empty");
   struct stat st {};
   if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
-    throw SceneError(option + " " + path + ": is " + kindOf(st) + "; give the path of a file to write");
+    throw InputError(option + " " + path + ": is " + kindOf(st) + "; give the path of a file to write");
   }
   for (const auto& in : inputs) {
     if (!in.empty() && samePath(path, in)) {
-      throw SceneError(option + " " + path + ": is an input of this run (" + in + "); it would be overwritten");
+      throw InputError(option + " " + path + ": is an input of this run (" + in + "); it would be overwritten");
     }
   }
   checkWritableFolder(option, path, folderOf(path));
@@ -104,23 +104,23 @@ void checkOutputFile(const std::string& option, const std::string& path, const s
 // --- FrameFolder -------------------------------------------------------------------------------
 
 FrameFolder::FrameFolder(const std::string& option, const std::string& dir_in) : dir_(stripSlashes(dir_in)) {
-  if (dir_.empty()) throw SceneError(option + ": the path must not be empty");
+  if (dir_.empty()) throw InputError(option + ": the path must not be empty");
   const fs::path dir(dir_);
   if (dir.filename().empty() || dir.filename() == "." || dir.filename() == "..") {
-    throw SceneError(option + " " + dir_ + ": name the frames folder itself (e.g. out/" + "scene)");
+    throw InputError(option + " " + dir_ + ": name the frames folder itself (e.g. out/" + "scene)");
   }
   struct stat st {};
   bool exists = false;
   if (::lstat(dir_.c_str(), &st) == 0) {
     exists = true;
-    if (S_ISLNK(st.st_mode)) throw SceneError(option + " " + dir_ + ": is a symbolic link; give the folder itself");
+    if (S_ISLNK(st.st_mode)) throw InputError(option + " " + dir_ + ": is a symbolic link; give the folder itself");
     if (!S_ISDIR(st.st_mode))
-      throw SceneError(option + " " + dir_ + ": exists and is " + kindOf(st) + ", not a folder");
+      throw InputError(option + " " + dir_ + ": exists and is " + kindOf(st) + ", not a folder");
   }
   const fs::path parent = folderOf(dir_);
   std::error_code ec;
   fs::create_directories(parent, ec);
-  if (ec) throw SceneError(option + " " + dir_ + ": cannot create the folder " + parent.string() + ": " + ec.message());
+  if (ec) throw InputError(option + " " + dir_ + ": cannot create the folder " + parent.string() + ": " + ec.message());
   struct stat pst {};
   if (exists && ::stat(parent.c_str(), &pst) == 0 && pst.st_dev != st.st_dev) mount_point_ = true;
 
@@ -133,12 +133,12 @@ FrameFolder::FrameFolder(const std::string& option, const std::string& dir_in) :
       if (mount_point_ && (name == "lost+found" || name.rfind(".partial-", 0) == 0)) continue;
       others.push_back(name);
     }
-    if (ec) throw SceneError(option + " " + dir_ + ": cannot list the folder: " + ec.message());
+    if (ec) throw InputError(option + " " + dir_ + ": cannot list the folder: " + ec.message());
     if (!others.empty()) {
       std::string list;
       for (size_t i = 0; i < others.size() && i < 3; ++i) list += (i ? ", " : "") + others[i];
       if (others.size() > 3) list += ", ... (" + std::to_string(others.size()) + " in all)";
-      throw SceneError(option + " " + dir_ + ": holds files that are not frames (" + list +
+      throw InputError(option + " " + dir_ + ": holds files that are not frames (" + list +
                        "); a render replaces the whole folder, so give an empty or a frames-only folder");
     }
   }
@@ -148,7 +148,7 @@ FrameFolder::FrameFolder(const std::string& option, const std::string& dir_in) :
   for (int attempt = 0;; ++attempt) {
     lock_fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (lock_fd_ < 0)
-      throw SceneError(option + " " + dir_ + ": cannot create the lock " + lock_path_ + ": " + errnoText());
+      throw InputError(option + " " + dir_ + ": cannot create the lock " + lock_path_ + ": " + errnoText());
     if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
       char buf[256] = {};
       const ssize_t n = ::pread(lock_fd_, buf, sizeof(buf) - 1, 0);
@@ -156,7 +156,7 @@ FrameFolder::FrameFolder(const std::string& option, const std::string& dir_in) :
       lock_fd_ = -1;
       std::string holder = n > 0 ? std::string(buf, size_t(n)) : "another process";
       while (!holder.empty() && holder.back() == '\n') holder.pop_back();
-      throw SceneError(option + " " + dir_ + ": another render is writing this folder (" + holder + ", lock " +
+      throw InputError(option + " " + dir_ + ": another render is writing this folder (" + holder + ", lock " +
                        lock_path_ + "); wait for it to end or choose another " + option);
     }
     // The holder before us may have removed the file after we opened it: lock the file that is
@@ -169,7 +169,7 @@ FrameFolder::FrameFolder(const std::string& option, const std::string& dir_in) :
     }
     ::close(lock_fd_);
     lock_fd_ = -1;
-    if (attempt > 10) throw SceneError(option + " " + dir_ + ": cannot take the lock " + lock_path_);
+    if (attempt > 10) throw InputError(option + " " + dir_ + ": cannot take the lock " + lock_path_);
   }
   {
     char buf[160];
@@ -195,7 +195,7 @@ FrameFolder::FrameFolder(const std::string& option, const std::string& dir_in) :
   fs::remove_all(staging_, ec);
   fs::create_directories(staging_, ec);
   if (ec)
-    throw SceneError(option + " " + dir_ + ": cannot create the staging folder " + staging_ + ": " + ec.message());
+    throw InputError(option + " " + dir_ + ": cannot create the staging folder " + staging_ + ": " + ec.message());
 }
 
 FrameFolder::~FrameFolder() {

@@ -19,7 +19,7 @@ bool samePath(const std::string& a, const std::string& b);
 
 // An output file (video, CSV, diff image): not "", not a folder, FIFO or device, not the same
 // file as one of `inputs`; its folder is created when missing and must accept a new file.
-// Throws SceneError naming `option` and the path.
+// Throws InputError naming `option` and the path.
 void checkOutputFile(const std::string& option, const std::string& path, const std::vector<std::string>& inputs);
 
 // The frames of one run. The constructor checks DIR (absent, or a folder holding frames only:

@@ -819,7 +819,7 @@ void Panel::drawPresets() {
           sim_.edited() = applyPreset(sim_.edited(), name);
           preset_error_ = false;
           preset_message_ = "Preset " + name + " applied (Save keeps it)";
-        } catch (const SceneError& e) {
+        } catch (const InputError& e) {
           preset_error_ = true;
           preset_message_ = e.what();
         }

@@ -18,14 +18,14 @@ const std::string kPresetDir = "assets/presets";
 
 json readFragment(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw SceneError(path + ": cannot open the preset");
+  if (!in) throw InputError(path + ": cannot open the preset");
   json j;
   try {
     j = json::parse(in, nullptr, true, /*ignore_comments=*/true);
   } catch (const json::parse_error& e) {
-    throw SceneError(path + ": not valid JSON: " + e.what());
+    throw InputError(path + ": not valid JSON: " + e.what());
   }
-  if (!j.is_object()) throw SceneError(path + ": a preset is a JSON object of scene sections, e.g. {\"chain\": {...}}");
+  if (!j.is_object()) throw InputError(path + ": a preset is a JSON object of scene sections, e.g. {\"chain\": {...}}");
   return j;
 }
 
@@ -54,14 +54,14 @@ Scene applyPreset(const Scene& scene, const std::string& name_or_path, const std
   if (path.empty()) {
     std::string known;
     for (const std::string& n : presetNames()) known += (known.empty() ? "" : ", ") + n;
-    throw SceneError("--preset " + name_or_path + ": no such preset (shipped: " + known +
+    throw InputError("--preset " + name_or_path + ": no such preset (shipped: " + known +
                      "; or a path to a .json fragment)");
   }
   const json fragment = readFragment(path);
   json j = sceneToJson(scene);
   for (auto it = fragment.begin(); it != fragment.end(); ++it) {
     if (it.value().is_object() && !j.contains(it.key())) {
-      throw SceneError(path + ": the preset sets '" + it.key() + "', but the scene " +
+      throw InputError(path + ": the preset sets '" + it.key() + "', but the scene " +
                        (scene.path.empty() ? std::string("") : scene.path + " ") + "has no '" + it.key() +
                        "' section (a preset never adds one)");
     }
@@ -85,7 +85,7 @@ std::string presetSummary(const std::string& name_or_path) {
       }
     }
     return s;
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     return e.what();
   }
 }

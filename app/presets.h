@@ -17,7 +17,7 @@ std::vector<std::string> presetNames();
 // The file of a preset: NAME (assets/presets/NAME.json) or a path to a .json file. "" if none.
 std::string presetPath(const std::string& name_or_path);
 
-// The scene with the preset laid over it, then the overrides (as --set). Throws SceneError naming
+// The scene with the preset laid over it, then the overrides (as --set). Throws InputError naming
 // the preset's file and the field (an unknown key, a value out of range, a section the scene does
 // not have: a preset never adds a ponytail to a scene without one).
 Scene applyPreset(const Scene& scene, const std::string& name_or_path, const std::vector<Override>& overrides = {});

@@ -9,7 +9,7 @@
 
 #include "engine/frame_writer.h"
 #include "engine/render_session.h"
-#include "sim/scene_io.h"
+#include "sim/input_error.h"
 
 namespace ponyhop {
 
@@ -25,10 +25,10 @@ FrameRange parseFrameRange(const std::string& text, int frames) {
   } else if (std::sscanf(text.c_str(), "%d%c", &a, &tail) == 1) {
     r = {a, a};
   } else {
-    throw SceneError("--range " + text + ": not a frame range" + allowed);
+    throw InputError("--range " + text + ": not a frame range" + allowed);
   }
   if (r.first < 0 || r.last < r.first || r.last >= frames) {
-    throw SceneError("--range " + text + ": outside the " + std::to_string(frames) + " frames" + allowed);
+    throw InputError("--range " + text + ": outside the " + std::to_string(frames) + " frames" + allowed);
   }
   return r;
 }

@@ -16,7 +16,7 @@ struct FrameRange {
   bool contains(int i) const { return i >= first && i <= last; }
 };
 
-// "A:B" (inclusive), "A:" (to the end) or "A" (one frame), within [0, frames). Throws SceneError
+// "A:B" (inclusive), "A:" (to the end) or "A" (one frame), within [0, frames). Throws InputError
 // naming --range and what is allowed.
 FrameRange parseFrameRange(const std::string& text, int frames);
 

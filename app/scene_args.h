@@ -51,7 +51,7 @@ struct SceneArgs {
                     "stiff, bouncy) or a .json fragment");
   }
 
-  // Loads the file, lays the preset over it, applies --set and validates; throws SceneError
+  // Loads the file, lays the preset over it, applies --set and validates; throws InputError
   // (the message names the file, the key, what is allowed).
   Scene load() const;
 };

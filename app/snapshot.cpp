@@ -190,7 +190,7 @@ Scene shotScene(const Shot& shot) {
 
 ShotList loadShotList(const std::string& path, const std::string& golden_dir) {
   std::ifstream in(path);
-  if (!in) throw SceneError(path + ": cannot open the shot list");
+  if (!in) throw InputError(path + ": cannot open the shot list");
   ShotList list;
   list.path = path;
   list.golden_dir = golden_dir.empty() ? fs::path(path).parent_path().string() : golden_dir;
@@ -261,7 +261,7 @@ ShotList loadShotList(const std::string& path, const std::string& golden_dir) {
       if (shot.check_subject && !shot.panel && have == 0)
         problems += where + "the scene " + shot.scene +
                     " has nothing to show (no head, chain or hopper); subject=none to allow\n";
-    } catch (const SceneError& e) {
+    } catch (const InputError& e) {
       problems += where + "shot '" + shot.name + "': " + e.what() + "\n";
       continue;
     }
@@ -269,9 +269,9 @@ ShotList loadShotList(const std::string& path, const std::string& golden_dir) {
   }
   if (!problems.empty()) {
     problems.pop_back();
-    throw SceneError(problems);
+    throw InputError(problems);
   }
-  if (list.shots.empty()) throw SceneError(path + ": no shots (one per line: NAME SCENE.json [key=value ...])");
+  if (list.shots.empty()) throw InputError(path + ": no shots (one per line: NAME SCENE.json [key=value ...])");
   return list;
 }
 

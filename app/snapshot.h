@@ -50,11 +50,11 @@ struct ShotList {
 };
 
 // Reads and checks a shot list (names, options, ranges) and loads every scene with its
-// overrides, so that nothing is rendered or written when any shot is wrong. Throws SceneError
+// overrides, so that nothing is rendered or written when any shot is wrong. Throws InputError
 // naming the file, the line, the key and what is allowed.
 ShotList loadShotList(const std::string& path, const std::string& golden_dir = "");
 
-// The scene of a shot: the file, the shot's size and overrides, validated. Throws SceneError.
+// The scene of a shot: the file, the shot's size and overrides, validated. Throws InputError.
 Scene shotScene(const Shot& shot);
 
 struct ShotPicture {
@@ -67,7 +67,7 @@ struct ShotPicture {
   std::vector<std::pair<std::string, double>> coverage;
 };
 
-// Renders a shot headless (and its subject coverage). Throws SceneError / std::runtime_error.
+// Renders a shot headless (and its subject coverage). Throws InputError / std::runtime_error.
 ShotPicture renderShot(const Shot& shot);
 
 // "" when every subject covers at least min_subject; otherwise why not (names the subject and share).

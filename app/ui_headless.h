@@ -19,7 +19,7 @@ namespace ponyhop {
 class HeadlessUi {
  public:
   // The scene view is scene_width x height, the panel panel_width x height beside it.
-  // Throws SceneError for a scene that cannot be built, std::runtime_error without GL.
+  // Throws InputError for a scene that cannot be built, std::runtime_error without GL.
   HeadlessUi(const Scene& scene, int scene_width, int height, int panel_width = Panel::kDefaultWidth);
   ~HeadlessUi();
 

@@ -178,7 +178,7 @@ ApplyKind LiveSim::applyEdits() {
   }
   try {
     validateScene(edited_, "panel");
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     error_ = e.what();
     return ApplyKind::None;
   }
@@ -311,7 +311,7 @@ bool LiveSim::save(const std::string& path) {
   try {
     validateScene(edited_, "panel");
     saveScene(edited_, path);
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     error_ = e.what();
     return false;
   }

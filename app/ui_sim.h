@@ -81,7 +81,7 @@ const char* applyKindName(ApplyKind k);
 
 class LiveSim {
  public:
-  // Builds the runtime. Throws SceneError when the scene cannot be built.
+  // Builds the runtime. Throws InputError when the scene cannot be built.
   explicit LiveSim(const Scene& scene);
   ~LiveSim();
   LiveSim(const LiveSim&) = delete;

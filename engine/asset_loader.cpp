@@ -13,7 +13,7 @@ HeadAsset AssimpAssets::loadHead(const HeadParams& head, const std::string& mesh
                                  const std::string& scene_path) const {
   HeadAsset a;
   std::string err;
-  if (!loadMesh(mesh_path, a.mesh, &err)) throw SceneError(scene_path + ": head.mesh: " + err);
+  if (!loadMesh(mesh_path, a.mesh, &err)) throw InputError(scene_path + ": head.mesh: " + err);
   // The file's own colours (textures, vertex colours, several materials) or head.color.
   for (const std::string& w : a.mesh.warnings) std::fprintf(stderr, "ponyhop: warning: head.mesh: %s\n", w.c_str());
   if (head.materials == HeadMaterials::Color) a.mesh.dropMaterials();

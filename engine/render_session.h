@@ -18,7 +18,7 @@ namespace ponyhop {
 
 class RenderSession {
  public:
-  // Builds the scene and the GL side. Throws SceneError on a bad scene, std::runtime_error when
+  // Builds the scene and the GL side. Throws InputError on a bad scene, std::runtime_error when
   // no GL context can be made.
   explicit RenderSession(const Scene& scene, bool reserve_panel = false);
   ~RenderSession();

@@ -1,5 +1,5 @@
 // libFuzzer target: keyframe clip files (engine/scene_io's clip reader, then the keyframe track
-// that the head plays). Every input ends in a track, a message, or a SceneError.
+// that the head plays). Every input ends in a track, a message, or a InputError.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -18,7 +18,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     } else if (err.empty()) {
       __builtin_trap();  // a refusal must say why
     }
-  } catch (const ponyhop::SceneError&) {
+  } catch (const ponyhop::InputError&) {
   }
   return 0;
 }

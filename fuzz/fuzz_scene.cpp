@@ -1,6 +1,6 @@
 // libFuzzer target: the scene reader with --set overrides (engine/scene_io). Input: scene JSON,
 // then optionally a NUL byte and up to 4 lines of `key=value` overrides. Every input must end in
-// a Scene or a SceneError; a scene that was read must write and read back to the same JSON.
+// a Scene or a InputError; a scene that was read must write and read back to the same JSON.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -26,7 +26,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const nlohmann::json written = ponyhop::sceneToJson(scene);
     const ponyhop::Scene again = ponyhop::parseSceneText(written.dump(), "fuzz-written.json");
     if (ponyhop::sceneToJson(again) != written) __builtin_trap();  // the writer and reader disagree
-  } catch (const ponyhop::SceneError&) {
+  } catch (const ponyhop::InputError&) {
     // a refusal with a message: the expected outcome for most inputs
   }
   return 0;

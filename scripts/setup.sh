@@ -35,8 +35,8 @@ if [ "${1:-}" = "--format" ]; then
   PACKAGES+=(clang-format)
 fi
 # `make bench` only (scripts/setup.sh --bench): the peer engines the bench compares against
-# (app/bench_peers.h), each optional at configure time: MuJoCo, Bullet (its -float64 libraries:
-# btMultiBody in double precision), ODE (double), DART.
+# (bench/peer.h), each optional: configure builds a module for each one found (bench/CMakeLists.txt):
+# MuJoCo, Bullet (its -float64 libraries: btMultiBody in double precision), ODE (double), DART.
 if [ "${1:-}" = "--bench" ]; then
   PACKAGES+=(libmujoco-dev libbullet-dev libode-dev libdart-dev)
 fi

@@ -25,7 +25,7 @@ struct HeadAsset {
 class AssetLoader {
  public:
   virtual ~AssetLoader() = default;
-  // The head of `head`, read from `mesh_path` (already resolved). Throws SceneError naming the
+  // The head of `head`, read from `mesh_path` (already resolved). Throws InputError naming the
   // scene file and the field when it cannot be read.
   virtual HeadAsset loadHead(const HeadParams& head, const std::string& mesh_path,
                              const std::string& scene_path) const = 0;

@@ -73,7 +73,7 @@ json parseJsonLimited(const std::string& text, const std::string& source) {
       case json::parse_event_t::object_start:
       case json::parse_event_t::array_start:
         if (depth >= kMaxJsonDepth) {
-          throw SceneError(source + ": " + (path.empty() ? std::string("the document") : where()) +
+          throw InputError(source + ": " + (path.empty() ? std::string("the document") : where()) +
                            ": nested deeper than " + std::to_string(kMaxJsonDepth) +
                            " levels of [ ] and { } (the limit for scene and clip files)");
         }
@@ -87,7 +87,7 @@ json parseJsonLimited(const std::string& text, const std::string& source) {
         path.resize(size_t(depth));
         path.back() = k;
         if (!seen[size_t(depth) - 1].insert(k).second) {
-          throw SceneError(source + ": " + where() + ": the key appears twice in one object (which one is meant?)");
+          throw InputError(source + ": " + where() + ": the key appears twice in one object (which one is meant?)");
         }
         break;
       }
@@ -103,10 +103,10 @@ json parseJsonLimited(const std::string& text, const std::string& source) {
     std::string msg = e.what();
     const auto q = msg.find("number overflow");
     if (q != std::string::npos) msg = msg.substr(q);
-    throw SceneError(source + ": " + (path.empty() ? std::string("the document") : where()) + ": " + shortText(msg) +
+    throw InputError(source + ": " + (path.empty() ? std::string("the document") : where()) + ": " + shortText(msg) +
                      " (numbers must be finite doubles, |x| < 1.8e308)");
   } catch (const json::exception& e) {
-    throw SceneError(source + ": not valid JSON: " + shortText(e.what()));
+    throw InputError(source + ": not valid JSON: " + shortText(e.what()));
   }
 }
 
@@ -303,14 +303,14 @@ void applyOverride(json& j, const Override& o) {
       char* end = nullptr;
       const long idx = std::strtol(p.c_str(), &end, 10);
       if (*end != '\0' || idx < 0 || static_cast<size_t>(idx) >= node->size()) {
-        throw SceneError("--set " + o.key + ": '" + p + "' is not an index of that list (0.." +
+        throw InputError("--set " + o.key + ": '" + p + "' is not an index of that list (0.." +
                          std::to_string(static_cast<long>(node->size()) - 1) + ")");
       }
       node = &(*node)[static_cast<size_t>(idx)];
     } else {
       if (node->is_null()) *node = json::object();
       if (!node->is_object()) {
-        throw SceneError("--set " + o.key + ": '" + p + "' is inside a value that is not a section");
+        throw InputError("--set " + o.key + ": '" + p + "' is inside a value that is not a section");
       }
       node = &(*node)[p];
     }
@@ -318,7 +318,7 @@ void applyOverride(json& j, const Override& o) {
       json v;
       try {
         v = parseJsonLimited(o.value, "--set " + o.key);
-      } catch (const SceneError& e) {
+      } catch (const InputError& e) {
         // Unquoted text is a string; JSON that is too deep or has a repeated key is an error.
         const std::string m = e.what();
         if (m.find("nested deeper") != std::string::npos || m.find("appears twice") != std::string::npos) throw;
@@ -326,7 +326,7 @@ void applyOverride(json& j, const Override& o) {
         try {
           (void)v.dump();  // JSON strings are UTF-8: refuse here what no writer could write
         } catch (const json::type_error&) {
-          throw SceneError("--set " + o.key + ": the value is not valid UTF-8 text");
+          throw InputError("--set " + o.key + ": the value is not valid UTF-8 text");
         }
       }
       *node = v;
@@ -359,7 +359,7 @@ void noteDenseCost(Scene& scene) {
 Override parseOverride(const std::string& kv) {
   const auto eq = kv.find('=');
   if (eq == std::string::npos || eq == 0) {
-    throw SceneError("--set " + kv + ": expected key=value, e.g. --set physics.dt=0.002");
+    throw InputError("--set " + kv + ": expected key=value, e.g. --set physics.dt=0.002");
   }
   return {kv.substr(0, eq), kv.substr(eq + 1)};
 }
@@ -382,7 +382,7 @@ std::string resolveScenePath(const std::string& path, const std::string& scene_p
 
 Scene parseScene(const json& j_in, const std::string& source, const std::vector<Override>& overrides) {
   json j = j_in;
-  if (!j.is_object()) throw SceneError(source + ": a scene file must be a JSON object { ... }");
+  if (!j.is_object()) throw InputError(source + ": a scene file must be a JSON object { ... }");
   // A mesh-space anchor belongs to the mesh it was written for: another mesh given by --set alone
   // takes its anchor from its own bounds (head.anchor_in_bounds).
   bool anchor_given = false;
@@ -393,7 +393,7 @@ Scene parseScene(const json& j_in, const std::string& source, const std::vector<
     const std::string section = o.key.substr(0, o.key.find('.'));
     for (const char* opt : kOptionalSections) {
       if (section == opt && !sectionPresent(j, opt) && o.key != section) {
-        throw SceneError("--set " + o.key + ": this scene has no '" + section +
+        throw InputError("--set " + o.key + ": this scene has no '" + section +
                          "' section (a scene file names what exists)");
       }
     }
@@ -420,7 +420,7 @@ Scene parseScene(const json& j_in, const std::string& source, const std::vector<
         }
       }
     }
-    throw SceneError(joinErrors(source, errors));
+    throw InputError(joinErrors(source, errors));
   }
   scene.path = source;
   validateScene(scene, source);
@@ -435,7 +435,7 @@ Scene parseSceneText(const std::string& text, const std::string& source, const s
 
 Scene loadScene(const std::string& path, const std::vector<Override>& overrides) {
   std::string text, err;
-  if (!readInputFile(path, kMaxSceneFileBytes, "scene file", &text, &err)) throw SceneError(err);
+  if (!readInputFile(path, kMaxSceneFileBytes, "scene file", &text, &err)) throw InputError(err);
   Scene scene = parseSceneText(text, path, overrides);
   scene.path = path;
   return scene;
@@ -452,13 +452,13 @@ AnimationParams parseClipText(const std::string& text, const std::string& source
   AnimationParams clip;
   std::vector<std::string> errors;
   JsonReader::readStruct(j, clip, "", errors);
-  if (!errors.empty()) throw SceneError(joinErrors(source, errors));
+  if (!errors.empty()) throw InputError(joinErrors(source, errors));
   return clip;
 }
 
 AnimationParams loadClipFile(const std::string& path) {
   std::string text, err;
-  if (!readInputFile(path, kMaxSceneFileBytes, "clip file", &text, &err)) throw SceneError(err);
+  if (!readInputFile(path, kMaxSceneFileBytes, "clip file", &text, &err)) throw InputError(err);
   return parseClipText(text, path);
 }
 
@@ -467,18 +467,18 @@ json sceneToJson(const Scene& scene) { return JsonWriter::write(scene); }
 void saveScene(const Scene& scene, const std::string& path) {
   std::error_code ec0;
   if (fs::exists(path, ec0) && !fs::is_regular_file(path, ec0)) {
-    throw SceneError(path + ": is not a regular file (a folder or a device); the scene is not saved there");
+    throw InputError(path + ": is not a regular file (a folder or a device); the scene is not saved there");
   }
   const std::string tmp = path + ".tmp";
   {
     std::ofstream out(tmp);
-    if (!out) throw SceneError(path + ": cannot write the scene file");
+    if (!out) throw InputError(path + ": cannot write the scene file");
     out << sceneToJson(scene).dump(2) << "\n";
-    if (!out) throw SceneError(path + ": write failed");
+    if (!out) throw InputError(path + ": write failed");
   }
   std::error_code ec;
   fs::rename(tmp, path, ec);
-  if (ec) throw SceneError(path + ": cannot replace the file: " + ec.message());
+  if (ec) throw InputError(path + ": cannot replace the file: " + ec.message());
 }
 
 void validateScene(const Scene& scene_in, const std::string& source) {
@@ -571,7 +571,7 @@ void validateScene(const Scene& scene_in, const std::string& source) {
     errors.push_back("render.width/height: must be even (got " + std::to_string(scene.render.width) + "x" +
                      std::to_string(scene.render.height) + ")");
   }
-  if (!errors.empty()) throw SceneError(joinErrors(source, errors));
+  if (!errors.empty()) throw InputError(joinErrors(source, errors));
 }
 
 namespace {

@@ -3,19 +3,13 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "sim/input_error.h"  // what the readers throw
 #include "sim/scene.h"
 
 namespace ponyhop {
-
-// A bad scene: the message names the file (or `--set`), the key and what is allowed.
-class SceneError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 // One `--set key=value` override. The value is parsed as JSON when it can be (numbers, true,
 // [1,2,3], "text"), otherwise taken as a string: `--set head.mesh=my head.obj` works unquoted.
@@ -23,7 +17,7 @@ struct Override {
   std::string key;
   std::string value;
 };
-Override parseOverride(const std::string& key_equals_value);  // throws SceneError
+Override parseOverride(const std::string& key_equals_value);  // throws InputError
 
 // Limits of scene and clip files (docs/RELIABILITY.md): a larger file or a deeper nesting of
 // [ ] and { } is refused with the limit in the message, before the JSON is built.
@@ -34,11 +28,11 @@ inline constexpr int kMaxJsonDepth = 64;
 inline constexpr int kDenseSolverMaxLinks = 32;
 
 // Reads a scene file, applies the overrides, validates every field (types, ranges, unknown keys,
-// files that must exist) and resolves relative paths. Throws SceneError listing every problem.
+// files that must exist) and resolves relative paths. Throws InputError listing every problem.
 Scene loadScene(const std::string& path, const std::vector<Override>& overrides = {});
 
 // The same from the file's text (`source` names it in messages): the limits above, a key twice
-// in one object, a number beyond a double's range are all SceneErrors naming source and field.
+// in one object, a number beyond a double's range are all InputErrors naming source and field.
 Scene parseSceneText(const std::string& text, const std::string& source, const std::vector<Override>& overrides = {});
 
 // The same from JSON already parsed (`source` names it in messages).
@@ -47,10 +41,10 @@ Scene parseScene(const nlohmann::json& j, const std::string& source, const std::
 // Every field of the scene, sections that exist only. Reading the result gives the same scene.
 nlohmann::json sceneToJson(const Scene& scene);
 
-// Writes the scene atomically (temporary file + rename). Throws SceneError on failure.
+// Writes the scene atomically (temporary file + rename). Throws InputError on failure.
 void saveScene(const Scene& scene, const std::string& path);
 
-// Checks a scene built or edited in code (the panel): ranges, cross-field rules. Throws SceneError.
+// Checks a scene built or edited in code (the panel): ranges, cross-field rules. Throws InputError.
 void validateScene(const Scene& scene, const std::string& source);
 
 // A path from a scene (mesh, clip) resolved: absolute as is; otherwise relative to the working
@@ -58,7 +52,7 @@ void validateScene(const Scene& scene, const std::string& source);
 std::string resolveScenePath(const std::string& path, const std::string& scene_path);
 
 // A clip file (assets/animations/*.json): {"mode": ..., "keys": [...]} with the fields of
-// AnimationParams. Throws SceneError naming the file and the key.
+// AnimationParams. Throws InputError naming the file and the key.
 AnimationParams loadClipFile(const std::string& path);
 AnimationParams parseClipText(const std::string& text, const std::string& source);
 

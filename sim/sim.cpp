@@ -11,13 +11,13 @@
 namespace ponyhop {
 
 Sim::Sim(const Scene& scene, const AssetLoader* assets) : scene_(scene), world_(scene.physics) {
-  if (!world_.ok()) throw SceneError(scene_.path + ": physics: " + world_.status());
+  if (!world_.ok()) throw InputError(scene_.path + ": physics: " + world_.status());
   if (scene_.head) buildHead(assets);
   if (scene_.terrain) terrain_ = std::make_shared<const Terrain>(scene_.terrain->boxes);
   buildHoppers();
   if (scene_.chain) buildChain();
   if (scene_.collision) buildCollisions();
-  if (!world_.ok()) throw SceneError(scene_.path + ": " + world_.status());
+  if (!world_.ok()) throw InputError(scene_.path + ": " + world_.status());
 }
 
 // The ponytail against the head: the head's triangles in its body frame make the distance grid
@@ -33,7 +33,7 @@ void Sim::buildCollisions() {
     for (const auto& p : head_->mesh.positions) vertices.push_back(head_->mesh_to_body * p.cast<double>());
     std::string err;
     collisions_ = makeHeadCollisions(world_, *chain_, head_body_, vertices, head_->mesh.indices, c, &err);
-    if (!collisions_) throw SceneError(scene_.path + ": collision: the head's mesh makes no collider: " + err);
+    if (!collisions_) throw InputError(scene_.path + ": collision: the head's mesh makes no collider: " + err);
   }
   if (c.ground && !hoppers_.empty()) {
     if (!collisions_) {
@@ -57,8 +57,8 @@ void Sim::buildCollisions() {
 void Sim::buildHead(const AssetLoader* assets) {
   const HeadParams& h = *scene_.head;
   const std::string mesh_path = resolveScenePath(h.mesh, scene_.path);
-  if (mesh_path.empty()) throw SceneError(scene_.path + ": head.mesh: " + h.mesh + ": file not found");
-  if (!assets) throw SceneError(scene_.path + ": head.mesh: this program reads no meshes (no asset loader)");
+  if (mesh_path.empty()) throw InputError(scene_.path + ": head.mesh: " + h.mesh + ": file not found");
+  if (!assets) throw InputError(scene_.path + ": head.mesh: this program reads no meshes (no asset loader)");
   head_ = assets->loadHead(h, mesh_path, scene_.path);
 
   // The head's motion: a clip file, the mesh file's own animation, or inline keys.
@@ -74,13 +74,13 @@ void Sim::buildHead(const AssetLoader* assets) {
     source = "head.animation.keys";
     if (!h.animation.clip.empty()) {
       source = resolveClipPath(h.animation.clip, scene_.path);
-      if (source.empty()) throw SceneError(scene_.path + ": head.animation.clip: no clip \"" + h.animation.clip + "\"");
+      if (source.empty()) throw InputError(scene_.path + ": head.animation.clip: no clip \"" + h.animation.clip + "\"");
       keys = loadClipFile(source).keys;
     }
     if (keys.empty()) keys.push_back(Keyframe{});  // no animation: the head holds still at the origin
     track = KeyframeTrack::fromKeyframes(keys, options, &err);
   }
-  if (!track) throw SceneError(scene_.path + ": head.animation (" + source + "): " + err);
+  if (!track) throw InputError(scene_.path + ": head.animation (" + source + "): " + err);
   head_body_ = world_.addKinematicBody(makeMotion(*track), "head");
 }
 
@@ -112,7 +112,7 @@ void Sim::buildHoppers() {
     if (!world_.ok()) {
       const bool listed = !(scene_.hopper && i == 0);
       const std::string which = listed ? "hoppers." + std::to_string(i - (scene_.hopper ? 1 : 0)) + ": " : "";
-      throw SceneError(scene_.path + ": " + which + world_.status());
+      throw InputError(scene_.path + ": " + which + world_.status());
     }
   }
 }
@@ -138,7 +138,7 @@ void Sim::buildChain() {
       break;
     case ChainAttach::Hopper: {
       const Hopper* h = hopper();
-      if (!h || !h->built()) throw SceneError(scene_.path + ": chain.attach: \"hopper\" needs a hopper section");
+      if (!h || !h->built()) throw InputError(scene_.path + ": chain.attach: \"hopper\" needs a hopper section");
       // Two-way coupled: the chain hangs from the hopper's body, at the back.
       parent = h->model().body;
       anchor_local = h->backPoint();

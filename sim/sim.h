@@ -31,7 +31,7 @@ struct SimSnapshot {
 class Sim {
  public:
   // Builds the world. `assets` reads the head's mesh and the mesh's own animation; a scene with a
-  // head needs one. Throws SceneError naming the file and the field when something cannot be
+  // head needs one. Throws InputError naming the file and the field when something cannot be
   // built (a mesh that does not load, a bad clip, invalid physics).
   explicit Sim(const Scene& scene, const AssetLoader* assets = nullptr);
 

@@ -185,13 +185,13 @@ TEST(Presets, BadPresetsAreClearErrors) {
   try {
     applyPreset(chain_scene, "curly");
     ADD_FAILURE() << "no such preset";
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("silky"), std::string::npos) << "lists the shipped ones: " << e.what();
   }
   try {
     applyPreset(loadScene("assets/scenes/hopper.json"), "silky");
     ADD_FAILURE() << "a preset must not add a ponytail";
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("has no 'chain' section"), std::string::npos) << e.what();
   }
   const std::string dir = testing::scratch("presets_bad");
@@ -199,7 +199,7 @@ TEST(Presets, BadPresetsAreClearErrors) {
   try {
     applyPreset(chain_scene, dir + "/bad.json");
     ADD_FAILURE() << "out of range";
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("chain.stiffness"), std::string::npos) << e.what();
   }

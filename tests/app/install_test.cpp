@@ -1,5 +1,6 @@
 // `cmake --install` into a temporary prefix, then the installed executable run from another
-// folder: it finds its scenes, head and clips relative to itself (no source path compiled in).
+// folder: it finds its scenes, head and clips relative to itself (no source path compiled in),
+// and `ponyhop bench` the peer modules this build made.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -48,6 +49,15 @@ TEST(Install, InstalledExecutableRunsFromAnyFolder) {
   EXPECT_EQ(sh(in + " bench --quick --links 8 --anchors fixed --dts 240 --no-scaling --out bench > bench.log 2>&1"), 0)
       << readFile(work + "/bench.log");
   EXPECT_TRUE(fs::exists(work + "/bench"));
+  // Every peer module built beside the build's executable was installed and loads (the bench's
+  // notes name a module that was not found or failed to load).
+  const std::string notes = readFile(work + "/bench/README.md");
+  for (const auto& entry : fs::directory_iterator(build)) {
+    const std::string file = entry.path().filename().string();
+    if (file.rfind("ponyhop-peer-", 0) != 0) continue;
+    EXPECT_EQ(notes.find(file + " was not found"), std::string::npos) << notes;
+    EXPECT_EQ(notes.find(file + " failed to load"), std::string::npos) << notes;
+  }
   // A relative scene path is the working directory's first: a scene here shadows the installed one.
   testing::writeFile(work + "/assets/scenes/ponytail.json", "{ \"name\": \"mine\", \"bogus\": 1 }");
   EXPECT_EQ(sh(in + " sim assets/scenes/ponytail.json --duration 0.01 --csv x.csv > mine.log 2>&1"), 2);

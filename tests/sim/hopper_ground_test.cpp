@@ -125,7 +125,7 @@ TEST(HopperGround, GroundNeedsAHopper) {
     parseSceneText(R"({"anchor": {}, "chain": {"attach": "anchor"}, "collision": {"ground": true, "head": false}})",
                    "no hopper");
     FAIL() << "collision.ground without a hopper was accepted";
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("collision.ground: the scene has no hopper"), std::string::npos) << e.what();
   }
 }

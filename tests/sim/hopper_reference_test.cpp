@@ -1,4 +1,4 @@
-// The hopper's converged reference (the bench's, app/cmd_bench.cpp): with its controller thinking
+// The hopper's converged reference (the bench's, bench/cmd_bench.cpp): with its controller thinking
 // at the scene's 1 ms in every run and touchdowns located within the step, RK4 runs whose substeps
 // differ by 2x agree within 1e-7 m over three stance phases. Without either they part: touchdowns
 // taken at the end of a substep are up to a substep late, and a controller that thinks once per

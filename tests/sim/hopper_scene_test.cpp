@@ -84,14 +84,14 @@ TEST(HopperScene, SceneChecksTheHopperSection) {
   try {
     parseScene(no_hopper, "test.json", {});
     ADD_FAILURE() << "a chain attached to a missing hopper must be refused";
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("needs a hopper section"), std::string::npos) << e.what();
   }
   const nlohmann::json bad = {{"hopper", {{"min_length", 0.85}}}};
   try {
     parseScene(bad, "test.json", {});
     ADD_FAILURE() << "min_length above rest_length must be refused";
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("hopper"), std::string::npos) << e.what();
   }
   const Scene ok = parseScene(nlohmann::json{{"hopper", nlohmann::json::object()}, {"chain", {{"attach", "hopper"}}}},

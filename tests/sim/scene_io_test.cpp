@@ -15,7 +15,7 @@ using nlohmann::json;
 std::string errorOf(const json& j, const std::vector<Override>& o = {}) {
   try {
     parseScene(j, "test.json", o);
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     return e.what();
   }
   return "";
@@ -91,7 +91,7 @@ TEST(SceneIo, OverridesApplyAndAreValidated) {
   const std::string e = errorOf(j, {parseOverride("physics.dt=nan")});
   EXPECT_NE(e.find("--set physics.dt=nan"), std::string::npos) << e;
   EXPECT_NE(errorOf(j, {parseOverride("physics.dtx=1")}).find("unknown key"), std::string::npos);
-  EXPECT_THROW(parseOverride("novalue"), SceneError);
+  EXPECT_THROW(parseOverride("novalue"), InputError);
 }
 
 TEST(SceneIo, OverrideCannotConjureAMissingSection) {
@@ -138,7 +138,7 @@ TEST(SceneIo, MissingAndBrokenFiles) {
   try {
     loadScene("no/such/scene.json");
     FAIL();
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("no/such/scene.json"), std::string::npos);
   }
   std::filesystem::create_directories(PONYHOP_TEST_OUT);
@@ -147,17 +147,17 @@ TEST(SceneIo, MissingAndBrokenFiles) {
   try {
     loadScene(path);
     FAIL();
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("not valid JSON"), std::string::npos) << e.what();
   }
 }
 
-// Hostile scene files (docs/RELIABILITY.md): each is a SceneError naming the file and the field,
+// Hostile scene files (docs/RELIABILITY.md): each is a InputError naming the file and the field,
 // never a crash, a hang or a library message.
 std::string textError(const std::string& text, const std::vector<Override>& o = {}) {
   try {
     parseSceneText(text, "hostile.json", o);
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     return e.what();
   }
   return "";
@@ -222,7 +222,7 @@ TEST(SceneIoHostile, FilesThatAreNotFilesOrTooLarge) {
   const auto errorLoading = [](const std::string& path) -> std::string {
     try {
       loadScene(path);
-    } catch (const SceneError& e) {
+    } catch (const InputError& e) {
       return e.what();
     }
     return "";

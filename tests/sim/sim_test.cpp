@@ -159,7 +159,7 @@ TEST(Sim, AHeadNeedsAnAssetLoader) {
   try {
     Sim sim(loadScene("assets/scenes/ponytail.json"));
     ADD_FAILURE() << "a head scene built without a mesh loader";
-  } catch (const SceneError& e) {
+  } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("head.mesh"), std::string::npos) << e.what();
   }
 }

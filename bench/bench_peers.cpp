@@ -1,48 +1,33 @@
-#include "app/bench_peers.h"
+#include "bench/bench_peers.h"
+
+#include <dlfcn.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 namespace ponyhop {
 namespace {
 
+namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
+// The engines that may have a module, in the order of their notes.
+struct Engine {
+  const char* name;     // in the notes: "MuJoCo"
+  const char* module;   // ponyhop-peer-<module>.so
+  const char* package;  // the Debian package that has CMake build the module
+};
+constexpr Engine kEngines[] = {{"MuJoCo", "mujoco", "libmujoco-dev"},
+                               {"Bullet", "bullet", "libbullet-dev"},
+                               {"ODE", "ode", "libode-dev"},
+                               {"DART", "dart", "libdart-dev"}};
+
 }  // namespace
-
-double PeerSim::energy() {
-  links(scratch_);
-  double e = 0.0;
-  for (size_t i = 0; i < scratch_.size(); ++i) {
-    const PeerLink& l = scratch_[i];
-    const Eigen::Matrix3d r = l.q.normalized().toRotationMatrix();
-    const Eigen::Vector3d w_body = r.transpose() * l.w;
-    e += 0.5 * chain_.mass[i] * l.v.squaredNorm() + 0.5 * w_body.dot(chain_.inertia[i].cwiseProduct(w_body)) -
-         chain_.mass[i] * chain_.gravity.dot(l.x);
-  }
-  return e;
-}
-
-Eigen::Vector3d PeerSim::tip() {
-  links(scratch_);
-  const PeerLink& l = scratch_.back();
-  return l.x + l.q.normalized() * Eigen::Vector3d(0.0, 0.0, -0.5 * chain_.length);
-}
-
-bool PeerSim::finite() {
-  links(scratch_);
-  for (const PeerLink& l : scratch_) {
-    for (const Eigen::Vector3d& v : {l.x, l.v, l.w}) {
-      if (!v.allFinite() || v.cwiseAbs().maxCoeff() > 1e10) return false;
-    }
-    if (!l.q.coeffs().allFinite()) return false;
-  }
-  return true;
-}
 
 PeerChain peerChainOf(const Sim& rt) {
   PeerChain m;
@@ -58,13 +43,6 @@ PeerChain peerChainOf(const Sim& rt) {
     m.radius.push_back(ch.radii[i]);
   }
   return m;
-}
-
-std::vector<Peer> availablePeers() {
-  std::vector<Peer> all;
-  for (auto&& list : {mujocoPeers(), bulletPeers(), odePeers(), dartPeers()})
-    all.insert(all.end(), list.begin(), list.end());
-  return all;
 }
 
 RunResult benchPeerRun(const Peer& peer, const PeerChain& chain, double dt, double horizon, int repeats,
@@ -170,37 +148,59 @@ ScalingResult benchPeerScaling(const Peer& peer, const PeerChain& chain, double 
   return s;
 }
 
-// Engines not compiled in contribute nothing.
-#ifndef PONYHOP_HAVE_MUJOCO
-std::vector<Peer> mujocoPeers() { return {}; }
-#endif
-#ifndef PONYHOP_HAVE_BULLET
-std::vector<Peer> bulletPeers() { return {}; }
-#endif
-#ifndef PONYHOP_HAVE_ODE
-std::vector<Peer> odePeers() { return {}; }
-#endif
-#ifndef PONYHOP_HAVE_DART
-std::vector<Peer> dartPeers() { return {}; }
-#endif
-
-std::vector<std::string> peerNotes() {
-  std::vector<std::string> notes;
-  const auto note = [&](const std::vector<Peer>& peers, const char* engine, const char* package) {
+PeerModules loadPeerModules(const std::vector<std::string>& dirs) {
+  PeerModules m;
+  for (const Engine& e : kEngines) {
+    const std::string file = std::string("ponyhop-peer-") + e.module + ".so";
+    const std::string no_rows = std::string(": no ") + e.name + " rows.";
+    std::string path;
+    for (const std::string& d : dirs) {
+      std::error_code ec;
+      if (!d.empty() && fs::is_regular_file(fs::path(d) / file, ec)) {
+        path = (fs::path(d) / file).string();
+        break;
+      }
+    }
+    if (path.empty()) {
+      m.notes.push_back(std::string(e.name) + "'s module " + file +
+                        " was not found (it is built when configure finds " + e.package + ")" + no_rows);
+      continue;
+    }
+    // Never closed: the peers' functions and the engine's own state live in the module.
+    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (!handle) {
+      m.notes.push_back(std::string(e.name) + "'s module " + path + " failed to load (" + dlerror() + ")" + no_rows);
+      continue;
+    }
+    const auto entry = reinterpret_cast<decltype(&ponyhop_peers_v1)>(dlsym(handle, kPeerEntry));
+    if (!entry) {
+      m.notes.push_back(std::string(e.name) + "'s module " + path + " has no " + kPeerEntry +
+                        " (built by another version of ponyhop?)" + no_rows);
+      continue;
+    }
+    std::vector<Peer> peers;
+    entry(&peers);
     if (peers.empty()) {
-      notes.push_back(std::string(engine) + " was not found at configure time (optional: " + package + "): no " +
-                      engine + " rows.");
-      return;
+      m.notes.push_back(std::string(e.name) + "'s module " + path + " has no peers" + no_rows);
+      continue;
     }
     std::string names;
     for (const Peer& p : peers) names += (names.empty() ? "" : ", ") + p.name;
-    notes.push_back(peers.front().version + " (" + names + ")");
-  };
-  note(mujocoPeers(), "MuJoCo", "libmujoco-dev");
-  note(bulletPeers(), "Bullet", "libbullet-dev");
-  note(odePeers(), "ODE", "libode-dev");
-  note(dartPeers(), "DART", "libdart-dev");
-  return notes;
+    m.notes.push_back(peers.front().version + " (" + names + ")");
+    m.peers.insert(m.peers.end(), peers.begin(), peers.end());
+  }
+  return m;
+}
+
+std::vector<std::string> peerModuleDirs() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) return {};
+  const fs::path bin = exe.parent_path();
+  // PREFIX/BINDIR/ponyhop -> PREFIX/LIBDIR/ponyhop: climb one folder per component of BINDIR.
+  fs::path prefix = bin;
+  for ([[maybe_unused]] const auto& part : fs::path(PONYHOP_INSTALL_BINDIR)) prefix = prefix.parent_path();
+  return {bin.string(), (prefix / PONYHOP_INSTALL_PEERDIR).string()};
 }
 
 }  // namespace ponyhop

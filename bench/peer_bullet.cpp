@@ -1,6 +1,6 @@
-// Compiled only when CMake found Bullet's double-precision libraries (libbullet-dev ships
-// libBullet*-float64 and bullet-float64.pc beside the single-precision ones; app/CMakeLists.txt
-// defines PONYHOP_HAVE_BULLET and BT_USE_DOUBLE_PRECISION).
+// The module ponyhop-peer-bullet.so, built only when CMake finds Bullet's double-precision
+// libraries (libbullet-dev ships libBullet*-float64 and bullet-float64.pc beside the
+// single-precision ones; bench/CMakeLists.txt, whose imported target defines BT_USE_DOUBLE_PRECISION).
 //
 // btMultiBody (Featherstone's articulated-body algorithm in Bullet, reduced coordinates) with a
 // fixed base at the anchor and one spherical joint per link, stepped by btMultiBodyDynamicsWorld
@@ -13,7 +13,7 @@
 #include <BulletDynamics/Featherstone/btMultiBodyLink.h>
 #include <btBulletDynamicsCommon.h>
 
-#include "app/bench_peers.h"
+#include "bench/peer.h"
 
 namespace ponyhop {
 namespace {
@@ -98,9 +98,7 @@ class BulletSim final : public PeerSim {
   double time_ = 0.0;
 };
 
-}  // namespace
-
-std::vector<Peer> bulletPeers() {
+Peer bulletPeer() {
   Peer p;
   p.name = "bullet/multibody";
   const int v = btGetVersion();  // 324 for 3.24
@@ -110,7 +108,10 @@ std::vector<Peer> bulletPeers() {
   p.make = [](const PeerChain& chain, double dt, std::string&) -> std::unique_ptr<PeerSim> {
     return std::make_unique<BulletSim>(chain, dt);
   };
-  return {p};
+  return p;
 }
 
+}  // namespace
 }  // namespace ponyhop
+
+extern "C" void ponyhop_peers_v1(std::vector<ponyhop::Peer>* out) { out->push_back(ponyhop::bulletPeer()); }

@@ -23,6 +23,7 @@
 #include <thread>
 
 #include "app/commands.h"
+#include "bench/commands.h"
 #include "engine/render_session.h"
 #include "sim/scene_io.h"
 
@@ -98,7 +99,7 @@ std::vector<Row> measureAll(const std::string& scene_path, const std::vector<std
   for (int i = 0; i < warmup + frames; ++i) {
     for (Run& r : runs) {
       const double t = i / r.scene.render.fps;
-      if (!r.session->simulateTo(t)) throw SceneError(scene_path + ": the simulation stopped: " + r.session->status());
+      if (!r.session->simulateTo(t)) throw InputError(scene_path + ": the simulation stopped: " + r.session->status());
       const auto t0 = Clock::now();
       r.session->renderFrame(t, rgba);
       const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -133,7 +134,7 @@ int runBenchRender(const BenchRenderArgs& args) {
     int w = 0, h = 0;
     char tail = 0;
     if (std::sscanf(size.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192)
-      throw SceneError("--sizes " + size + ": expected WIDTHxHEIGHT between 16x16 and 8192x8192, e.g. 1280x720");
+      throw InputError("--sizes " + size + ": expected WIDTHxHEIGHT between 16x16 and 8192x8192, e.g. 1280x720");
     sizes.emplace_back(w, h);
   }
   std::vector<Override> overrides;
@@ -152,7 +153,7 @@ int runBenchRender(const BenchRenderArgs& args) {
     gl_name = s.glRenderer() + " / " + s.glVersion();
   }
   md << "# Render speed\n\n"
-     << "`ponyhop bench-render` (app/cmd_bench_render.cpp): ms per frame, median of " << args.frames
+     << "`ponyhop bench-render` (bench/cmd_bench_render.cpp): ms per frame, median of " << args.frames
      << " frames after 2 warm-up frames (the configurations take turns frame by frame), on " << u.machine << " with "
      << std::thread::hardware_concurrency() << " hardware threads, " << gl_name
      << ", LP_NUM_THREADS=" << (lp ? lp : "(unset)") << ", load average at the start " << loadAverage() << ".\n\n";
@@ -230,14 +231,7 @@ void addBenchRenderCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--set", args->sets, "key=value overrides applied to every configuration (as render --set)");
   cmd->add_option("--out", args->out,
                   "Markdown table to write (default docs/bench/render_table.md; empty: print only)");
-  cmd->callback([args, &exit_code] {
-    try {
-      exit_code = runBenchRender(*args);
-    } catch (const SceneError& e) {
-      std::fprintf(stderr, "ponyhop bench-render: %s\n", e.what());
-      exit_code = 2;
-    }
-  });
+  cmd->callback([args, &exit_code] { exit_code = runCommand("bench-render", [&] { return runBenchRender(*args); }); });
 }
 
 }  // namespace ponyhop

@@ -1,4 +1,5 @@
-// Compiled only when CMake found MuJoCo (app/CMakeLists.txt defines PONYHOP_HAVE_MUJOCO).
+// The module ponyhop-peer-mujoco.so, built only when CMake finds MuJoCo (libmujoco-dev;
+// bench/CMakeLists.txt).
 #include <mujoco/mujoco.h>
 #include <unistd.h>
 
@@ -10,7 +11,7 @@
 #include <memory>
 #include <sstream>
 
-#include "app/bench_peers.h"
+#include "bench/peer.h"
 
 namespace ponyhop {
 namespace {
@@ -69,8 +70,7 @@ bool finite(const Model& s) {
   return s.d->warning[mjWARN_BADQACC].number == 0;
 }
 
-}  // namespace
-
+// The MJCF text of the chain with integrator "Euler" or "RK4" and timestep dt.
 std::string mujocoChainXml(const PeerChain& c, const std::string& integrator, double dt) {
   std::ostringstream x;
   x.precision(17);
@@ -106,8 +106,6 @@ std::string mujocoChainXml(const PeerChain& c, const std::string& integrator, do
   x << "  </worldbody>\n</mujoco>\n";
   return x.str();
 }
-
-namespace {
 
 class MujocoSim final : public PeerSim {
  public:
@@ -160,7 +158,9 @@ Peer mujocoPeer(const std::string& integrator) {
 }
 
 }  // namespace
-
-std::vector<Peer> mujocoPeers() { return {mujocoPeer("Euler"), mujocoPeer("RK4")}; }
-
 }  // namespace ponyhop
+
+extern "C" void ponyhop_peers_v1(std::vector<ponyhop::Peer>* out) {
+  out->push_back(ponyhop::mujocoPeer("Euler"));
+  out->push_back(ponyhop::mujocoPeer("RK4"));
+}

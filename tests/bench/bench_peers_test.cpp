@@ -1,13 +1,15 @@
-// The peer engines of `ponyhop bench` (app/bench_peers.h) build the same chain as ponyhop: at
-// t = 0 every peer's links sit where ponyhop's are (the tip and the potential energy agree), and
-// after 0.1 s of the released 8-link chain at dt = 1/1920 s the tip is where ponyhop's reduced
-// RK4 puts it, within what a first-order step can reach. Engines not found at configure time
-// are skipped (the bench then has no rows for them).
-#include "app/bench_peers.h"
+// The peer engines of `ponyhop bench` (bench/peer.h) build the same chain as ponyhop: at t = 0
+// every peer's links sit where ponyhop's are (the tip and the potential energy agree), and after
+// 0.1 s of the released 8-link chain at dt = 1/1920 s the tip is where ponyhop's reduced RK4 puts
+// it, within what a first-order step can reach. The modules are the ones built beside the
+// executable; engines whose module was not built are skipped (the bench then has no rows for
+// them), and a module that was built must load.
+#include "bench/bench_peers.h"
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <filesystem>
 
 #include "sim/scene_io.h"
 #include "sim/sim.h"
@@ -26,8 +28,14 @@ std::vector<Override> chainOverrides(const std::string& solver) {
 }
 
 TEST(BenchPeers, EveryPeerBuildsTheSameChainAndMovesLikeIt) {
-  const std::vector<Peer> peers = availablePeers();
-  if (peers.empty()) GTEST_SKIP() << "no peer engine was found at configure time";
+  const PeerModules modules = loadPeerModules({std::filesystem::path(PONYHOP_EXE).parent_path().string()});
+  for (const std::string& note : modules.notes) {
+    EXPECT_EQ(note.find("failed to load"), std::string::npos) << note;
+    EXPECT_EQ(note.find(" has no "), std::string::npos) << note;
+    std::printf("%s\n", note.c_str());
+  }
+  const std::vector<Peer>& peers = modules.peers;
+  if (peers.empty()) GTEST_SKIP() << "no peer engine's module was built";
   Sim rt(loadScene("assets/scenes/chain.json", chainOverrides("featherstone")));
   ASSERT_TRUE(rt.ok()) << rt.status();
   const PeerChain chain = peerChainOf(rt);

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "app/bench_run.h"
+#include "bench/bench_run.h"
 
 namespace ponyhop {
 

@@ -1,8 +1,11 @@
-// Other engines run side by side with ponyhop's methods in `ponyhop bench` (docs/bench/README.md):
+// The interface between `ponyhop bench` and a peer engine's module (docs/bench/README.md):
 // MuJoCo (libmujoco-dev), Bullet's btMultiBody in double precision (libbullet-dev's -float64
 // libraries), ODE with dWorldStep and dWorldQuickStep (libode-dev, double precision) and DART
-// (libdart-dev). Each is optional: app/CMakeLists.txt compiles an engine's file and defines
-// PONYHOP_HAVE_<ENGINE> only when its Debian package was found at configure time.
+// (libdart-dev). Each engine is a module of its own, ponyhop-peer-<engine>.so (bench/peer_<engine>.cpp),
+// built only when bench/CMakeLists.txt finds the engine's Debian package; the `ponyhop` executable
+// is the same whichever were found, and loads the modules it finds at run time (bench/bench_peers.h).
+// This header is all a module sees of ponyhop: Eigen and the C++ library, everything inline, so
+// that a module links nothing of ponyhop's.
 //
 // Every peer builds the same chain (a PeerChain read from the built World: exact masses and
 // principal inertias, link length, gravity, the initial orientations, the fixed anchor), with
@@ -17,9 +20,6 @@
 #include <memory>
 #include <string>
 #include <vector>
-
-#include "app/bench_run.h"
-#include "sim/sim.h"
 
 namespace ponyhop {
 
@@ -42,9 +42,6 @@ struct PeerLink {
   Eigen::Quaterniond q;
 };
 
-// The chain of a built scene (its chain, fixed anchor) as the peers build it.
-PeerChain peerChainOf(const Sim& rt);
-
 // A peer engine's chain, stepped in place.
 class PeerSim {
  public:
@@ -53,12 +50,39 @@ class PeerSim {
   virtual double time() const = 0;
   // The links' states after the last step (the engine's own forward kinematics).
   virtual void links(std::vector<PeerLink>& out) = 0;
+
   // Kinetic + potential energy (J, potential -m g . x).
-  virtual double energy();
+  virtual double energy() {
+    links(scratch_);
+    double e = 0.0;
+    for (size_t i = 0; i < scratch_.size(); ++i) {
+      const PeerLink& l = scratch_[i];
+      const Eigen::Matrix3d r = l.q.normalized().toRotationMatrix();
+      const Eigen::Vector3d w_body = r.transpose() * l.w;
+      e += 0.5 * chain_.mass[i] * l.v.squaredNorm() + 0.5 * w_body.dot(chain_.inertia[i].cwiseProduct(w_body)) -
+           chain_.mass[i] * chain_.gravity.dot(l.x);
+    }
+    return e;
+  }
+
   // The free end of the last link, m.
-  Eigen::Vector3d tip();
+  Eigen::Vector3d tip() {
+    links(scratch_);
+    const PeerLink& l = scratch_.back();
+    return l.x + l.q.normalized() * Eigen::Vector3d(0.0, 0.0, -0.5 * chain_.length);
+  }
+
   // false when the state is non-finite or ran away (|coordinate| > 1e10).
-  virtual bool finite();
+  virtual bool finite() {
+    links(scratch_);
+    for (const PeerLink& l : scratch_) {
+      for (const Eigen::Vector3d& v : {l.x, l.v, l.w}) {
+        if (!v.allFinite() || v.cwiseAbs().maxCoeff() > 1e10) return false;
+      }
+      if (!l.q.coeffs().allFinite()) return false;
+    }
+    return true;
+  }
 
  protected:
   explicit PeerSim(const PeerChain& chain) : chain_(chain) {}
@@ -74,29 +98,12 @@ struct Peer {
   std::function<std::unique_ptr<PeerSim>(const PeerChain&, double dt, std::string& error)> make;
 };
 
-// The peers compiled in (empty when none was found at configure time).
-std::vector<Peer> availablePeers();
-// One note per engine (its version and settings, or that it was not found).
-std::vector<std::string> peerNotes();
-
-// One peer run, measured like benchRun(): `repeats` timed runs of [0, horizon], the tip's error
-// against the reference, then the first repeat continued (untimed) to long_duration for the
-// energy drift (against the peer's own energy at t = 0; e_start: the chain's energy in ponyhop's
-// reference, for the relative drift).
-RunResult benchPeerRun(const Peer& peer, const PeerChain& chain, double dt, double horizon, int repeats,
-                       double long_duration, const Trajectory& reference, double e_start);
-
-// Cost per step of the chain hanging at rest (the scaling sweep), median of blocks of steps
-// within ~budget seconds.
-ScalingResult benchPeerScaling(const Peer& peer, const PeerChain& chain, double dt, double budget);
-
-// The engines' entries (defined in app/bench_<engine>.cpp when compiled in).
-std::vector<Peer> mujocoPeers();
-std::vector<Peer> bulletPeers();
-std::vector<Peer> odePeers();
-std::vector<Peer> dartPeers();
-
-// The MJCF text of the chain with integrator "Euler" or "RK4" and timestep dt.
-std::string mujocoChainXml(const PeerChain& chain, const std::string& integrator, double dt);
+// The name of the one symbol a module exports (found with dlsym), declared below.
+inline constexpr const char* kPeerEntry = "ponyhop_peers_v1";
 
 }  // namespace ponyhop
+
+// A module's entry point: appends its engine's peers to `out`. The module and the executable share
+// the types above, so both must come from one build; the version in the name makes a module built
+// against another layout of them fail to load (with a message) rather than crash.
+extern "C" void ponyhop_peers_v1(std::vector<ponyhop::Peer>* out);

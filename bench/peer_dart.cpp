@@ -1,4 +1,4 @@
-// Compiled only when CMake found DART (libdart-dev; app/CMakeLists.txt defines PONYHOP_HAVE_DART).
+// The module ponyhop-peer-dart.so, built only when CMake finds DART (libdart-dev; bench/CMakeLists.txt).
 //
 // A dart::dynamics::Skeleton of BallJoint + BodyNode pairs (reduced coordinates, articulated-body
 // forward dynamics), the first joint's parent frame at the anchor, stepped by
@@ -10,7 +10,7 @@
 #include <dart/dynamics/Skeleton.hpp>
 #include <dart/simulation/World.hpp>
 
-#include "app/bench_peers.h"
+#include "bench/peer.h"
 
 namespace ponyhop {
 namespace {
@@ -67,9 +67,7 @@ class DartSim final : public PeerSim {
   std::vector<BodyNode*> nodes_;
 };
 
-}  // namespace
-
-std::vector<Peer> dartPeers() {
+Peer dartPeer() {
   Peer p;
   p.name = "dart/ball";
   p.version = std::string("DART ") + DART_VERSION +
@@ -77,7 +75,10 @@ std::vector<Peer> dartPeers() {
   p.make = [](const PeerChain& chain, double dt, std::string&) -> std::unique_ptr<PeerSim> {
     return std::make_unique<DartSim>(chain, dt);
   };
-  return {p};
+  return p;
 }
 
+}  // namespace
 }  // namespace ponyhop
+
+extern "C" void ponyhop_peers_v1(std::vector<ponyhop::Peer>* out) { out->push_back(ponyhop::dartPeer()); }

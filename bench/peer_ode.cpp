@@ -1,5 +1,5 @@
-// Compiled only when CMake found ODE (libode-dev, built with dDOUBLE; app/CMakeLists.txt defines
-// PONYHOP_HAVE_ODE).
+// The module ponyhop-peer-ode.so, built only when CMake finds ODE (libode-dev, built with dDOUBLE;
+// bench/CMakeLists.txt).
 //
 // ODE works in maximal coordinates with velocity-level multipliers, like ponyhop's dense and
 // tree solvers: one rigid body per link, a ball joint at each pivot, semi-implicit Euler. Two
@@ -8,7 +8,7 @@
 // back by 20 % per step; CFM 1e-10), gyroscopic mode on, no auto-disable, no collision.
 #include <ode/ode.h>
 
-#include "app/bench_peers.h"
+#include "bench/peer.h"
 
 namespace ponyhop {
 namespace {
@@ -92,7 +92,9 @@ Peer odePeer(bool quick) {
 }
 
 }  // namespace
-
-std::vector<Peer> odePeers() { return {odePeer(false), odePeer(true)}; }
-
 }  // namespace ponyhop
+
+extern "C" void ponyhop_peers_v1(std::vector<ponyhop::Peer>* out) {
+  out->push_back(ponyhop::odePeer(false));
+  out->push_back(ponyhop::odePeer(true));
+}

@@ -8,8 +8,8 @@
 //             the released chain is chaotic, so the horizon is where that holds (found, stated);
 //   long runs: energy drift (fixed anchor), joint drift, whether the motion stays bounded;
 //   cost:     microseconds per step and per simulated second (median of repeats), per stage.
-// Scaling: cost per step for N = 2 ... 1024 per solver. The peer engines found at configure time
-// (MuJoCo, Bullet, ODE, DART: app/bench_peers.h) run the fixed-anchor chains and the scaling
+// Scaling: cost per step for N = 2 ... 1024 per solver. The peer engines whose modules were built
+// (MuJoCo, Bullet, ODE, DART: bench/peer.h) run the fixed-anchor chains and the scaling
 // sweep beside them, with a table of ours / fastest peer per N. Writes CSV, Markdown and PNGs.
 #include <sys/utsname.h>
 
@@ -26,10 +26,10 @@
 #include <type_traits>
 #include <vector>
 
-#include "app/bench_peers.h"
-#include "app/bench_report.h"
-#include "app/bench_run.h"
-#include "app/commands.h"
+#include "bench/bench_peers.h"
+#include "bench/bench_report.h"
+#include "bench/bench_run.h"
+#include "bench/commands.h"
 #include "engine/asset_loader.h"
 #include "physics/models/head_collisions.h"
 #include "physics/physics_params.h"
@@ -194,7 +194,7 @@ Reference computeReference(const BenchCase& bench_case, const Config& cfg, doubl
   return ref;
 }
 
-// The chain of a scene as the peer engines build it (app/bench_peers.h).
+// The chain of a scene as the peer engines build it (bench/bench_peers.h).
 PeerChain peerChainOf(const std::string& scene, const std::vector<Override>& overrides) {
   return peerChainOf(Sim(loadScene(scene, overrides)));
 }
@@ -581,9 +581,10 @@ int runBench(BenchArgs& args) {
     return (a->links == 0 ? 8.5 : a->links) < (b->links == 0 ? 8.5 : b->links);
   });
 
-  const std::vector<Peer> peers = args.peers ? availablePeers() : std::vector<Peer>{};
+  const PeerModules modules = args.peers ? loadPeerModules(peerModuleDirs()) : PeerModules{};
+  const std::vector<Peer>& peers = modules.peers;
   if (args.peers) {
-    for (const auto& n : peerNotes()) notes.push_back(n);
+    for (const auto& n : modules.notes) notes.push_back(n);
   } else {
     notes.push_back("Peer engines left out (--no-peers).");
   }

@@ -1,0 +1,44 @@
+// The peer engines of `ponyhop bench` as the bench drives them (bench/peer.h: the chain, the
+// engines' interface): the chain read from a built scene, the modules found and loaded, and a
+// peer's run measured like one of ours.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "bench/bench_run.h"
+#include "bench/peer.h"
+#include "sim/sim.h"
+
+namespace ponyhop {
+
+// The chain of a built scene (its chain, fixed anchor) as the peers build it.
+PeerChain peerChainOf(const Sim& rt);
+
+// The peers of the modules that loaded, and one note per engine: its version and settings, or
+// that its module was not built or failed to load (and why).
+struct PeerModules {
+  std::vector<Peer> peers;
+  std::vector<std::string> notes;
+};
+
+// Loads ponyhop-peer-<engine>.so of each engine from the first folder of `dirs` that has it.
+// A module stays loaded for the life of the process (its peers' code is in it).
+PeerModules loadPeerModules(const std::vector<std::string>& dirs);
+
+// Where the executable looks for the modules: its own folder (a build folder), then the install
+// layout's PREFIX/LIBDIR/ponyhop (found relative to the executable, as its assets are).
+std::vector<std::string> peerModuleDirs();
+
+// One peer run, measured like benchRun(): `repeats` timed runs of [0, horizon], the tip's error
+// against the reference, then the first repeat continued (untimed) to long_duration for the
+// energy drift (against the peer's own energy at t = 0; e_start: the chain's energy in ponyhop's
+// reference, for the relative drift).
+RunResult benchPeerRun(const Peer& peer, const PeerChain& chain, double dt, double horizon, int repeats,
+                       double long_duration, const Trajectory& reference, double e_start);
+
+// Cost per step of the chain hanging at rest (the scaling sweep), median of blocks of steps
+// within ~budget seconds.
+ScalingResult benchPeerScaling(const Peer& peer, const PeerChain& chain, double dt, double budget);
+
+}  // namespace ponyhop

@@ -1,0 +1,12 @@
+// The bench's subcommands of the `ponyhop` executable (app/main.cpp adds them beside app/commands.h's).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace ponyhop {
+
+// As app/commands.h: each adds its subcommand to `app`; the callback runs it and sets `exit_code`.
+void addBenchCommand(CLI::App& app, int& exit_code);        // bench/cmd_bench.cpp: speed against accuracy
+void addBenchRenderCommand(CLI::App& app, int& exit_code);  // bench/cmd_bench_render.cpp: render time per pass
+
+}  // namespace ponyhop
