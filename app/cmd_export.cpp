@@ -30,8 +30,8 @@ Eigen::Vector3f toBody(const RigidBody& b, const Eigen::Vector3d& p_world) {
 }
 
 // A mesh for every body, in its own frame, from the scene at t = 0.
-std::vector<BakeMesh> bodyMeshes(const Sim& rt, std::vector<int>& mesh_of_body) {
-  const World& w = rt.world();
+std::vector<BakeMesh> bodyMeshes(const Sim& sim, std::vector<int>& mesh_of_body) {
+  const World& w = sim.world();
   std::vector<BakeMesh> meshes;
   mesh_of_body.assign(size_t(w.bodyCount()), -1);
   const auto add = [&](int body, BakeMesh m) {
@@ -39,14 +39,14 @@ std::vector<BakeMesh> bodyMeshes(const Sim& rt, std::vector<int>& mesh_of_body) 
     mesh_of_body[size_t(body)] = int(meshes.size());
     meshes.push_back(std::move(m));
   };
-  const Scene& scene = rt.scene();
-  if (rt.headBody() >= 0 && rt.head()) {
-    BakeMesh m{"head", rt.head()->mesh, scene.head->color.cast<float>()};
+  const Scene& scene = sim.scene();
+  if (sim.headBody() >= 0 && sim.head()) {
+    BakeMesh m{"head", sim.head()->mesh, scene.head->color.cast<float>()};
     m.mesh.dropMaterials();
-    transformMesh(m.mesh, rt.head()->mesh_to_body);
-    add(rt.headBody(), std::move(m));
+    transformMesh(m.mesh, sim.head()->mesh_to_body);
+    add(sim.headBody(), std::move(m));
   }
-  if (const Chain* c = rt.chain()) {
+  if (const Chain* c = sim.chain()) {
     const std::vector<CapsuleSegment> segs = c->segments(w);
     for (size_t i = 0; i < c->links.size(); ++i) {
       const RigidBody& b = w.body(c->links[i]);
@@ -61,9 +61,9 @@ std::vector<BakeMesh> bodyMeshes(const Sim& rt, std::vector<int>& mesh_of_body) 
       }
     }
   }
-  for (size_t i = 0; i < rt.hoppers().size(); ++i) {
-    const Hopper* h = rt.hoppers()[i].get();
-    const HopperSection& p = hopperSection(rt.scene(), i);
+  for (size_t i = 0; i < sim.hoppers().size(); ++i) {
+    const Hopper* h = sim.hoppers()[i].get();
+    const HopperSection& p = hopperSection(sim.scene(), i);
     const HopperShape s = h->shape(w);
     const HopperModel& m = h->model();
     const Eigen::Vector3d half = 0.5 * p.body_size;
@@ -90,24 +90,24 @@ int runExport(const ExportArgs& args) {
   const std::string ext = std::filesystem::path(args.out).extension().string();
   if (ext != ".glb") throw InputError("--out " + args.out + ": the bake is written as binary glTF: name it *.glb");
 
-  Sim rt(scene, &assimpAssets());
+  Sim sim(scene, &assimpAssets());
   Bake bake;
   std::vector<int> mesh_of_body;
-  bake.meshes = bodyMeshes(rt, mesh_of_body);
-  const std::vector<std::string> ids = bodyIds(rt.world());
+  bake.meshes = bodyMeshes(sim, mesh_of_body);
+  const std::vector<std::string> ids = bodyIds(sim.world());
   for (size_t i = 0; i < ids.size(); ++i) {
     BakeNode n;
     n.name = ids[i];
     n.mesh = mesh_of_body[i];
     bake.nodes.push_back(std::move(n));
   }
-  PoseSampler sampler(rt);
+  PoseSampler sampler(sim);
   PoseFrame fr;
   for (int k = 0; k < scene.render.frames; ++k) {
     const double t = k / scene.render.fps;
     if (!sampler.at(t, fr)) {
       std::fprintf(stderr, "ponyhop export: the simulation stopped before frame %d: %s\n  %s was not written\n", k,
-                   rt.status().c_str(), args.out.c_str());
+                   sim.status().c_str(), args.out.c_str());
       return 1;
     }
     bake.times.push_back(t);

@@ -42,24 +42,24 @@ struct SimRow {
   size_t split = 0;
 };
 
-std::string baseHeader(const Sim& rt) {
+std::string baseHeader(const Sim& sim) {
   // Hopper: body centre of mass (m, m/s), attitude (rad), leg length (m), phase, foot contact
   // point (m), contact 0/1, the largest violation of the knee's five constraints.
-  if (rt.hopper()) {
+  if (sim.hopper()) {
     return "t,x,y,z,vx,vy,vz,roll,pitch,yaw,leg_length,phase,foot_x,foot_y,foot_z,contact,knee_error";
   }
-  if (rt.chain()) return "t,tip_x,tip_y,tip_z,energy,max_joint_error";
+  if (sim.chain()) return "t,tip_x,tip_y,tip_z,energy,max_joint_error";
   return "t,max_joint_error";
 }
 
 // A scene with collisions adds the active contacts and limits after the last contact stage and
 // the deepest overlap (m) that stage found before it pushed the bodies apart.
-std::string header(const Sim& rt) { return baseHeader(rt) + (rt.collisions() ? ",contacts,deepest" : ""); }
+std::string header(const Sim& sim) { return baseHeader(sim) + (sim.collisions() ? ",contacts,deepest" : ""); }
 
-SimRow baseSample(const Sim& rt) {
+SimRow baseSample(const Sim& sim) {
   SimRow r;
-  if (const Hopper* h = rt.hopper()) {
-    const World& w = rt.world();
+  if (const Hopper* h = sim.hopper()) {
+    const World& w = sim.world();
     const RigidBody& b = w.body(h->model().body);
     const Eigen::Vector3d att = h->attitude(w);
     const Eigen::Vector3d foot = h->footPoint(w);
@@ -68,18 +68,18 @@ SimRow baseSample(const Sim& rt) {
                 h->kneeError(w)};
     r.text = h->phaseName();
     r.split = 10;
-  } else if (const Chain* c = rt.chain()) {
-    const Eigen::Vector3d tip = c->tip(rt.world());
-    r.values = {tip.x(), tip.y(), tip.z(), rt.chainEnergy(), rt.maxJointError()};
+  } else if (const Chain* c = sim.chain()) {
+    const Eigen::Vector3d tip = c->tip(sim.world());
+    r.values = {tip.x(), tip.y(), tip.z(), sim.chainEnergy(), sim.maxJointError()};
   } else {
-    r.values = {rt.maxJointError()};
+    r.values = {sim.maxJointError()};
   }
   return r;
 }
 
-SimRow sample(const Sim& rt) {
-  SimRow r = baseSample(rt);
-  if (const Collisions* c = rt.collisions()) {
+SimRow sample(const Sim& sim) {
+  SimRow r = baseSample(sim);
+  if (const Collisions* c = sim.collisions()) {
     r.values.push_back(c->stats().active);
     r.values.push_back(c->stats().deepest);
   }
@@ -96,18 +96,18 @@ void writeRow(std::FILE* f, double t, const SimRow& r) {
 }
 
 int runSummary(const Scene& scene, double duration, const SimArgs& args) {
-  Sim rt(scene, &assimpAssets());
+  Sim sim(scene, &assimpAssets());
 
   // Written to a temporary name and renamed: a failed run never replaces a good CSV.
   const std::string tmp = args.csv + ".partial-" + std::to_string(getpid());
   std::FILE* f = std::fopen(tmp.c_str(), "w");
   if (!f) throw InputError("--csv " + args.csv + ": cannot write the file");
-  std::fprintf(f, "%s\n", header(rt).c_str());
+  std::fprintf(f, "%s\n", header(sim).c_str());
 
   const long rows = static_cast<long>(std::floor(duration * 1000.0 + 1e-9)) + 1;
   long next = 0;  // next row (millisecond) to write
-  double prev_t = rt.time();
-  SimRow prev = sample(rt);
+  double prev_t = sim.time();
+  SimRow prev = sample(sim);
   writeRow(f, 0.0, prev);
   next = 1;
   // Progress on long runs: a line every 5 s of wall time (a long chain on a slow solver shows
@@ -126,19 +126,19 @@ int runSummary(const Scene& scene, double duration, const SimArgs& args) {
     if (Clock::now() >= t_report) {
       t_report += std::chrono::seconds(5);
       const double wall = std::chrono::duration<double>(Clock::now() - t_start).count();
-      const double done = rt.time() / std::max(duration, 1e-12);
-      std::fprintf(stderr, "sim: %.3f of %.3f s simulated (%.1f%%), %.0f s elapsed, about %.0f s left\n", rt.time(),
+      const double done = sim.time() / std::max(duration, 1e-12);
+      std::fprintf(stderr, "sim: %.3f of %.3f s simulated (%.1f%%), %.0f s elapsed, about %.0f s left\n", sim.time(),
                    duration, 100.0 * done, wall, done > 0.0 ? wall * (1.0 - done) / done : 0.0);
     }
-    if (!rt.step()) {
+    if (!sim.step()) {
       std::fclose(f);
       std::remove(tmp.c_str());
-      std::fprintf(stderr, "ponyhop sim: the simulation stopped: %s\n  %s was not written\n", rt.status().c_str(),
+      std::fprintf(stderr, "ponyhop sim: the simulation stopped: %s\n  %s was not written\n", sim.status().c_str(),
                    args.csv.c_str());
       return 1;
     }
-    const double t = rt.time();
-    const SimRow cur = sample(rt);
+    const double t = sim.time();
+    const SimRow cur = sample(sim);
     // Rows in (prev_t, t]: take whichever step is nearer.
     while (next < rows && next * 1e-3 <= t + 1e-12) {
       const double tr = next * 1e-3;
@@ -159,7 +159,7 @@ int runSummary(const Scene& scene, double duration, const SimArgs& args) {
   if (ec) throw InputError("--csv " + args.csv + ": " + ec.message());
   std::fprintf(stderr, "sim: %ld rows (%.3f s simulated, dt %.6g s) -> %s\n", rows, duration, scene.physics.dt,
                args.csv.c_str());
-  if (const int misses = rt.world().toleranceMisses(); misses > 0) {
+  if (const int misses = sim.world().toleranceMisses(); misses > 0) {
     std::fprintf(stderr,
                  "sim: warning: %d substeps kept an error estimate above physics.tolerance = %g m even at the "
                  "deepest split (1/1024 of dt): the tolerance was not met there\n",
@@ -190,15 +190,15 @@ int runPoses(const Scene& scene, double duration, const SimArgs& args) {
     const long n = static_cast<long>(std::floor(duration * args.rate + 1e-9)) + 1;
     for (long k = 0; k < n; ++k) times.push_back(double(k) / args.rate);
   }
-  Sim rt(scene, &assimpAssets());
+  Sim sim(scene, &assimpAssets());
   // Written to a temporary name of this process and renamed (as --csv): a failed, stopped or
   // concurrent run never replaces a good file.
   const std::string tmp = args.poses + ".partial-" + std::to_string(getpid());
   std::FILE* f = std::fopen(tmp.c_str(), "w");
   if (!f) throw InputError("--poses " + args.poses + ": cannot write the file");
   std::fprintf(f, "t,body,name,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz\n");
-  const std::vector<std::string> ids = bodyIds(rt.world());
-  PoseSampler sampler(rt);
+  const std::vector<std::string> ids = bodyIds(sim.world());
+  PoseSampler sampler(sim);
   PoseFrame fr;
   long rows = 0;
   bool ok = true;
@@ -208,7 +208,7 @@ int runPoses(const Scene& scene, double duration, const SimArgs& args) {
     writePoseRows(f, fr, ids);
     ++rows;
     const double end = duration - 0.5 * scene.physics.dt;
-    while (ok && rt.time() < end && !(sig = InterruptGuard::signal())) {
+    while (ok && sim.time() < end && !(sig = InterruptGuard::signal())) {
       ok = sampler.nextStep(fr);
       if (ok) {
         writePoseRows(f, fr, ids);
@@ -236,7 +236,7 @@ int runPoses(const Scene& scene, double duration, const SimArgs& args) {
   if (!ok || !written) {
     std::remove(tmp.c_str());
     if (!ok) {
-      std::fprintf(stderr, "ponyhop sim: the simulation stopped: %s\n  %s was not written\n", rt.status().c_str(),
+      std::fprintf(stderr, "ponyhop sim: the simulation stopped: %s\n  %s was not written\n", sim.status().c_str(),
                    args.poses.c_str());
       return 1;
     }

@@ -4,8 +4,8 @@
 
 namespace ponyhop {
 
-PoseSampler::PoseSampler(Sim& rt) : rt_(rt) {
-  cur_ = capturePoses(rt.time(), rt.world().bodies());
+PoseSampler::PoseSampler(Sim& sim) : rt_(sim) {
+  cur_ = capturePoses(sim.time(), sim.world().bodies());
   prev_ = cur_;
 }
 

@@ -13,9 +13,9 @@ namespace ponyhop {
 
 class PoseSampler {
  public:
-  explicit PoseSampler(Sim& rt);
+  explicit PoseSampler(Sim& sim);
   // The poses at time t (t not before the previous call's). A time within 1e-9 dt of a step is
-  // that step's state exactly. False when the world stopped before t (rt.status() says why).
+  // that step's state exactly. False when the world stopped before t (sim.status() says why).
   bool at(double t, PoseFrame& out);
   // The next step's poses (t = the step's end). False when the world stopped.
   bool nextStep(PoseFrame& out);

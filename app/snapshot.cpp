@@ -148,17 +148,17 @@ Image renderPanelShot(const Scene& scene, double t, std::string* renderer) {
 }
 
 // Steps a hopper scene from its time on to the first stance (bottom) or flight (past apex) moment.
-std::string waitFor(Sim& rt, const std::string& wait) {
-  const Hopper* h = rt.hopper();
+std::string waitFor(Sim& sim, const std::string& wait) {
+  const Hopper* h = sim.hopper();
   if (!h) return "wait=" + wait + ": the scene has no hopper";
   const bool stance = wait == "stance";
   auto reached = [&] {
-    const double vz = h->centerOfMassVelocity(rt.world()).z();
+    const double vz = h->centerOfMassVelocity(sim.world()).z();
     return stance ? h->inContact() && vz >= 0.0 : !h->inContact() && vz <= 0.0;
   };
-  const double limit = rt.time() + 3.0;
-  while (rt.ok() && rt.time() < limit && !reached()) rt.step();
-  if (!rt.ok()) return "the simulation stopped: " + rt.status();
+  const double limit = sim.time() + 3.0;
+  while (sim.ok() && sim.time() < limit && !reached()) sim.step();
+  if (!sim.ok()) return "the simulation stopped: " + sim.status();
   if (!reached()) return "no " + wait + " moment within 3 s after t";
   return "";
 }

@@ -29,14 +29,14 @@ constexpr Engine kEngines[] = {{"MuJoCo", "mujoco", "libmujoco-dev"},
 
 }  // namespace
 
-PeerChain peerChainOf(const Sim& rt) {
+PeerChain peerChainOf(const Sim& sim) {
   PeerChain m;
-  const Chain& ch = *rt.chain();
-  m.anchor = ch.anchor(rt.world());
+  const Chain& ch = *sim.chain();
+  m.anchor = ch.anchor(sim.world());
   m.length = ch.length;
-  m.gravity = rt.world().params().gravity;
+  m.gravity = sim.world().params().gravity;
   for (size_t i = 0; i < ch.links.size(); ++i) {
-    const RigidBody& b = rt.world().body(ch.links[i]);
+    const RigidBody& b = sim.world().body(ch.links[i]);
     m.mass.push_back(b.mass);
     m.inertia.push_back(b.inertia);
     m.q.push_back(b.q);

@@ -13,7 +13,7 @@
 namespace ponyhop {
 
 // The chain of a built scene (its chain, fixed anchor) as the peers build it.
-PeerChain peerChainOf(const Sim& rt);
+PeerChain peerChainOf(const Sim& sim);
 
 // The peers of the modules that loaded, and one note per engine: its version and settings, or
 // that its module was not built or failed to load (and why).

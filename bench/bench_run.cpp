@@ -56,19 +56,19 @@ Trajectory simulateTrajectory(const BenchCase& c, const Method& m, double dt, do
   const double ws = c.worldStep(dt);
   const long every = sampleEvery(ws);
   t.stride = every * ws;
-  auto rt = build(c, m, dt);
-  if (!rt->ok()) {
-    t.status = rt->status();
+  auto sim = build(c, m, dt);
+  if (!sim->ok()) {
+    t.status = sim->status();
     return t;
   }
-  t.p.push_back(rt->trackedPoint());
+  t.p.push_back(sim->trackedPoint());
   const long n = stepsFor(duration, ws);
   for (long i = 1; i <= n; ++i) {
-    if (!rt->step()) {
-      t.status = rt->status();
+    if (!sim->step()) {
+      t.status = sim->status();
       return t;
     }
-    if (i % every == 0) t.p.push_back(rt->trackedPoint());
+    if (i % every == 0) t.p.push_back(sim->trackedPoint());
   }
   return t;
 }
@@ -102,35 +102,35 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   std::vector<StageTimes> stages;
   std::vector<double> substeps;
   for (int rep = 0; rep < std::max(1, repeats); ++rep) {
-    auto rt = build(c, m, dt);
-    if (!rt->ok()) {
+    auto sim = build(c, m, dt);
+    if (!sim->ok()) {
       r.status = "failed";
-      r.reason = rt->status();
+      r.reason = sim->status();
       return r;
     }
-    if (rep == 0) traj.p.push_back(rt->trackedPoint());
-    rt->world().resetStageTimes();
+    if (rep == 0) traj.p.push_back(sim->trackedPoint());
+    sim->world().resetStageTimes();
     Clock::duration total{};
     long taken = 0, substep_sum = 0;
     for (long i = 1; i <= n; ++i) {
       const auto t0 = Clock::now();
-      const bool ok = rt->step();
+      const bool ok = sim->step();
       total += Clock::now() - t0;
       ++taken;
-      substep_sum += std::max(1, rt->world().lastSubsteps());
+      substep_sum += std::max(1, sim->world().lastSubsteps());
       if (!ok) break;
-      if (rep == 0 && i % every == 0) traj.p.push_back(rt->trackedPoint());
+      if (rep == 0 && i % every == 0) traj.p.push_back(sim->trackedPoint());
     }
     per_step.push_back(seconds(total) / static_cast<double>(std::max(1L, taken)));
-    stages.push_back(rt->world().stageTimes());
+    stages.push_back(sim->world().stageTimes());
     substeps.push_back(static_cast<double>(substep_sum) / std::max(1L, taken));
-    if (!rt->ok()) {  // deterministic: every repeat would stop the same way
+    if (!sim->ok()) {  // deterministic: every repeat would stop the same way
       r.status = "failed";
-      r.reason = rt->status();
+      r.reason = sim->status();
       r.steps = taken;
       break;
     }
-    if (rep == 0) first = std::move(rt);
+    if (rep == 0) first = std::move(sim);
   }
   // Cost: the median repeat, its stages per step.
   const double med = median(per_step);
@@ -155,34 +155,34 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   r.err_max = err[1];
 
   // Long run: the first repeat continued (untimed) to the long duration.
-  Sim& rt = *first;
-  r.tolerance_misses = rt.world().toleranceMisses();
+  Sim& sim = *first;
+  r.tolerance_misses = sim.world().toleranceMisses();
   const long total_steps = stepsFor(c.long_duration, ws);
   const long sample = std::max(1L, std::lround(kDriftSample / ws));
-  const double e0 = rt.chainEnergy();  // after the horizon: equal to the start's up to the drift so far
+  const double e0 = sim.chainEnergy();  // after the horizon: equal to the start's up to the drift so far
   auto fresh = build(c, m, dt);
   const double e_start = fresh->chainEnergy();
   fresh.reset();
   double drift = std::abs(e0 - e_start);
   const auto observe = [&] {
-    r.joint_drift = std::max(r.joint_drift, rt.maxJointError());
-    r.max_speed = std::max(r.max_speed, rt.trackedVelocity().norm());
-    if (c.conservative) drift = std::max(drift, std::abs(rt.chainEnergy() - e_start));
+    r.joint_drift = std::max(r.joint_drift, sim.maxJointError());
+    r.max_speed = std::max(r.max_speed, sim.trackedVelocity().norm());
+    if (c.conservative) drift = std::max(drift, std::abs(sim.chainEnergy() - e_start));
   };
   observe();
   for (long i = n + 1; i <= total_steps; ++i) {
-    if (!rt.step()) break;
+    if (!sim.step()) break;
     if (i % sample == 0) observe();
   }
   observe();
-  r.long_reached = rt.time();
+  r.long_reached = sim.time();
   if (c.conservative) {
     r.energy_drift = drift;
     r.energy_rel = std::abs(e_start) > 0.0 ? drift / std::abs(e_start) : drift;
   }
-  if (!rt.ok()) {
+  if (!sim.ok()) {
     r.long_status = "stopped";
-    r.long_reason = rt.status();
+    r.long_reason = sim.status();
     return r;
   }
   // Bounded: joints held to a centimetre, the tracked point slower than 100 m/s (the released
@@ -195,8 +195,8 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
     std::snprintf(why, sizeof why, "speed %.3g m/s > 100 m/s", r.max_speed);
   else if (c.conservative && r.energy_rel > 1.0)
     std::snprintf(why, sizeof why, "energy drift %.3g x E0", r.energy_rel);
-  else if (rt.hopper() && !(rt.trackedPoint().z() > 0.2 && rt.trackedPoint().z() < 5.0)) {
-    std::snprintf(why, sizeof why, "hopper body at z = %.3g m (fell or flew off)", rt.trackedPoint().z());
+  else if (sim.hopper() && !(sim.trackedPoint().z() > 0.2 && sim.trackedPoint().z() < 5.0)) {
+    std::snprintf(why, sizeof why, "hopper body at z = %.3g m (fell or flew off)", sim.trackedPoint().z());
   }
   if (why[0]) {
     r.long_status = "unbounded";
@@ -240,25 +240,25 @@ ScalingResult benchScaling(const std::string& scene, const std::string& solver, 
   // an explicit step, so every N runs its steps.
   c.overrides = scalingOverrides(links);
   const Method m{solver, "symplectic_euler", "none"};
-  auto rt = build(c, m, kBenchGrid);
-  if (!rt->ok()) {
+  auto sim = build(c, m, kBenchGrid);
+  if (!sim->ok()) {
     s.status = "failed";
-    s.reason = rt->status();
+    s.reason = sim->status();
     return s;
   }
   // The steps are timed as the peers' are, without the per-stage clock (its reads were 4-5 % of
   // a tree step at N = 8); the joint-force stage's share comes from one more block with it on.
-  rt->world().setStageTiming(false);
-  const double per_step = timeSteps([&] { return rt->step(); }, budget, s.steps);
+  sim->world().setStageTiming(false);
+  const double per_step = timeSteps([&] { return sim->step(); }, budget, s.steps);
   s.us_per_step = 1e6 * per_step;
-  rt->world().setStageTiming(true);
-  rt->world().resetStageTimes();
+  sim->world().setStageTiming(true);
+  sim->world().resetStageTimes();
   int staged = 0;
-  for (const int extra = std::max(1, s.steps / 5); rt->ok() && staged < extra && rt->step();) ++staged;
-  s.joint_forces_us = 1e6 * rt->world().stageTimes()[Stage::JointForces] / std::max(1, staged);
-  if (!rt->ok()) {
+  for (const int extra = std::max(1, s.steps / 5); sim->ok() && staged < extra && sim->step();) ++staged;
+  s.joint_forces_us = 1e6 * sim->world().stageTimes()[Stage::JointForces] / std::max(1, staged);
+  if (!sim->ok()) {
     s.status = "failed";
-    s.reason = rt->status();
+    s.reason = sim->status();
   }
   return s;
 }

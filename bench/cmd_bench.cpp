@@ -459,22 +459,22 @@ std::vector<CollisionCostRow> benchCollisionCost(const std::string& scene_path, 
         if (!on) scene.collision.reset();
         if (on && !scene.collision) scene.collision.emplace();
         const auto t0 = Clock::now();
-        Sim rt(scene, &assimpAssets());
+        Sim sim(scene, &assimpAssets());
         build.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
-        rt.world().resetStageTimes();
+        sim.world().resetStageTimes();
         r.steps = 0;
         const auto t1 = Clock::now();
-        while (rt.time() < seconds && rt.step()) {
+        while (sim.time() < seconds && sim.step()) {
           ++r.steps;
-          if (const Collisions* c = rt.collisions()) {
+          if (const Collisions* c = sim.collisions()) {
             r.max_contacts = std::max(r.max_contacts, c->stats().active);
             r.deepest = std::max(r.deepest, c->stats().deepest);
           }
         }
         const double wall = std::chrono::duration<double>(Clock::now() - t1).count();
-        if (!rt.ok()) r.status = rt.status();
+        if (!sim.ok()) r.status = sim.status();
         per_step.push_back(1e6 * wall / std::max(1, r.steps));
-        contact.push_back(1e6 * rt.world().stageTimes()[Stage::Contact] / std::max(1, r.steps));
+        contact.push_back(1e6 * sim.world().stageTimes()[Stage::Contact] / std::max(1, r.steps));
       }
       const auto median = [](std::vector<double>& v) {
         std::sort(v.begin(), v.end());
@@ -677,13 +677,13 @@ int runBench(BenchArgs& args) {
       }
       if (!peers.empty() && c.links > 0 && c.anchor == "fixed") {
         const PeerChain chain = peerChainOf(c.scene, c.overrides);
-        Sim rt(loadScene(c.scene, c.overrides));
+        Sim sim(loadScene(c.scene, c.overrides));
         for (const Peer& peer : peers) {
           const auto slash = peer.name.find('/');
           BenchRow row{&c,      peer.name, peer.name.substr(0, slash), peer.name.substr(slash + 1), "-", "fixed", dt,
                        horizon, {}};
           row.r =
-              benchPeerRun(peer, chain, dt, horizon, cfg.repeats, c.long_duration, ref.trajectory, rt.chainEnergy());
+              benchPeerRun(peer, chain, dt, horizon, cfg.repeats, c.long_duration, ref.trajectory, sim.chainEnergy());
           std::fprintf(stderr, "bench: %-14s %-40s dt 1/%-4d %-10s %9.1f us/step  err %.3g m\n", c.id.c_str(),
                        row.method.c_str(), d, row.r.status.c_str(), row.r.us_per_step, row.r.err_rms);
           rows.push_back(std::move(row));

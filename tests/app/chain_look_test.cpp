@@ -149,9 +149,9 @@ TEST(Presets, ShippedPresetsLoadAndChangeTheLook) {
     EXPECT_NE(sceneToJson(s)["chain"], sceneToJson(base)["chain"]) << n << " changes the ponytail";
     EXPECT_EQ(sceneToJson(s)["physics"], sceneToJson(base)["physics"]) << n << " leaves the rest alone";
     EXPECT_EQ(s.chain->links, base.chain->links);
-    Sim rt(s, &assimpAssets());
-    for (int i = 0; i < 240 && rt.ok(); ++i) rt.step();
-    EXPECT_TRUE(rt.ok()) << n << ": " << rt.status();
+    Sim sim(s, &assimpAssets());
+    for (int i = 0; i < 240 && sim.ok(); ++i) sim.step();
+    EXPECT_TRUE(sim.ok()) << n << ": " << sim.status();
   }
   // Different looks: the stiff preset's ponytail is stiffer than the silky one's, the wet one heavier.
   const double g = 9.81;

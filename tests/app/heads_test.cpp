@@ -53,15 +53,15 @@ TEST_P(Heads, LandWellWithThePonytailOnTheBackOfTheHead) {
   const std::string mesh = kModels + c.path;
   ASSERT_TRUE(fs::exists(mesh)) << mesh << " is missing: scripts/setup.sh installs assimp-testmodels";
   const Scene scene = loadScene("assets/scenes/ponytail.json", headOverrides(mesh));
-  Sim rt(scene, &assimpAssets());
-  const HeadFit fit = fitHead(*scene.head, mesh, rt.head()->mesh);
-  const RigidBody& head = rt.world().body(rt.headBody());
+  Sim sim(scene, &assimpAssets());
+  const HeadFit fit = fitHead(*scene.head, mesh, sim.head()->mesh);
+  const RigidBody& head = sim.world().body(sim.headBody());
 
   // The head's part, in the world at t = 0.
   Eigen::AlignedBox3d box;
   std::vector<Eigen::Vector3d> all_points;
-  for (const auto& p : rt.head()->mesh.positions) {
-    const Eigen::Vector3d w = head.pointToWorld(rt.head()->mesh_to_body * p.cast<double>());
+  for (const auto& p : sim.head()->mesh.positions) {
+    const Eigen::Vector3d w = head.pointToWorld(sim.head()->mesh_to_body * p.cast<double>());
     all_points.push_back(w);
     if (fit.head_bounds.contains(p)) {
       box.extend(head.q.conjugate() * (w - head.x));  // body frame
@@ -75,14 +75,14 @@ TEST_P(Heads, LandWellWithThePonytailOnTheBackOfTheHead) {
   EXPECT_TRUE(box.contains(Eigen::Vector3d::Zero())) << "the head's bounds hold its pivot";
 
   // The anchor: on the back half (body +y is the back), high on the head, on or near its surface.
-  const Chain* chain = rt.chain();
+  const Chain* chain = sim.chain();
   ASSERT_NE(chain, nullptr);
   const Eigen::Vector3d anchor = chain->anchor_local;
   EXPECT_GT(anchor.y(), box.center().y()) << "the anchor is on the back half";
   EXPECT_GT(anchor.z(), box.center().z()) << "the anchor is on the upper half";
   // Nearest point of the head's own triangles (a low-poly head's vertices lie far apart).
   double nearest = 1e9;
-  const auto& mesh_data = rt.head()->mesh;
+  const auto& mesh_data = sim.head()->mesh;
   const Eigen::Vector3d anchor_world = head.pointToWorld(anchor);
   for (size_t t = 0; t + 2 < mesh_data.indices.size(); t += 3) {
     Eigen::Vector3d v[3];
@@ -90,7 +90,7 @@ TEST_P(Heads, LandWellWithThePonytailOnTheBackOfTheHead) {
     for (int k = 0; k < 3; ++k) {
       const Eigen::Vector3f& p = mesh_data.positions[mesh_data.indices[t + size_t(k)]];
       in_head = in_head && fit.head_bounds.contains(p);
-      v[k] = head.pointToWorld(rt.head()->mesh_to_body * p.cast<double>());
+      v[k] = head.pointToWorld(sim.head()->mesh_to_body * p.cast<double>());
     }
     if (in_head)
       nearest = std::min(nearest, (closestPointOnTriangle(anchor_world, v[0], v[1], v[2]) - anchor_world).norm());
@@ -98,7 +98,7 @@ TEST_P(Heads, LandWellWithThePonytailOnTheBackOfTheHead) {
   EXPECT_LT(nearest, chain->radii.front() + 0.005) << "the first link holds on to the head";
 
   // At t = 0 no link but the first touches the mesh (the whole mesh: a body's back too).
-  const auto segs = chain->segments(rt.world());
+  const auto segs = chain->segments(sim.world());
   int touching = 0;
   for (size_t i = 1; i < segs.size(); ++i) {
     const Eigen::Vector3d a = segs[i].top, d = segs[i].bottom - segs[i].top;
@@ -126,10 +126,10 @@ TEST_P(Heads, SwingTheShowcaseWithTheCollider) {
   ASSERT_TRUE(fs::exists(mesh)) << mesh << " is missing: scripts/setup.sh installs assimp-testmodels";
   const Scene scene = loadScene("assets/scenes/ponytail.json", {{"head.mesh", mesh}});
   ASSERT_EQ(scene.head->anchor_space, AnchorSpace::Bounds);
-  Sim rt(scene, &assimpAssets());
-  ASSERT_NE(rt.collisions(), nullptr);
-  while (rt.ok() && rt.time() < 3.0) rt.step();
-  EXPECT_TRUE(rt.ok()) << rt.status();
+  Sim sim(scene, &assimpAssets());
+  ASSERT_NE(sim.collisions(), nullptr);
+  while (sim.ok() && sim.time() < 3.0) sim.step();
+  EXPECT_TRUE(sim.ok()) << sim.status();
 }
 
 INSTANTIATE_TEST_SUITE_P(ThirdParty, Heads, ::testing::ValuesIn(kHeads),
@@ -138,12 +138,12 @@ INSTANTIATE_TEST_SUITE_P(ThirdParty, Heads, ::testing::ValuesIn(kHeads),
 // The default head stays where it was: its mesh origin (the skull's centre) is the pivot.
 TEST(HeadsDefault, DefaultHeadKeepsItsPlacement) {
   const Scene scene = loadScene("assets/scenes/ponytail.json");
-  Sim rt(scene, &assimpAssets());
-  const HeadFit fit = fitHead(*scene.head, "assets/head/head.gltf", rt.head()->mesh);
+  Sim sim(scene, &assimpAssets());
+  const HeadFit fit = fitHead(*scene.head, "assets/head/head.gltf", sim.head()->mesh);
   EXPECT_EQ(fit.up, UpAxis::Y);
   EXPECT_FALSE(fit.whole_body);
   EXPECT_TRUE(fit.pivot.isZero(0.0));
-  EXPECT_TRUE(rt.head()->mesh_to_body.isApprox(meshToBody(*scene.head, rt.head()->mesh.bbox), 0.0));
+  EXPECT_TRUE(sim.head()->mesh_to_body.isApprox(meshToBody(*scene.head, sim.head()->mesh.bbox), 0.0));
 }
 
 // A textured cube: its faces show the texture (the render with the file's materials has colours

@@ -58,22 +58,22 @@ void expectRowsMatchWorld(const std::string& scene_path, double duration, int ex
   const std::vector<Row> rows = readPoses(csv, &header);
   EXPECT_EQ(header, "t,body,name,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz");
 
-  Sim rt(loadScene(scene_path), &assimpAssets());
-  const int n = rt.world().bodyCount();
+  Sim sim(loadScene(scene_path), &assimpAssets());
+  const int n = sim.world().bodyCount();
   ASSERT_EQ(n, expected_bodies);
-  const long steps = std::lround(duration / rt.scene().physics.dt);
+  const long steps = std::lround(duration / sim.scene().physics.dt);
   ASSERT_EQ(rows.size(), size_t((steps + 1) * n));
-  const std::vector<std::string> ids = bodyIds(rt.world());
+  const std::vector<std::string> ids = bodyIds(sim.world());
   for (long k = 0; k <= steps; ++k) {
     if (k > 0) {
-      ASSERT_TRUE(rt.step());
+      ASSERT_TRUE(sim.step());
     }
     for (int i = 0; i < n; ++i) {
       const Row& row = rows[size_t(k * n + i)];
-      const RigidBody& b = rt.world().body(i);
+      const RigidBody& b = sim.world().body(i);
       ASSERT_EQ(row.body, i);
       ASSERT_EQ(row.name, ids[size_t(i)]);
-      ASSERT_NEAR(row.t, rt.time(), 1e-9);
+      ASSERT_NEAR(row.t, sim.time(), 1e-9);
       const double want[13] = {b.x.x(), b.x.y(), b.x.z(), b.q.w(), b.q.x(), b.q.y(), b.q.z(),
                                b.v.x(), b.v.y(), b.v.z(), b.w.x(), b.w.y(), b.w.z()};
       for (int c = 0; c < 13; ++c)

@@ -126,10 +126,10 @@ std::string stateHash(const World& world) {
 }
 
 std::string fingerprint(const std::string& scene_path, int steps) {
-  Sim rt(loadScene(scene_path), &assimpAssets());
-  for (int i = 0; i < steps && rt.ok(); ++i) rt.step();
-  EXPECT_TRUE(rt.ok()) << rt.status();
-  return stateHash(rt.world());
+  Sim sim(loadScene(scene_path), &assimpAssets());
+  for (int i = 0; i < steps && sim.ok(); ++i) sim.step();
+  EXPECT_TRUE(sim.ok()) << sim.status();
+  return stateHash(sim.world());
 }
 
 struct Print {
@@ -179,10 +179,10 @@ TEST(FingerprintHash, DetectsTinyPhysicsChanges) {
   const std::string a = fingerprint("assets/scenes/chain.json", 200);
   EXPECT_EQ(a, fingerprint("assets/scenes/chain.json", 200)) << "not deterministic";
   EXPECT_NE(a, fingerprint("assets/scenes/chain.json", 201));
-  Sim rt(loadScene("assets/scenes/chain.json"), &assimpAssets());
-  rt.world().body(rt.chain()->links.back()).x.x() += 1e-12;
-  for (int i = 0; i < 200; ++i) rt.step();
-  EXPECT_NE(a, stateHash(rt.world()));
+  Sim sim(loadScene("assets/scenes/chain.json"), &assimpAssets());
+  sim.world().body(sim.chain()->links.back()).x.x() += 1e-12;
+  for (int i = 0; i < 200; ++i) sim.step();
+  EXPECT_NE(a, stateHash(sim.world()));
 }
 
 }  // namespace

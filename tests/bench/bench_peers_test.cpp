@@ -36,38 +36,38 @@ TEST(BenchPeers, EveryPeerBuildsTheSameChainAndMovesLikeIt) {
   }
   const std::vector<Peer>& peers = modules.peers;
   if (peers.empty()) GTEST_SKIP() << "no peer engine's module was built";
-  Sim rt(loadScene("assets/scenes/chain.json", chainOverrides("featherstone")));
-  ASSERT_TRUE(rt.ok()) << rt.status();
-  const PeerChain chain = peerChainOf(rt);
-  const Chain& ch = *rt.chain();
-  const Eigen::Vector3d tip0 = ch.tip(rt.world());
+  Sim sim(loadScene("assets/scenes/chain.json", chainOverrides("featherstone")));
+  ASSERT_TRUE(sim.ok()) << sim.status();
+  const PeerChain chain = peerChainOf(sim);
+  const Chain& ch = *sim.chain();
+  const Eigen::Vector3d tip0 = ch.tip(sim.world());
   double potential0 = 0.0;
   std::vector<Eigen::Vector3d> x0;
   for (int id : ch.links) {
-    potential0 -= rt.world().body(id).mass * chain.gravity.dot(rt.world().body(id).x);
-    x0.push_back(rt.world().body(id).x);
+    potential0 -= sim.world().body(id).mass * chain.gravity.dot(sim.world().body(id).x);
+    x0.push_back(sim.world().body(id).x);
   }
   const double dt = 1.0 / 1920.0;
   const int steps = 192;  // 0.1 s
-  for (int i = 0; i < steps; ++i) ASSERT_TRUE(rt.step()) << rt.status();
-  const Eigen::Vector3d tip1 = ch.tip(rt.world());
+  for (int i = 0; i < steps; ++i) ASSERT_TRUE(sim.step()) << sim.status();
+  const Eigen::Vector3d tip1 = ch.tip(sim.world());
   ASSERT_GT((tip1 - tip0).norm(), 0.01) << "the chain did not move: the comparison would say nothing";
   for (const Peer& peer : peers) {
     SCOPED_TRACE(peer.name);
     std::string error;
-    auto sim = peer.make(chain, dt, error);
-    ASSERT_TRUE(sim) << error;
-    EXPECT_LT((sim->tip() - tip0).norm(), 1e-9);
+    auto peer_sim = peer.make(chain, dt, error);
+    ASSERT_TRUE(peer_sim) << error;
+    EXPECT_LT((peer_sim->tip() - tip0).norm(), 1e-9);
     std::vector<PeerLink> links;
-    sim->links(links);
+    peer_sim->links(links);
     ASSERT_EQ(links.size(), ch.links.size());
     for (size_t i = 0; i < links.size(); ++i) EXPECT_LT((links[i].x - x0[i]).norm(), 1e-9) << "link " << i;
     if (peer.name.rfind("mujoco", 0) != 0) {  // MuJoCo reports its own energy (its reference)
-      EXPECT_NEAR(sim->energy(), potential0, 1e-9 * (1.0 + std::abs(potential0)));
+      EXPECT_NEAR(peer_sim->energy(), potential0, 1e-9 * (1.0 + std::abs(potential0)));
     }
-    for (int i = 0; i < steps; ++i) sim->step();
-    ASSERT_TRUE(sim->finite());
-    const double off = (sim->tip() - tip1).norm();
+    for (int i = 0; i < steps; ++i) peer_sim->step();
+    ASSERT_TRUE(peer_sim->finite());
+    const double off = (peer_sim->tip() - tip1).norm();
     std::printf("%-16s tip after 0.1 s: %.3g m from ponyhop featherstone/rk4\n", peer.name.c_str(), off);
     // First-order steps at 1/1920 s over 0.1 s of the falling chain: millimetres, not a wrong chain
     // (a swapped inertia or pivot puts the tip centimetres off).

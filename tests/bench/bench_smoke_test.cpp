@@ -1,6 +1,8 @@
 // Smoke test of `ponyhop bench --quick`: the real executable runs headless and writes its CSV and
 // Markdown; every number in them is finite, or its row says it failed and why.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -80,15 +82,27 @@ const std::set<std::string> kText{"case", "anchor", "method", "solver",      "in
 class BenchSmoke : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    // ctest runs each TEST in its own process, in parallel: each process gets its own folder.
-    const auto* info = ::testing::UnitTest::GetInstance();
+    // ctest runs each TEST in its own process, in parallel. The four read one run of the bench
+    // (a minute under ASan): the first process to take the lock runs it into a folder named for
+    // this build of the executable, the others wait and read what it wrote.
+    const fs::path exe(PONYHOP_EXE);
+    const auto stamp = fs::last_write_time(exe).time_since_epoch().count();
     out_ = fs::path(PONYHOP_TEST_OUT) /
-           ("bench-" + std::to_string(info->random_seed()) + "-" + std::to_string(static_cast<long>(::getpid())));
-    fs::remove_all(out_);
+           ("bench-smoke-" + std::to_string(stamp) + "-" + std::to_string(fs::file_size(exe)));
     fs::create_directories(out_);
-    const std::string cmd =
-        std::string(PONYHOP_EXE) + " bench --quick --out " + out_.string() + " 2>" + (out_ / "stderr.txt").string();
-    rc_ = std::system(cmd.c_str());
+    const int lock = ::open((out_ / "lock").c_str(), O_CREAT | O_RDWR, 0644);
+    ASSERT_GE(lock, 0);
+    ASSERT_EQ(::flock(lock, LOCK_EX), 0);
+    const fs::path done = out_ / "exit_status.txt";
+    if (std::ifstream in(done); !(in >> rc_)) {
+      fs::remove_all(out_ / "run");  // a run that died half way: start again
+      const std::string cmd = std::string(PONYHOP_EXE) + " bench --quick --out " + (out_ / "run").string() + " 2>" +
+                              (out_ / "stderr.txt").string();
+      rc_ = std::system(cmd.c_str());
+      std::ofstream(done) << rc_ << "\n";
+    }
+    ::close(lock);
+    out_ /= "run";
   }
   static fs::path out_;
   static int rc_;
@@ -97,7 +111,7 @@ fs::path BenchSmoke::out_;
 int BenchSmoke::rc_ = -1;
 
 TEST_F(BenchSmoke, RunsAndWritesItsFiles) {
-  ASSERT_EQ(rc_, 0) << "see " << (out_ / "stderr.txt");
+  ASSERT_EQ(rc_, 0) << "see " << (out_.parent_path() / "stderr.txt");
   for (const char* f : {"bench.csv", "reference.csv", "scaling.csv", "README.md"}) {
     EXPECT_TRUE(fs::exists(out_ / f)) << f;
     EXPECT_GT(fs::file_size(out_ / f), 50u) << f;

@@ -31,11 +31,11 @@ std::string writeTinyGltf(const std::string& name, bool animated) {
                                     ::testing::UnitTest::GetInstance()->current_test_info()->name();
   std::filesystem::create_directories(dir);
   std::vector<float> data{0, 0, 0, 1, 0, 0, 0, 1, 0};  // positions (36 bytes)
-  const float rt[5] = {0, 0.5f, 1, 1.5f, 2};
+  const float sim[5] = {0, 0.5f, 1, 1.5f, 2};
   const float ra[5] = {0, 20, 0, -20, 0};
   const float tt[3] = {0, 1, 2};
-  data.insert(data.end(), rt, rt + 5);  // offset 36, 20 bytes
-  for (float a : ra) {                  // offset 56, 80 bytes: xyzw about +y
+  data.insert(data.end(), sim, sim + 5);  // offset 36, 20 bytes
+  for (float a : ra) {                    // offset 56, 80 bytes: xyzw about +y
     const float h = static_cast<float>(deg(a) / 2);
     data.insert(data.end(), {0.0f, std::sin(h), 0.0f, std::cos(h)});
   }

@@ -95,26 +95,26 @@ Result play(const std::string& mesh_path, const std::string& clip, double durati
   }
   scene.head->animation.clip = clip;
   // The product's path: the scene's collision section makes the collider (sim/sim.cpp).
-  Sim rt(scene, &assimpAssets());
-  EXPECT_TRUE(rt.ok()) << rt.status();
-  EXPECT_TRUE(rt.head() && rt.chain());
-  EXPECT_EQ(rt.collisions() != nullptr, collide);
-  if (!rt.head() || !rt.chain()) return {};
-  const MeshData& mesh = rt.head()->mesh;
-  const Eigen::Affine3d T = rt.head()->mesh_to_body;
+  Sim sim(scene, &assimpAssets());
+  EXPECT_TRUE(sim.ok()) << sim.status();
+  EXPECT_TRUE(sim.head() && sim.chain());
+  EXPECT_EQ(sim.collisions() != nullptr, collide);
+  if (!sim.head() || !sim.chain()) return {};
+  const MeshData& mesh = sim.head()->mesh;
+  const Eigen::Affine3d T = sim.head()->mesh_to_body;
   std::vector<Vector3d> v;
   for (const auto& p : mesh.positions) v.push_back(T * p.cast<double>());
   TriangleDistance exact(v, mesh.indices, 0.01);
   Result res;
-  const Chain& chain = *rt.chain();
+  const Chain& chain = *sim.chain();
   const int frames = static_cast<int>(duration * 30.0);
-  for (int f = 1; f <= frames && rt.ok(); ++f) {
+  for (int f = 1; f <= frames && sim.ok(); ++f) {
     const auto t0 = std::chrono::steady_clock::now();
-    rt.advanceTo(f / 30.0);
+    sim.advanceTo(f / 30.0);
     res.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (const Collisions* col = rt.collisions()) res.contacts_max = std::max(res.contacts_max, col->stats().active);
-    const RigidBody& head = rt.world().body(rt.headBody());
-    const std::vector<CapsuleSegment> segs = chain.segments(rt.world());
+    if (const Collisions* col = sim.collisions()) res.contacts_max = std::max(res.contacts_max, col->stats().active);
+    const RigidBody& head = sim.world().body(sim.headBody());
+    const std::vector<CapsuleSegment> segs = chain.segments(sim.world());
     for (size_t i = 1; i < segs.size(); ++i) {
       for (int k = 0; k <= 20; ++k) {
         const double s = k / 20.0;
@@ -129,7 +129,7 @@ Result play(const std::string& mesh_path, const std::string& clip, double durati
       }
     }
   }
-  EXPECT_TRUE(rt.ok()) << rt.status();
+  EXPECT_TRUE(sim.ok()) << sim.status();
   return res;
 }
 
@@ -177,7 +177,7 @@ TEST(HeadPenetrationControl, WithoutTheColliderTheShowcaseGoesThroughTheHead) {
 // cache builds it again.
 TEST(HeadCollisionsScene, ARebuildWithTheSameHeadReusesItsGrid) {
   Scene scene = loadScene("assets/scenes/ponytail.json");
-  const auto gridOf = [](const Sim& rt) { return rt.collisions()->shapes().front().sdf.get(); };
+  const auto gridOf = [](const Sim& sim) { return sim.collisions()->shapes().front().sdf.get(); };
   Sim a(scene, &assimpAssets());
   scene.collision->friction = 0.6;
   Sim b(scene, &assimpAssets());
@@ -201,26 +201,26 @@ TEST(HeadCollisionsScene, JointConesAndTwistLimitsHold) {
   ASSERT_TRUE(scene.collision);
   scene.collision->joint_cone = 25.0;
   scene.collision->joint_twist = 10.0;
-  Sim rt(scene, &assimpAssets());
-  ASSERT_TRUE(rt.collisions());
-  const Chain& chain = *rt.chain();
+  Sim sim(scene, &assimpAssets());
+  ASSERT_TRUE(sim.collisions());
+  const Chain& chain = *sim.chain();
   std::vector<Eigen::Quaterniond> rest;
   for (size_t i = 1; i < chain.links.size(); ++i)
-    rest.push_back(rt.world().body(chain.links[i - 1]).q.conjugate() * rt.world().body(chain.links[i]).q);
+    rest.push_back(sim.world().body(chain.links[i - 1]).q.conjugate() * sim.world().body(chain.links[i]).q);
   const double deg = M_PI / 180.0;
   double swing = 0.0, twist = 0.0;
-  for (int f = 1; f <= 120 && rt.ok(); ++f) {
-    rt.advanceTo(f / 30.0);
+  for (int f = 1; f <= 120 && sim.ok(); ++f) {
+    sim.advanceTo(f / 30.0);
     for (size_t i = 1; i < chain.links.size(); ++i) {
-      const RigidBody& p = rt.world().body(chain.links[i - 1]);
-      const RigidBody& c = rt.world().body(chain.links[i]);
+      const RigidBody& p = sim.world().body(chain.links[i - 1]);
+      const RigidBody& c = sim.world().body(chain.links[i]);
       const Vector3d zp = p.q * Vector3d::UnitZ(), zc = c.q * Vector3d::UnitZ();
       swing = std::max(swing, std::atan2(zp.cross(zc).norm(), zp.dot(zc)));
       const Eigen::Quaterniond dev = (p.q * rest[i - 1]).conjugate() * c.q;
       twist = std::max(twist, std::abs(2.0 * std::atan2(dev.vec().z(), dev.w())));
     }
   }
-  ASSERT_TRUE(rt.ok()) << rt.status();
+  ASSERT_TRUE(sim.ok()) << sim.status();
   std::printf("joint swing at most %.4f deg (limit 25), twist at most %.4f deg (limit 10)\n", swing / deg, twist / deg);
   EXPECT_LT(swing, 25.5 * deg);
   EXPECT_LT(twist, 10.5 * deg);
@@ -236,12 +236,12 @@ double selfOverlap(bool self) {
   EXPECT_TRUE(scene.collision);
   if (!scene.collision) return 0.0;
   scene.collision->self = self;
-  Sim rt(scene, &assimpAssets());
-  const Chain& chain = *rt.chain();
+  Sim sim(scene, &assimpAssets());
+  const Chain& chain = *sim.chain();
   double worst = 0.0;
-  for (int f = 1; f <= 66 && rt.ok(); ++f) {
-    rt.advanceTo(f / 30.0);
-    const std::vector<CapsuleSegment> segs = chain.segments(rt.world());
+  for (int f = 1; f <= 66 && sim.ok(); ++f) {
+    sim.advanceTo(f / 30.0);
+    const std::vector<CapsuleSegment> segs = chain.segments(sim.world());
     for (size_t i = 0; i < segs.size(); ++i)
       for (size_t j = i + 2; j < segs.size(); ++j)
         for (int a = 0; a <= 10; ++a)
@@ -254,7 +254,7 @@ double selfOverlap(bool self) {
             worst = std::max(worst, ri + rj - (p - q).norm());
           }
   }
-  EXPECT_TRUE(rt.ok()) << rt.status();
+  EXPECT_TRUE(sim.ok()) << sim.status();
   std::printf("collision.self %s: deepest overlap of two links two or more apart %.3f mm\n", self ? "on" : "off",
               1e3 * worst);
   return worst;

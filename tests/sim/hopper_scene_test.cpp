@@ -19,64 +19,64 @@ TEST(HopperScene, CourseSceneRunsItsScript) {
   Scene scene = loadScene("assets/scenes/hopper.json");
   ASSERT_TRUE(scene.hopper);
   EXPECT_EQ(scene.camera.follow, "hopper");
-  Sim rt(scene);
-  ASSERT_NE(rt.hopper(), nullptr);
+  Sim sim(scene);
+  ASSERT_NE(sim.hopper(), nullptr);
   double max_tilt = 0.0;
   double max_leg_spin = 0.0;  // rad/s, the upper leg about its own axis
-  while (rt.ok() && rt.time() < scene.duration - 1e-9) {
-    rt.step();
-    max_tilt = std::max(max_tilt, rt.hopper()->tilt(rt.world()));
-    const RigidBody& leg = rt.world().body(rt.hopper()->model().upper);
+  while (sim.ok() && sim.time() < scene.duration - 1e-9) {
+    sim.step();
+    max_tilt = std::max(max_tilt, sim.hopper()->tilt(sim.world()));
+    const RigidBody& leg = sim.world().body(sim.hopper()->model().upper);
     max_leg_spin = std::max(max_leg_spin, std::abs(leg.w.dot(leg.q * Eigen::Vector3d::UnitZ())));
   }
   // The stance servos' torque about the leg's axis is held within the toe's torsional friction:
   // before, the toe slipped at each turn and the reaction spun the leg up to 3178 rad/s.
   std::printf("[ course ] the leg spins at most %.1f rad/s about its axis\n", max_leg_spin);
   EXPECT_LT(max_leg_spin, 30.0);
-  ASSERT_TRUE(rt.ok()) << rt.status();
-  const RigidBody& b = rt.world().body(rt.hopper()->model().body);
+  ASSERT_TRUE(sim.ok()) << sim.status();
+  const RigidBody& b = sim.world().body(sim.hopper()->model().body);
   std::printf("[ course ] %.0f s: ends at (%.2f, %.2f) m, speed %.3f m/s, max tilt %.2f deg, %d hops\n", scene.duration,
-              b.x.x(), b.x.y(), b.v.head<2>().norm(), max_tilt * 180.0 / std::numbers::pi, rt.hopper()->hops());
+              b.x.x(), b.x.y(), b.v.head<2>().norm(), max_tilt * 180.0 / std::numbers::pi, sim.hopper()->hops());
   EXPECT_LT(max_tilt * 180.0 / std::numbers::pi, 15.0);
   EXPECT_GT(b.x.head<2>().norm(), 1.0) << "the course goes somewhere";
-  EXPECT_EQ(rt.followPoint(), b.x);
+  EXPECT_EQ(sim.followPoint(), b.x);
 }
 
 TEST(HopperScene, PonytailOnTheHopperHopsForThirtySeconds) {
   Scene scene = loadScene("assets/scenes/ponytail_hopper.json");
   ASSERT_TRUE(scene.hopper && scene.chain);
-  Sim rt(scene);
-  const Chain* chain = rt.chain();
+  Sim sim(scene);
+  const Chain* chain = sim.chain();
   ASSERT_NE(chain, nullptr);
-  ASSERT_EQ(chain->parent, rt.hopper()->model().body);
+  ASSERT_EQ(chain->parent, sim.hopper()->model().body);
   // The chain's first joint's multipliers are the force the chain exerts on the body.
   double chain_mass = 0.0;
-  for (int i : chain->links) chain_mass += rt.world().body(i).mass;
+  for (int i : chain->links) chain_mass += sim.world().body(i).mass;
   double max_tilt = 0.0, min_z = 1e9, max_joint = 0.0, pull_sum = 0.0;
   int samples = 0;
-  while (rt.ok() && rt.time() < 30.0 - 1e-9) {
-    rt.step();
-    if (!rt.ok()) break;
-    max_tilt = std::max(max_tilt, rt.hopper()->tilt(rt.world()));
-    min_z = std::min(min_z, rt.world().body(rt.hopper()->model().body).x.z());
-    max_joint = std::max(max_joint, rt.maxJointError());
+  while (sim.ok() && sim.time() < 30.0 - 1e-9) {
+    sim.step();
+    if (!sim.ok()) break;
+    max_tilt = std::max(max_tilt, sim.hopper()->tilt(sim.world()));
+    min_z = std::min(min_z, sim.world().body(sim.hopper()->model().body).x.z());
+    max_joint = std::max(max_joint, sim.maxJointError());
     // lambda is from the last force evaluation (the contact stage's, or RK4's last stage).
     int r = 0;
-    for (int j = 0; j < chain->joints.front(); ++j) r += rt.world().joints()[j]->dimension();
-    pull_sum += rt.world().lambda().segment(r, 3).norm();
+    for (int j = 0; j < chain->joints.front(); ++j) r += sim.world().joints()[j]->dimension();
+    pull_sum += sim.world().lambda().segment(r, 3).norm();
     ++samples;
   }
-  ASSERT_TRUE(rt.ok()) << rt.status();
+  ASSERT_TRUE(sim.ok()) << sim.status();
   const double mean_pull = pull_sum / samples;
   std::printf(
       "[ ponytail hopper ] 30 s: max tilt %.2f deg, lowest body %.3f m, max joint error %.2e, "
       "mean pull of the chain on the body %.2f N (its weight %.2f N), %d hops\n",
-      max_tilt * 180.0 / std::numbers::pi, min_z, max_joint, mean_pull, chain_mass * 9.81, rt.hopper()->hops());
+      max_tilt * 180.0 / std::numbers::pi, min_z, max_joint, mean_pull, chain_mass * 9.81, sim.hopper()->hops());
   EXPECT_LT(max_tilt * 180.0 / std::numbers::pi, 15.0) << "the hopper must not fall";
   EXPECT_GT(min_z, 0.6);
   EXPECT_LT(max_joint, 1e-9);
   EXPECT_GT(mean_pull, 0.5 * chain_mass * 9.81) << "the chain must pull on the body (two-way coupling)";
-  EXPECT_GT(rt.hopper()->hops(), 40);
+  EXPECT_GT(sim.hopper()->hops(), 40);
 }
 
 TEST(HopperScene, SceneChecksTheHopperSection) {
