@@ -78,8 +78,6 @@ class Panel {
 
   // The camera of the scene view now: the scene's camera, or the free view once the mouse moved it.
   Camera camera() const { return camera_; }
-  // Back to the scene camera (drops the free view).
-  void useSceneCamera() { free_view_ = false; }
   bool freeView() const { return free_view_; }
 
   // Where a widget was in the last frame: a field by its dotted key ("chain.links",

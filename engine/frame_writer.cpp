@@ -182,7 +182,6 @@ void FrameWriter::worker() {
       if (ok) {
         ++written_;
         encode_ms_total_ += ms;
-        last_encode_ms_ = ms;
       } else if (error_.empty()) {
         error_ = e;
       }
@@ -199,10 +198,6 @@ int FrameWriter::framesWritten() const {
 double FrameWriter::meanEncodeMs() const {
   std::lock_guard<std::mutex> lock(mu_);
   return written_ ? encode_ms_total_ / written_ : 0.0;
-}
-double FrameWriter::lastEncodeMs() const {
-  std::lock_guard<std::mutex> lock(mu_);
-  return last_encode_ms_;
 }
 std::string FrameWriter::error() const {
   std::lock_guard<std::mutex> lock(mu_);

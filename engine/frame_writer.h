@@ -47,7 +47,6 @@ class FrameWriter {
 
   int framesWritten() const;
   double meanEncodeMs() const;  // per frame: PNG encode + write + rename, on a worker
-  double lastEncodeMs() const;
   std::string error() const;
 
  private:
@@ -66,7 +65,7 @@ class FrameWriter {
   bool stop_ = false;
   std::string error_;
   int written_ = 0;
-  double encode_ms_total_ = 0.0, last_encode_ms_ = 0.0;
+  double encode_ms_total_ = 0.0;
   std::vector<std::thread> threads_;
 };
 

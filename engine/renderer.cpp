@@ -334,10 +334,6 @@ void Renderer::drawLine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, cons
   impl_->lines.push_back({{float(b.x()), float(b.y()), float(b.z())}, {color.x(), color.y(), color.z()}});
 }
 
-void Renderer::drawLines(const std::vector<DebugLine>& lines) {
-  for (const DebugLine& l : lines) drawLine(l.a, l.b, l.color);
-}
-
 // ---------------------------------------------------------------------------------------------
 // [SECTION] endFrame: the passes in order
 

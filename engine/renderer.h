@@ -42,11 +42,6 @@ struct MeshHandle {
   bool valid() const { return id >= 0; }
 };
 
-struct DebugLine {
-  Eigen::Vector3d a, b;
-  Eigen::Vector3f color{1.0f, 0.2f, 0.2f};  // sRGB, unlit
-};
-
 // Where a frame's time goes, per pass. With a software rasterizer (llvmpipe: the CPU is the GPU,
 // and it rasterizes each framebuffer's work synchronously when the framebuffer changes or on a
 // flush) every pass ends with glFinish and its wall time is taken: the pass's own cost, exactly,
@@ -111,7 +106,6 @@ class Renderer {
   // Strands (ribbons widened in the vertex shader) and a core tube, shaded as hair (Kajiya-Kay
   // highlights along the tangent); they cast and receive shadows. See engine/hair.h.
   void drawHair(const HairMesh& hair);
-  void drawLines(const std::vector<DebugLine>& lines);
   void drawLine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3f& color);
   // Shadow pass, main pass (background, ground, objects, lines), MSAA resolve.
   void endFrame();

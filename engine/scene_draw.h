@@ -16,7 +16,6 @@ class SceneDraw {
   // released by release() or with the renderer.
   void upload(const Sim& sim, Renderer& renderer);
   void release();
-  bool uploaded() const { return renderer_ != nullptr; }
   // Draws the sim's current state with its scene's look (needs upload() first for the head).
   void draw(const Sim& sim, Renderer& renderer) const;
   // The same with the drawing fields of the chain taken from `look` (the panel's applied scene:

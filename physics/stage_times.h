@@ -71,7 +71,6 @@ class StageClock {
     enabled_ = on;
     active_ = -1;
   }
-  bool enabled() const { return enabled_; }
 
  private:
   void charge(Clock::time_point now) {
