@@ -44,12 +44,12 @@ demo: build
 	done
 	@echo "demo: the executable is $(PONYHOP) (make install PREFIX=... puts it in PREFIX/bin)"
 
-# Every test, with the normal build (about 5 min from a fresh clone on 2 cores, 30 s of it tests).
+# Every test, with the normal build (about 10 min from a fresh clone on 2 cores, 2.5 min of it tests).
 test: build
 	@cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
 
 # The same tests under AddressSanitizer + UndefinedBehaviorSanitizer, in their own build (about
-# 10 min to build and 6 min to run on 2 cores): CI runs it after `make test`.
+# 17 min to build on 2 cores, then the tests): CI runs it after `make test`.
 
 test-asan: setup
 	@cmake -S . -B $(ASAN_BUILD) $(call GENERATOR,$(ASAN_BUILD)) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPONYHOP_SANITIZE=ON >/dev/null
