@@ -9,7 +9,21 @@
 #include <sstream>
 #include <string>
 
+#include <gtest/gtest.h>
+
 namespace ponyhop::testing {
+
+// The folder that belongs to the running test: ctest runs tests in parallel, so two tests that
+// picked the same scratch or log name (sim_poses, once) must still not share a folder.
+inline std::string testOut() {
+  std::string dir = std::string(PONYHOP_TEST_OUT) + "/";
+  const ::testing::TestInfo* t = ::testing::UnitTest::GetInstance()->current_test_info();
+  if (t == nullptr) return dir + "suite";
+  std::string name = std::string(t->test_suite_name()) + "." + t->name();
+  for (char& c : name)
+    if (c == '/') c = '_';
+  return dir + name;
+}
 
 struct RunResult {
   int code = -1;
@@ -18,8 +32,9 @@ struct RunResult {
 
 // Runs `ponyhop ARGS` from the repository root; captures the output.
 inline RunResult runPonyhop(const std::string& args, const std::string& tag) {
-  std::filesystem::create_directories(PONYHOP_TEST_OUT);
-  const std::string log = std::string(PONYHOP_TEST_OUT) + "/" + tag + ".log";
+  const std::string out = testOut();
+  std::filesystem::create_directories(out);
+  const std::string log = out + "/" + tag + ".log";
   // Appended piece by piece: GCC 12 at -O3 warns (-Werror=restrict) on `"literal" + std::string&&`.
   std::string cmd = "\"";
   cmd += PONYHOP_EXE;
@@ -50,9 +65,9 @@ inline void writeFile(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
 }
 
-// A fresh scratch folder under the test output folder.
+// A fresh scratch folder under the running test's output folder.
 inline std::string scratch(const std::string& name) {
-  const std::string dir = std::string(PONYHOP_TEST_OUT) + "/" + name;
+  const std::string dir = testOut() + "/" + name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
