@@ -14,10 +14,13 @@ namespace ponyhop {
 namespace {
 
 // gtest only (no gmock): a substring check that prints the whole message on failure.
-::testing::AssertionResult Contains(const Status& status, const std::string& part) {
-  const std::string& text = status.message();
-  if (!status.ok() && text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
+::testing::AssertionResult Contains(const std::string& text, const std::string& part) {
+  if (text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
   return ::testing::AssertionFailure() << "\"" << part << "\" not in \"" << text << "\"";
+}
+::testing::AssertionResult Contains(const Status& status, const std::string& part) {
+  if (status.ok()) return ::testing::AssertionFailure() << "ok, expected an error with \"" << part << "\"";
+  return Contains(status.message(), part);
 }
 
 TEST(PhysicsParams, DefaultsAreValid) {
