@@ -186,8 +186,8 @@ ApplyKind LiveSim::applyEdits() {
   if (kind == ApplyKind::KeepState && onlyHopperCommand(applied_, edited_) && runtime_->hopper() && runtime_->ok()) {
     // A command (the velocity pad, height, heading) goes live without resetting the controller's
     // state machine, which a rebuild would do at every tick of a drag.
-    if (std::string e = runtime_->hopper()->setCommand(edited_.hopper->command); !e.empty()) {
-      error_ = e;
+    if (Status s = runtime_->hopper()->setCommand(edited_.hopper->command); !s.ok()) {
+      error_ = s.message();
       return ApplyKind::None;
     }
     done = ApplyKind::Live;

@@ -244,9 +244,11 @@ std::optional<KeyframeTrack> importAnimationTrack(const std::string& path, const
                                                   const TrackOptions& track, std::string* error) {
   const std::optional<ImportedAnimation> anim = importAnimation(path, options, error);
   if (!anim) return std::nullopt;
-  std::string err;
-  std::optional<KeyframeTrack> tr = KeyframeTrack::fromSamples(anim->samples, track, &err);
-  if (!tr && error) *error = path + ": animation \"" + anim->animation_name + "\": " + err;
+  KeyframeTrack tr;
+  if (Status s = KeyframeTrack::fromSamples(anim->samples, track, tr); !s.ok()) {
+    if (error) *error = path + ": animation \"" + anim->animation_name + "\": " + s.message();
+    return std::nullopt;
+  }
   return tr;
 }
 

@@ -11,11 +11,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
     const ponyhop::AnimationParams clip = ponyhop::parseClipText(text, "fuzz_clip.json");
-    std::string err;
-    const auto track = ponyhop::KeyframeTrack::fromKeyframes(clip.keys, ponyhop::trackOptions(clip), &err);
-    if (track) {
-      for (double t : {0.0, 0.37, 1.0, 12.5}) (void)track->evaluate(t);
-    } else if (err.empty()) {
+    ponyhop::KeyframeTrack track;
+    const ponyhop::Status s = ponyhop::KeyframeTrack::fromKeyframes(clip.keys, ponyhop::trackOptions(clip), track);
+    if (s.ok()) {
+      for (double t : {0.0, 0.37, 1.0, 12.5}) (void)track.evaluate(t);
+    } else if (s.message().empty()) {
       __builtin_trap();  // a refusal must say why
     }
   } catch (const ponyhop::InputError&) {

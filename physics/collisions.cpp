@@ -66,7 +66,7 @@ void Collisions::attach(World& world) {
 
 void Collisions::update(World& world) {
   if (!world.ok()) return;
-  if (std::string e = resolve(world.bodies(), world.joints()); !e.empty()) world.fail("collisions: " + e);
+  if (Status s = resolve(world.bodies(), world.joints()); !s.ok()) world.fail("collisions: " + s.message());
 }
 
 bool Collisions::impactInside(const World& world) const { return impactIn(world.bodies()); }
@@ -198,14 +198,14 @@ bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Const
   return true;
 }
 
-std::string Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& joints) {
+Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& joints) {
   stats_.active = 0;
   stats_.deepest = 0.0;
   stats_.iterations = 0;
   std::vector<Row> rows = detect(bodies, 0.0);
   if (rows.empty()) {
     active_.clear();
-    return "";
+    return {};
   }
   bool impact = false;
   for (const Row& r : rows) {
@@ -216,7 +216,7 @@ std::string Collisions::resolve(std::vector<RigidBody>& bodies, const Constraint
 
   // 1. Impulses.
   buildJacobians(bodies, rows, false);
-  if (!buildDelassus(bodies, joints)) return "the joints' constraint matrix is singular";
+  if (!buildDelassus(bodies, joints)) return Status::error("the joints' constraint matrix is singular");
   const int m = static_cast<int>(jrows_.size());
   Eigen::VectorXd u0(m), target = Eigen::VectorXd::Zero(m);
   std::vector<std::pair<int, int>> blocks;
@@ -260,7 +260,7 @@ std::string Collisions::resolve(std::vector<RigidBody>& bodies, const Constraint
     for (const Row& r : over) worst = std::max(worst, -r.gap);
     if (worst <= 1e-10) break;
     buildJacobians(bodies, over, true);
-    if (!buildDelassus(bodies, joints)) return "the joints' constraint matrix is singular";
+    if (!buildDelassus(bodies, joints)) return Status::error("the joints' constraint matrix is singular");
     const int mo = static_cast<int>(jrows_.size());
     Eigen::VectorXd gap(mo);
     std::vector<std::pair<int, int>> nb;
@@ -282,7 +282,7 @@ std::string Collisions::resolve(std::vector<RigidBody>& bodies, const Constraint
     }
     if (!joints.empty()) {
       const ProjectionResult pr = projectPositions(bodies, joints, joint_system_, *solver_);
-      if (!pr.problem.empty()) return "joint projection after the push-out: " + pr.problem;
+      if (!pr.status.ok()) return Status::error("joint projection after the push-out: " + pr.status.message());
     }
   }
 
@@ -290,7 +290,7 @@ std::string Collisions::resolve(std::vector<RigidBody>& bodies, const Constraint
   active_.clear();
   for (const Row& r : detect(bodies, kActiveSlop)) active_.insert({r.key0, r.key1});
   stats_.active = static_cast<int>(active_.size());
-  return "";
+  return {};
 }
 
 }  // namespace ponyhop

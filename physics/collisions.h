@@ -43,6 +43,7 @@
 #include "physics/controller.h"
 #include "physics/physics_params.h"
 #include "physics/shapes.h"
+#include "physics/status.h"
 
 namespace ponyhop {
 
@@ -89,8 +90,8 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
   std::any saveState() const override { return active_; }
   void restoreState(const std::any& state) override;
 
-  // The contact stage on the state just reached (joints: the world's). Returns "" or a problem.
-  std::string resolve(std::vector<RigidBody>& bodies, const Constraints& joints);
+  // The contact stage on the state just reached (joints: the world's). Returns ok or a problem.
+  Status resolve(std::vector<RigidBody>& bodies, const Constraints& joints);
   // True when a contact not active at the start of the substep now overlaps by more than
   // impact_tolerance (the World splits the substep).
   bool impactIn(const std::vector<RigidBody>& bodies) const;

@@ -2,8 +2,8 @@
 
 namespace ponyhop {
 
-std::string ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, const ConstraintSystem& system,
-                                               const BaumgarteGains& gains) {
+Status ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, const ConstraintSystem& system,
+                                          const BaumgarteGains& gains) {
   // Known accelerations: unconstrained M^-1 F_ext (with w x I w) for dynamic bodies, the
   // prescribed ones for kinematic bodies; and every body's velocity, for C' = J q'.
   // Each dynamic body's rotation and R I^-1 R^T once, shared by the free acceleration, the
@@ -37,9 +37,11 @@ std::string ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, c
       rhs_ -= 2.0 * gains.alpha * jx_;
     }
     if (gains.beta != 0.0) rhs_ -= gains.beta * gains.beta * system.C();
-    if (!factorWith(bodies, system, inverse_inertia_)) return "the constraint matrix J M^-1 J^T is singular";
+    if (!factorWith(bodies, system, inverse_inertia_)) {
+      return Status::error("the constraint matrix J M^-1 J^T is singular");
+    }
     solveInto(rhs_, lambda_);
-    if (!lambda_.allFinite()) return "non-finite multipliers lambda";
+    if (!lambda_.allFinite()) return Status::error("non-finite multipliers lambda");
   }
 
   // F_c = J^T lambda; acceleration = M^-1 (F_ext + F_c) (the free part already has M^-1 F_ext).
@@ -54,7 +56,7 @@ std::string ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, c
     b.a = acc[i].head<3>() + fc[i].head<3>() / b.mass;
     b.alpha = acc[i].tail<3>() + inverse_inertia_[i] * fc[i].tail<3>();
   }
-  return "";
+  return {};
 }
 
 std::vector<Vector6d> ConstraintSolver::massWeightedTranspose(const std::vector<RigidBody>& bodies,

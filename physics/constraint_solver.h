@@ -20,6 +20,7 @@
 
 #include "physics/constraint.h"
 #include "physics/rigid_body.h"
+#include "physics/status.h"
 
 namespace ponyhop {
 
@@ -54,9 +55,8 @@ class ConstraintSolver {
 
   // The joint-force stage. Needs the bodies' accumulated forces (dynamic) and prescribed
   // accelerations (kinematic). Writes constraint_force/torque and the total accelerations a,
-  // alpha of every dynamic body. Returns "" or what went wrong.
-  std::string solveJointForces(std::vector<RigidBody>& bodies, const ConstraintSystem& system,
-                               const BaumgarteGains& gains);
+  // alpha of every dynamic body. Returns ok or what went wrong.
+  Status solveJointForces(std::vector<RigidBody>& bodies, const ConstraintSystem& system, const BaumgarteGains& gains);
   // The multipliers of the last solveJointForces (one per constraint row; a spherical joint's
   // three are its constraint force on body a, in newtons).
   const Eigen::VectorXd& lambda() const { return lambda_; }

@@ -166,8 +166,8 @@ bool ArticulatedSystem::sameSignature(const std::vector<RigidBody>& bodies, cons
   return k == signature_.size();
 }
 
-std::string ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Constraints& joints) {
-  if (sameSignature(bodies, joints)) return error_;
+Status ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Constraints& joints) {
+  if (sameSignature(bodies, joints)) return built_;
   signature_ = {static_cast<int>(bodies.size()), static_cast<int>(joints.size())};
   for (const RigidBody& b : bodies) signature_.push_back(b.isDynamic() ? 1 : 0);
   for (const auto& j : joints) signature_.insert(signature_.end(), {j->bodyA(), j->bodyB()});
@@ -176,8 +176,9 @@ std::string ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const
   have_state_ = false;
   const auto fail = [&](std::string e) {
     nodes_.clear();
-    error_ = "solver 'featherstone': " + std::move(e) + "; use physics.solver = tree or dense for this scene";
-    return error_;
+    built_ =
+        Status::error("solver 'featherstone': " + std::move(e) + "; use physics.solver = tree or dense for this scene");
+    return built_;
   };
   const auto name = [&](int b) { return b == kWorldBody ? std::string("world") : "'" + bodies[b].name + "'"; };
 
@@ -236,7 +237,7 @@ std::string ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const
     // Breadth-first from the root: parents before children. Reaching a placed body again
     // through another joint is a loop.
     const size_t first = nodes_.size();
-    const auto addNode = [&](int body, int parent, int joint) -> std::string {
+    const auto addNode = [&](int body, int parent, int joint) -> Status {
       Node nd;
       nd.body = body;
       nd.parent = parent;
@@ -260,8 +261,9 @@ std::string ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const
       } else {
         const auto* pj = dynamic_cast<const PrismaticJoint*>(joints[joint].get());
         if (pj->bodyA() != parent) {
-          return "prismatic joint " + std::to_string(joint) + " has its sliding frame on " + name(pj->bodyA()) +
-                 ", which is the child here (the frame must be on the parent, the body nearer the root)";
+          return Status::error("prismatic joint " + std::to_string(joint) + " has its sliding frame on " +
+                               name(pj->bodyA()) +
+                               ", which is the child here (the frame must be on the parent, the body nearer the root)");
         }
         nd.type = Type::Prismatic;
         nd.dofs = 1;
@@ -274,16 +276,15 @@ std::string ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const
       }
       dofs_ += nd.dofs;
       nodes_.push_back(nd);
-      return "";
+      return {};
     };
-    if (std::string e =
-            addNode(root,
-                    held >= 0 ? (joints[grounding[root]]->bodyA() == root ? joints[grounding[root]]->bodyB()
-                                                                          : joints[grounding[root]]->bodyA())
-                              : kWorldBody,
-                    held >= 0 ? grounding[root] : -1);
-        !e.empty()) {
-      return fail(e);
+    if (Status st = addNode(root,
+                            held >= 0 ? (joints[grounding[root]]->bodyA() == root ? joints[grounding[root]]->bodyB()
+                                                                                  : joints[grounding[root]]->bodyA())
+                                      : kWorldBody,
+                            held >= 0 ? grounding[root] : -1);
+        !st.ok()) {
+      return fail(st.message());
     }
     seen[root] = 1;
     for (size_t k = first; k < nodes_.size(); ++k) {
@@ -296,7 +297,7 @@ std::string ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const
         }
         seen[other] = 1;
         parent_joint[other] = j;
-        if (std::string e = addNode(other, body, j); !e.empty()) return fail(e);
+        if (Status st = addNode(other, body, j); !st.ok()) return fail(st.message());
         nodes_[k].children.push_back(static_cast<int>(nodes_.size()) - 1);
       }
     }
@@ -310,8 +311,8 @@ std::string ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const
   pass_.resize(nodes_.size());
   for (Coordinates* c : {&c0_, &y_, &r_[0], &r_[1], &r_[2], &r_[3]}) *c = coords_;
   for (Eigen::VectorXd* v : {&u0_, &us_, &k_[0], &k_[1], &k_[2], &k_[3]}) v->setZero(dofs_);
-  error_.clear();
-  return error_;
+  built_ = {};
+  return built_;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -719,9 +720,9 @@ Eigen::MatrixXd ArticulatedSystem::massMatrix(const std::vector<RigidBody>& bodi
 // ---------------------------------------------------------------------------------------------
 // Time stepping in joint space
 
-std::string ArticulatedSystem::derivative(double t, const Coordinates& c, const Eigen::VectorXd& u,
-                                          std::vector<RigidBody>& bodies, const ReducedHooks& hooks,
-                                          Eigen::VectorXd& udot, bool written) {
+Status ArticulatedSystem::derivative(double t, const Coordinates& c, const Eigen::VectorXd& u,
+                                     std::vector<RigidBody>& bodies, const ReducedHooks& hooks, Eigen::VectorXd& udot,
+                                     bool written) {
   if (!written) {
     if (&c != &coords_) coords_ = c;
     if (&u != &u_) u_ = u;
@@ -729,10 +730,10 @@ std::string ArticulatedSystem::derivative(double t, const Coordinates& c, const 
     writeState(bodies);
   }
   stopped_ = !hooks.forces();
-  if (stopped_) return "";           // the world stopped itself with its own message
+  if (stopped_) return {};           // the world stopped itself with its own message
   aba(bodies, nullptr, udot, true);  // the bodies are writeState()'s, here or at the end of the last step
-  if (!udot.allFinite()) return "non-finite joint accelerations";
-  return "";
+  if (!udot.allFinite()) return Status::error("non-finite joint accelerations");
+  return {};
 }
 
 // Position rates: x' = v; q' = 1/2 (0, w) q (free, world w); Q' = 1/2 (0, omega) Q (spherical,
@@ -758,8 +759,8 @@ void ArticulatedSystem::rates(const Coordinates& c, const Eigen::VectorXd& u, Co
 
 // The coordinates and speeds of the stages live in members sized by build(): equal-size copies
 // reuse their storage, so a step allocates nothing.
-std::string ArticulatedSystem::step(double t, double h, Integrator integrator, std::vector<RigidBody>& bodies,
-                                    const ReducedHooks& hooks) {
+Status ArticulatedSystem::step(double t, double h, Integrator integrator, std::vector<RigidBody>& bodies,
+                               const ReducedHooks& hooks) {
   // Unless someone changed the bodies, they hold what the last step wrote at this very t (its
   // kinematics at t + h, which is this step's t): the first stage skips forward kinematics.
   const bool written = have_state_ && t == written_time_ && !bodiesChanged(bodies);
@@ -777,7 +778,7 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
     case Integrator::SymplecticEuler: {
       // u += h u'(t, y); positions with the new speeds (exact exponential map for rotations).
       // In place: the step needs the coordinates at t only through u'(t, y).
-      if (std::string e = derivative(t, coords_, u_, bodies, hooks, k[0], written); !e.empty() || stopped_) return e;
+      if (Status st = derivative(t, coords_, u_, bodies, hooks, k[0], written); !st.ok() || stopped_) return st;
       u_ += h * k[0];
       for (size_t i = 0; i < nodes_.size(); ++i) {
         const Node& nd = nodes_[i];
@@ -803,19 +804,19 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
       u0_ = u_;
       Coordinates* r = r_;
       rates(c0_, u0_, r[0]);
-      if (std::string e = derivative(t, c0_, u0_, bodies, hooks, k[0], written); !e.empty() || stopped_) return e;
+      if (Status st = derivative(t, c0_, u0_, bodies, hooks, k[0], written); !st.ok() || stopped_) return st;
       axpy(c0_, 0.5 * h, r[0], y_);
       us_ = u0_ + 0.5 * h * k[0];
       rates(y_, us_, r[1]);
-      if (std::string e = derivative(t + 0.5 * h, y_, us_, bodies, hooks, k[1]); !e.empty() || stopped_) return e;
+      if (Status st = derivative(t + 0.5 * h, y_, us_, bodies, hooks, k[1]); !st.ok() || stopped_) return st;
       axpy(c0_, 0.5 * h, r[1], y_);
       us_ = u0_ + 0.5 * h * k[1];
       rates(y_, us_, r[2]);
-      if (std::string e = derivative(t + 0.5 * h, y_, us_, bodies, hooks, k[2]); !e.empty() || stopped_) return e;
+      if (Status st = derivative(t + 0.5 * h, y_, us_, bodies, hooks, k[2]); !st.ok() || stopped_) return st;
       axpy(c0_, h, r[2], y_);
       us_ = u0_ + h * k[2];
       rates(y_, us_, r[3]);
-      if (std::string e = derivative(t + h, y_, us_, bodies, hooks, k[3]); !e.empty() || stopped_) return e;
+      if (Status st = derivative(t + h, y_, us_, bodies, hooks, k[3]); !st.ok() || stopped_) return st;
       coords_ = c0_;
       for (size_t i = 0; i < nodes_.size(); ++i) {
         coords_.x[i] += h / 6.0 * (r[0].x[i] + 2.0 * r[1].x[i] + 2.0 * r[2].x[i] + r[3].x[i]);
@@ -828,25 +829,24 @@ std::string ArticulatedSystem::step(double t, double h, Integrator integrator, s
       break;
     }
     default:
-      return std::string(
-                 "solver 'featherstone' integrates in joint space with rk4 or symplectic_euler; "
-                 "physics.integrator = '") +
-             std::string(enumName(integrator)) + "' is not available with it";
+      return Status::error(std::string("solver 'featherstone' integrates in joint space with rk4 or symplectic_euler; "
+                                       "physics.integrator = '") +
+                           std::string(enumName(integrator)) + "' is not available with it");
   }
   hooks.kinematics(t + h);
   writeState(bodies);
   remember(bodies);
   written_time_ = t + h;
-  return "";
+  return {};
 }
 
-std::string ArticulatedSystem::evaluate(double t, std::vector<RigidBody>& bodies, const ReducedHooks& hooks) {
+Status ArticulatedSystem::evaluate(double t, std::vector<RigidBody>& bodies, const ReducedHooks& hooks) {
   if (!have_state_ || bodiesChanged(bodies)) readState(bodies);
   c0_ = coords_;
   u0_ = u_;
-  std::string e = derivative(t, c0_, u0_, bodies, hooks, k_[0]);
+  Status st = derivative(t, c0_, u0_, bodies, hooks, k_[0]);
   remember(bodies);
-  return e;
+  return st;
 }
 
 // Someone outside (a contact handler, the UI, a test) may set the bodies between steps: then the

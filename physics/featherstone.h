@@ -42,12 +42,12 @@
 #include <Eigen/Geometry>
 #include <functional>
 #include <limits>
-#include <string>
 #include <vector>
 
 #include "physics/constraint.h"
 #include "physics/physics_params.h"
 #include "physics/rigid_body.h"
+#include "physics/status.h"
 
 namespace ponyhop {
 
@@ -62,9 +62,9 @@ class ArticulatedSystem {
   using Matrix6 = Eigen::Matrix<double, 6, 6>;
   using Motion = Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, 6>;  // S, 6 x dofs
 
-  // Tree from the world's bodies and joints. "" or what it cannot express. Cheap to call every
+  // Tree from the world's bodies and joints. Ok or what it cannot express. Cheap to call every
   // step: rebuilds only when the bodies or joints changed.
-  std::string build(const std::vector<RigidBody>& bodies, const Constraints& joints);
+  Status build(const std::vector<RigidBody>& bodies, const Constraints& joints);
 
   // Joint coordinates from the maximal bodies (initial state, or after someone changed them).
   void readState(const std::vector<RigidBody>& bodies);
@@ -82,11 +82,10 @@ class ArticulatedSystem {
   Eigen::MatrixXd massMatrix(const std::vector<RigidBody>& bodies) const;
 
   // One step of size h from time t in joint space (rk4 or symplectic_euler), then the bodies
-  // written back at t + h. "" or what went wrong.
-  std::string step(double t, double h, Integrator integrator, std::vector<RigidBody>& bodies,
-                   const ReducedHooks& hooks);
+  // written back at t + h. Ok or what went wrong.
+  Status step(double t, double h, Integrator integrator, std::vector<RigidBody>& bodies, const ReducedHooks& hooks);
   // The force evaluation at time t without stepping (World::evaluate).
-  std::string evaluate(double t, std::vector<RigidBody>& bodies, const ReducedHooks& hooks);
+  Status evaluate(double t, std::vector<RigidBody>& bodies, const ReducedHooks& hooks);
 
   int dofs() const { return dofs_; }
   int nodeCount() const { return static_cast<int>(nodes_.size()); }
@@ -147,14 +146,14 @@ class ArticulatedSystem {
   void abaOutward(size_t i, Eigen::VectorXd& udot);
   // u' at (t, c, u). written: the bodies already hold exactly (t, c, u) (the first stage of a
   // step after the last one wrote them): forward kinematics is not repeated.
-  std::string derivative(double t, const Coordinates& c, const Eigen::VectorXd& u, std::vector<RigidBody>& bodies,
-                         const ReducedHooks& hooks, Eigen::VectorXd& udot, bool written = false);
+  Status derivative(double t, const Coordinates& c, const Eigen::VectorXd& u, std::vector<RigidBody>& bodies,
+                    const ReducedHooks& hooks, Eigen::VectorXd& udot, bool written = false);
   void rates(const Coordinates& c, const Eigen::VectorXd& u, Coordinates& out) const;
   bool bodiesChanged(const std::vector<RigidBody>& bodies) const;
   void remember(const std::vector<RigidBody>& bodies);
 
   std::vector<int> signature_;
-  std::string error_;        // what build() could not express ("" when fine)
+  Status built_;             // what build() could not express (ok when fine)
   std::vector<Node> nodes_;  // parents before children
   int dofs_ = 0;
   bool have_state_ = false;

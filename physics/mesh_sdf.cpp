@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "physics/shapes.h"
 
@@ -28,18 +29,13 @@ bool crossAlong(int a, const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, con
 
 }  // namespace
 
-bool SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices,
-                               double cell, double padding, std::string* error, long max_nodes,
-                               const Eigen::AlignedBox3d* region) {
-  const auto fail = [&](const std::string& m) {
-    if (error) *error = m;
-    return false;
-  };
+Status SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices,
+                                 double cell, double padding, long max_nodes, const Eigen::AlignedBox3d* region) {
   const size_t tris = indices.size() / 3;
-  if (tris == 0) return fail("collider mesh has no triangles");
-  if (!(cell > 0.0) || !std::isfinite(cell)) return fail("collider cell must be positive (m)");
+  if (tris == 0) return Status::error("collider mesh has no triangles");
+  if (!(cell > 0.0) || !std::isfinite(cell)) return Status::error("collider cell must be positive (m)");
   for (uint32_t i : indices)
-    if (i >= vertices.size()) return fail("collider mesh: a triangle index is out of range");
+    if (i >= vertices.size()) return Status::error("collider mesh: a triangle index is out of range");
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector3d hi = -lo;
   for (uint32_t i : indices) {
@@ -52,15 +48,15 @@ bool SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, con
     lo = lo.cwiseMax(region->min());
     hi = hi.cwiseMin(region->max());
     // At least two nodes a side (trilinear interpolation needs a cell).
-    if (((hi - lo).array() < cell).any()) return fail("collider region does not meet the mesh");
+    if (((hi - lo).array() < cell).any()) return Status::error("collider region does not meet the mesh");
   }
   cell_ = cell;
   origin_ = lo;
   for (int a = 0; a < 3; ++a) dims_(a) = static_cast<int>(std::ceil((hi(a) - lo(a)) / cell)) + 1;
   const long nodes = static_cast<long>(dims_.x()) * dims_.y() * dims_.z();
   if (nodes > max_nodes) {
-    return fail("collider grid of " + std::to_string(nodes) + " nodes is larger than " + std::to_string(max_nodes) +
-                ": raise the cell size");
+    return Status::error("collider grid of " + std::to_string(nodes) + " nodes is larger than " +
+                         std::to_string(max_nodes) + ": raise the cell size");
   }
   const auto vert = [&](size_t t, int k) -> const Eigen::Vector3d& { return vertices[indices[3 * t + k]]; };
   const auto nodeAt = [&](int i, int j, int k) -> Eigen::Vector3d {
@@ -159,7 +155,7 @@ bool SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, con
   }
   values_.resize(nodes);
   for (long n = 0; n < nodes; ++n) values_[n] = static_cast<float>(votes[n] >= 2 ? -dist[n] : dist[n]);
-  return true;
+  return {};
 }
 
 double SignedDistanceGrid::trilinear(const Eigen::Vector3d& p, Eigen::Vector3d* grad) const {

@@ -25,8 +25,9 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
-#include <string>
 #include <vector>
+
+#include "physics/status.h"
 
 namespace ponyhop {
 
@@ -35,11 +36,10 @@ class SignedDistanceGrid {
   // Builds the field of the triangles (3 indices each into `vertices`) on a grid of cubic cells
   // of edge `cell` covering the mesh's bounding box plus `padding` on every side, cut to `region`
   // when one is given (the part of a large mesh that anything can reach: the sign still counts
-  // every triangle). Returns false with a message (no triangles, a non-positive cell, a region
-  // that misses the mesh, more than max_nodes nodes).
-  bool build(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices, double cell,
-             double padding, std::string* error, long max_nodes = 8'000'000,
-             const Eigen::AlignedBox3d* region = nullptr);
+  // every triangle). Returns what failed (no triangles, a non-positive cell, a region that
+  // misses the mesh, more than max_nodes nodes).
+  Status build(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices, double cell,
+               double padding, long max_nodes = 8'000'000, const Eigen::AlignedBox3d* region = nullptr);
 
   // Signed distance (m, negative inside) and its gradient (of the interpolant, normalized).
   double distance(const Eigen::Vector3d& p) const;

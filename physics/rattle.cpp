@@ -231,8 +231,8 @@ ConstrainedStepResult rattleStep(double t, double h, Eigen::VectorXd& mu, Constr
   }
   // Velocity multipliers: J(q') v' = -J_k v_k, the mass-metric projection (the impulse
   // h/2 J^T nu changes p and L by exactly that correction).
-  if (std::string e = projectVelocities(bodies, s.joints, s.system, s.solver, work.projection); !e.empty()) {
-    result.fail("RATTLE velocity solve: %s", e.c_str());
+  if (Status st = projectVelocities(bodies, s.joints, s.system, s.solver, work.projection); !st.ok()) {
+    result.fail("RATTLE velocity solve: %s", st.message().c_str());
     return result;
   }
   work.remember(s.solver, bodies, s.joints);  // the factorization of A(q_{n+1})

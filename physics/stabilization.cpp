@@ -14,7 +14,7 @@ ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constrai
     // Newton step on C(q) = 0 with the minimum-mass-norm correction:
     // J dq = -C, dq = M^-1 J^T y  =>  (J M^-1 J^T) y = -C.
     if (!solver.factor(bodies, system)) {
-      result.problem = "the constraint matrix J M^-1 J^T is singular";
+      result.status = Status::error("the constraint matrix J M^-1 J^T is singular");
       return result;
     }
     const Eigen::VectorXd y = solver.solve(-system.C());
@@ -23,7 +23,7 @@ ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constrai
       RigidBody& b = bodies[i];
       if (!b.isDynamic()) continue;
       if (!dq[i].allFinite()) {
-        result.problem = "non-finite position correction";
+        result.status = Status::error("non-finite position correction");
         return result;
       }
       // Linear part moves the centre; the angular part is a small world-frame rotation
@@ -41,31 +41,31 @@ ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constrai
   return result;
 }
 
-std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
-                              ConstraintSolver& solver, Eigen::VectorXd* impulses) {
+Status projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
+                         ConstraintSolver& solver, Eigen::VectorXd* impulses) {
   VelocityProjectionWork work;
   return projectVelocities(bodies, constraints, system, solver, work, impulses);
 }
 
-std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
-                              ConstraintSolver& solver, VelocityProjectionWork& work, Eigen::VectorXd* impulses) {
+Status projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
+                         ConstraintSolver& solver, VelocityProjectionWork& work, Eigen::VectorXd* impulses) {
   system.evaluate(bodies, constraints);
   if (impulses) impulses->resize(0);
-  if (system.rows() == 0) return "";
+  if (system.rows() == 0) return {};
   work.vel.resize(bodies.size());
   for (size_t i = 0; i < bodies.size(); ++i) work.vel[i] << bodies[i].v, bodies[i].w;
   // (J M^-1 J^T) y = -(J_d v_d + J_k v_k), dv = M^-1 J^T y.
-  if (!solver.factor(bodies, system)) return "the constraint matrix J M^-1 J^T is singular";
+  if (!solver.factor(bodies, system)) return Status::error("the constraint matrix J M^-1 J^T is singular");
   massMetricCorrection(bodies, system, solver, work.vel, work);
   for (size_t i = 0; i < bodies.size(); ++i) {
     RigidBody& b = bodies[i];
     if (!b.isDynamic()) continue;
-    if (!work.dv[i].allFinite()) return "non-finite velocity correction";
+    if (!work.dv[i].allFinite()) return Status::error("non-finite velocity correction");
     b.v += work.dv[i].head<3>();
     b.w += work.dv[i].tail<3>();
   }
   if (impulses) *impulses = work.y;
-  return "";
+  return {};
 }
 
 void massMetricCorrection(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,

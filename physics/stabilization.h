@@ -17,14 +17,15 @@
 
 #include "physics/constraint.h"
 #include "physics/constraint_solver.h"
+#include "physics/status.h"
 
 namespace ponyhop {
 
-struct ProjectionResult {
+struct [[nodiscard]] ProjectionResult {
   int iterations = 0;
   double error = 0.0;  // max joint error after the projection (m for spherical joints)
   bool converged = false;
-  std::string problem;  // "" or what failed (singular A, non-finite correction)
+  Status status;  // ok or what failed (singular A, non-finite correction)
 };
 
 // Positions and orientations of the dynamic bodies onto C = 0. `system` is scratch.
@@ -33,18 +34,17 @@ ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constrai
                                   int max_iterations = 10);
 
 // Velocities of the dynamic bodies onto J v = -J_k v_k (kinematic bodies' velocities as they
-// are). Returns "" or what failed. `impulses` (optional): the multiplier y of every row (N s),
+// are). Returns ok or what failed. `impulses` (optional): the multiplier y of every row (N s),
 // dv = M^-1 J^T y; a contact reads its own rows' impulse from it.
-std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
-                              ConstraintSolver& solver, Eigen::VectorXd* impulses = nullptr);
+Status projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
+                         ConstraintSolver& solver, Eigen::VectorXd* impulses = nullptr);
 // The same with the caller's work space (kept between calls: a steady step allocates nothing).
 struct VelocityProjectionWork {
   std::vector<Vector6d> vel, dv;
   Eigen::VectorXd rhs, y;
 };
-std::string projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
-                              ConstraintSolver& solver, VelocityProjectionWork& work,
-                              Eigen::VectorXd* impulses = nullptr);
+Status projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
+                         ConstraintSolver& solver, VelocityProjectionWork& work, Eigen::VectorXd* impulses = nullptr);
 // The mass-metric correction of per-body velocities `vel` with the solver already factored at
 // `system`: (J M^-1 J^T) y = -J vel into work.y, M^-1 J^T y into work.dv (the kinematic bodies'
 // zero). projectVelocities applies it to the bodies; RATTLE's corrector to a velocity change.

@@ -2,17 +2,17 @@
 
 namespace ponyhop {
 
-std::string validate(const PhysicsParams& p, const std::string& prefix) {
-  if (std::string e = checkRanges(p, prefix); !e.empty()) return e;
-  if (!(p.dt > 0.0)) return prefix + ".dt must be positive";
-  if (p.substeps < 1) return prefix + ".substeps must be at least 1";
+Status validate(const PhysicsParams& p, const std::string& prefix) {
+  if (Status s = checkRanges(p, prefix); !s.ok()) return s;
+  if (!(p.dt > 0.0)) return Status::error(prefix + ".dt must be positive");
+  if (p.substeps < 1) return Status::error(prefix + ".substeps must be at least 1");
   if (p.solver == SolverKind::Featherstone && p.integrator != Integrator::RK4 &&
       p.integrator != Integrator::SymplecticEuler) {
-    return prefix + ".integrator = '" + std::string(enumName(p.integrator)) +
-           "': solver 'featherstone' integrates in joint space with rk4 or symplectic_euler ('" +
-           std::string(enumName(p.integrator)) + "' belongs to the multiplier formulation)";
+    return Status::error(prefix + ".integrator = '" + std::string(enumName(p.integrator)) +
+                         "': solver 'featherstone' integrates in joint space with rk4 or symplectic_euler ('" +
+                         std::string(enumName(p.integrator)) + "' belongs to the multiplier formulation)");
   }
-  return "";
+  return {};
 }
 
 }  // namespace ponyhop

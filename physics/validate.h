@@ -1,5 +1,5 @@
-// Physics refuses nonsense: each check returns "" or a message naming the field and the
-// allowed range ("chain.links = 0: must be an integer in [1, 4096]"). Ranges come from the
+// Physics refuses nonsense: each check returns an ok Status or one whose message names the field
+// and the allowed range ("chain.links = 0: must be an integer in [1, 4096]"). Ranges come from the
 // structs' reflect() lists (one source of truth with the scene file and the panel), plus the
 // checks reflect cannot express (a zero direction vector).
 #pragma once
@@ -9,9 +9,11 @@
 #include <cstdio>
 #include <string>
 #include <type_traits>
+#include <utility>
 
 #include "physics/physics_params.h"
 #include "physics/reflect.h"
+#include "physics/status.h"
 
 namespace ponyhop {
 
@@ -65,14 +67,15 @@ struct RangeCheck {
   }
 };
 
-// The first range error of a reflectable struct, or "".
+// The first range error of a reflectable struct, or ok.
 template <class P>
-std::string checkRanges(P p, const std::string& prefix) {
+Status checkRanges(P p, const std::string& prefix) {
   RangeCheck v{prefix, ""};
   p.reflect(v);
-  return v.error;
+  if (v.error.empty()) return {};
+  return Status::error(std::move(v.error));
 }
 
-std::string validate(const PhysicsParams& p, const std::string& prefix = "physics");
+Status validate(const PhysicsParams& p, const std::string& prefix = "physics");
 
 }  // namespace ponyhop

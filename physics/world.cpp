@@ -51,7 +51,7 @@ World::World(const PhysicsParams& params)
       solver_(makeConstraintSolver(params.solver)),
       reduced_(makeReducedSystem(params.solver)),
       scheme_(makeIntegratorScheme(params.integrator)) {
-  if (std::string e = validate(params_); !e.empty()) fail(e);
+  if (Status s = validate(params_); !s.ok()) fail(s.message());
 }
 
 World::~World() = default;
@@ -433,8 +433,8 @@ void World::solveJointForces() {
   system_.evaluate(bodies_, joints_);
   BaumgarteGains gains;
   if (params_.stabilization == Stabilization::Baumgarte) gains = {params_.baumgarte_alpha, params_.baumgarte_beta};
-  if (std::string e = solver_->solveJointForces(bodies_, system_, gains); !e.empty()) {
-    return stop("joint forces", e,
+  if (Status s = solver_->solveJointForces(bodies_, system_, gains); !s.ok()) {
+    return stop("joint forces", s.message(),
                 "redundant or duplicate joints, a joint between two prescribed bodies, or a zero mass or inertia");
   }
   if (checkBodies("joint forces", true)) forces_stale_ = false;
@@ -479,15 +479,15 @@ void World::stabilize() {
   const auto timed = clock_.time(Stage::Stabilize);
   updateKinematicBodies(state_.time);
   const ProjectionResult r = projectPositions(bodies_, joints_, system_, *solver_);
-  if (!r.problem.empty() || !(r.error < 1e-6)) {
+  if (!r.status.ok() || !(r.error < 1e-6)) {
     char buf[96];
     std::snprintf(buf, sizeof buf, " (joint error %.3g m after %d iterations)", r.error, r.iterations);
-    return stop("stabilize", (r.problem.empty() ? std::string("position projection failed") : r.problem) + buf,
+    return stop("stabilize", (r.status.ok() ? std::string("position projection failed") : r.status.message()) + buf,
                 "the joints were pulled far apart within one step (a step too large for stiff springs or a "
                 "fast whip): reduce dt or raise substeps, or use integrator = implicit_euler for stiff springs");
   }
-  if (std::string e = ponyhop::projectVelocities(bodies_, joints_, system_, *solver_); !e.empty()) {
-    return stop("stabilize", e, "redundant or duplicate joints");
+  if (Status s = ponyhop::projectVelocities(bodies_, joints_, system_, *solver_); !s.ok()) {
+    return stop("stabilize", s.message(), "redundant or duplicate joints");
   }
   checkBodies("stabilize", false);
 }
@@ -522,13 +522,14 @@ void World::reducedStep(double h) {
                              applyControllerForces();
                              return ok();
                            }};
-  std::string e = reduced_->build(bodies_, joints_);
-  if (e.empty()) {
-    e = h > 0.0 ? reduced_->step(state_.time, h, scheme_->kind(), bodies_, hooks)
+  Status s = reduced_->build(bodies_, joints_);
+  if (s.ok()) {
+    s = h > 0.0 ? reduced_->step(state_.time, h, scheme_->kind(), bodies_, hooks)
                 : reduced_->evaluate(state_.time, bodies_, hooks);
   }
-  if (!e.empty()) {
-    return stop("reduced step", e, "the scene needs what reduced coordinates cannot express (docs/SOLVERS.md)");
+  if (!s.ok()) {
+    return stop("reduced step", s.message(),
+                "the scene needs what reduced coordinates cannot express (docs/SOLVERS.md)");
   }
   if (!ok() || h == 0.0) return;
   state_.time += h;
@@ -559,15 +560,15 @@ void World::evaluate() {
 void World::projectVelocities() {
   if (!ok()) return;
   updateKinematicBodies(state_.time);
-  if (std::string e = projectVelocitiesOntoJoints(); !e.empty())
-    stop("velocity projection", e, "redundant or duplicate joints");
+  if (Status s = projectVelocitiesOntoJoints(); !s.ok())
+    stop("velocity projection", s.message(), "redundant or duplicate joints");
 }
 
 ProjectionResult World::projectPositionsOntoJoints() {
   return ponyhop::projectPositions(bodies_, joints_, system_, *solver_);
 }
 
-std::string World::projectVelocitiesOntoJoints(Eigen::VectorXd* impulses) {
+Status World::projectVelocitiesOntoJoints(Eigen::VectorXd* impulses) {
   return ponyhop::projectVelocities(bodies_, joints_, system_, *solver_, impulses);
 }
 

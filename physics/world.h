@@ -22,6 +22,7 @@
 #include "physics/stability_monitor.h"
 #include "physics/stabilization.h"
 #include "physics/stage_times.h"
+#include "physics/status.h"
 
 namespace ponyhop {
 
@@ -77,9 +78,9 @@ class World {
   void projectVelocities();
   // The projections of physics/stabilization.h through this world's solver (dense, tree, ...),
   // at the bodies' current state, for contact sets (impacts). They do not stop the world:
-  // "" or what failed. `impulses`: the velocity projection's multiplier of every row (N s).
+  // ok or what failed. `impulses`: the velocity projection's multiplier of every row (N s).
   ProjectionResult projectPositionsOntoJoints();
-  std::string projectVelocitiesOntoJoints(Eigen::VectorXd* impulses = nullptr);
+  Status projectVelocitiesOntoJoints(Eigen::VectorXd* impulses = nullptr);
 
   // RATTLE's warm start: the position multipliers of the last step taken and the joints'
   // dimensions (rows) they belong to; valid once a RATTLE step succeeded.

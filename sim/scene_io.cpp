@@ -560,10 +560,10 @@ void validateScene(const Scene& scene_in, const std::string& source) {
   if (errors.empty()) {
     // Physical sense beyond the ranges (leg lengths in order, the foot above the ground, ...).
     if (scene.hopper) {
-      if (std::string e = validate(*scene.hopper); !e.empty()) errors.push_back(e);
+      if (Status s = validate(*scene.hopper); !s.ok()) errors.push_back(s.message());
     }
     for (size_t i = 0; i < scene.hoppers.size(); ++i) {
-      if (std::string e = validate(scene.hoppers[i], "hoppers." + std::to_string(i)); !e.empty()) errors.push_back(e);
+      if (Status s = validate(scene.hoppers[i], "hoppers." + std::to_string(i)); !s.ok()) errors.push_back(s.message());
     }
   }
   if (scene.render.width % 2 || scene.render.height % 2) {

@@ -31,9 +31,10 @@ void Sim::buildCollisions() {
     std::vector<Eigen::Vector3d> vertices;
     vertices.reserve(head_->mesh.positions.size());
     for (const auto& p : head_->mesh.positions) vertices.push_back(head_->mesh_to_body * p.cast<double>());
-    std::string err;
-    collisions_ = makeHeadCollisions(world_, *chain_, head_body_, vertices, head_->mesh.indices, c, &err);
-    if (!collisions_) throw InputError(scene_.path + ": collision: the head's mesh makes no collider: " + err);
+    if (Status s = makeHeadCollisions(world_, *chain_, head_body_, vertices, head_->mesh.indices, c, collisions_);
+        !s.ok()) {
+      throw InputError(scene_.path + ": collision: the head's mesh makes no collider: " + s.message());
+    }
   }
   if (c.ground && !hoppers_.empty()) {
     if (!collisions_) {
@@ -78,7 +79,12 @@ void Sim::buildHead(const AssetLoader* assets) {
       keys = loadClipFile(source).keys;
     }
     if (keys.empty()) keys.push_back(Keyframe{});  // no animation: the head holds still at the origin
-    track = KeyframeTrack::fromKeyframes(keys, options, &err);
+    KeyframeTrack built;
+    if (Status s = KeyframeTrack::fromKeyframes(keys, options, built); s.ok()) {
+      track = built;
+    } else {
+      err = s.message();
+    }
   }
   if (!track) throw InputError(scene_.path + ": head.animation (" + source + "): " + err);
   head_body_ = world_.addKinematicBody(makeMotion(*track), "head");

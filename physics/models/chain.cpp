@@ -11,19 +11,19 @@
 
 namespace ponyhop {
 
-std::string validate(const ChainParams& p, const std::string& prefix) {
-  if (std::string e = checkRanges(p, prefix); !e.empty()) return e;
-  if (!(p.links >= 1)) return prefix + ".links must be at least 1";
+Status validate(const ChainParams& p, const std::string& prefix) {
+  if (Status s = checkRanges(p, prefix); !s.ok()) return s;
+  if (!(p.links >= 1)) return Status::error(prefix + ".links must be at least 1");
   if (!(p.length > 0.0) || !(p.mass > 0.0) || !(p.radius > 0.0) || !(p.taper > 0.0)) {
-    return prefix + ".length, .mass, .radius and .taper must be positive";
+    return Status::error(prefix + ".length, .mass, .radius and .taper must be positive");
   }
   if (!(p.direction.norm() > 1e-9)) {
-    return prefix + ".direction = (0, 0, 0): must be a non-zero vector (the chain's initial direction)";
+    return Status::error(prefix + ".direction = (0, 0, 0): must be a non-zero vector (the chain's initial direction)");
   }
-  return "";
+  return {};
 }
 
-std::string validate(const AnchorParams& p, const std::string& prefix) { return checkRanges(p, prefix); }
+Status validate(const AnchorParams& p, const std::string& prefix) { return checkRanges(p, prefix); }
 
 namespace {
 
@@ -34,8 +34,8 @@ const RigidBody& bodyOf(const World& world, int i) { return i == kWorldBody ? wo
 Chain addChain(World& world, const ChainParams& params, int parent, const Eigen::Vector3d& anchor_local,
                const Eigen::Vector3d& initial_velocity) {
   Chain chain;
-  if (std::string e = validate(params); !e.empty()) {
-    world.fail(e);
+  if (Status s = validate(params); !s.ok()) {
+    world.fail(s.message());
     return chain;
   }
   if (parent != kWorldBody && (parent < 0 || parent >= world.bodyCount())) {
@@ -99,8 +99,8 @@ Chain addChain(World& world, const ChainParams& params, int parent, const Eigen:
 
 ChainWorld makeChainWorld(const PhysicsParams& physics, const ChainParams& chain, const AnchorParams& anchor) {
   ChainWorld cw{World(physics), Chain{}, -1};
-  if (std::string e = validate(anchor); !e.empty()) {
-    cw.world.fail(e);
+  if (Status s = validate(anchor); !s.ok()) {
+    cw.world.fail(s.message());
     return cw;
   }
   if (!cw.world.ok()) return cw;

@@ -20,6 +20,7 @@
 
 #include "physics/models/chain_params.h"
 #include "physics/physics_params.h"
+#include "physics/status.h"
 #include "physics/world.h"
 
 namespace ponyhop {
@@ -58,9 +59,9 @@ struct Chain {
 // The links start with `initial_velocity`, then take the least-kinetic-energy velocities that
 // satisfy the joints (Kelvin): a chain at rest on a moving parent starts correctly. Invalid
 // params: nothing is built and the world stops with the message (world.status()).
-// The first invalid field of a chain or anchor section, or "" (physics/validate.h).
-std::string validate(const ChainParams& p, const std::string& prefix = "chain");
-std::string validate(const AnchorParams& p, const std::string& prefix = "anchor");
+// The first invalid field of a chain or anchor section, or ok (physics/validate.h).
+Status validate(const ChainParams& p, const std::string& prefix = "chain");
+Status validate(const AnchorParams& p, const std::string& prefix = "anchor");
 
 Chain addChain(World& world, const ChainParams& params, int parent, const Eigen::Vector3d& anchor_local,
                const Eigen::Vector3d& initial_velocity = Eigen::Vector3d::Zero());

@@ -42,21 +42,24 @@ uint64_t gridKey(const std::vector<Eigen::Vector3d>& vertices, const std::vector
   return h;
 }
 
-std::shared_ptr<const SignedDistanceGrid> cachedGrid(const std::vector<Eigen::Vector3d>& vertices,
-                                                     const std::vector<uint32_t>& indices, double cell, double pad,
-                                                     const Eigen::AlignedBox3d& region, std::string* error) {
+Status cachedGrid(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices, double cell,
+                  double pad, const Eigen::AlignedBox3d& region, std::shared_ptr<const SignedDistanceGrid>& out) {
   const uint64_t key = gridKey(vertices, indices, cell, pad, region);
   GridCache& cache = gridCache();
   {
     std::lock_guard<std::mutex> lock(cache.mutex);
-    if (cache.grid && cache.key == key) return cache.grid;
+    if (cache.grid && cache.key == key) {
+      out = cache.grid;
+      return {};
+    }
   }
   auto grid = std::make_shared<SignedDistanceGrid>();
-  if (!grid->build(vertices, indices, cell, pad, error, 8'000'000, &region)) return nullptr;
+  if (Status s = grid->build(vertices, indices, cell, pad, 8'000'000, &region); !s.ok()) return s;
   std::lock_guard<std::mutex> lock(cache.mutex);
   cache.key = key;
   cache.grid = grid;
-  return grid;
+  out = grid;
+  return {};
 }
 
 }  // namespace
@@ -68,10 +71,9 @@ void clearHeadColliderCache() {
   cache.key = 0;
 }
 
-std::shared_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain, int head_body,
-                                               const std::vector<Eigen::Vector3d>& vertices,
-                                               const std::vector<uint32_t>& indices, const HeadCollisionParams& params,
-                                               std::string* error) {
+Status makeHeadCollisions(World& world, const Chain& chain, int head_body, const std::vector<Eigen::Vector3d>& vertices,
+                          const std::vector<uint32_t>& indices, const HeadCollisionParams& params,
+                          std::shared_ptr<Collisions>& collisions) {
   // Padding: the thickest link plus a few cells, so every query near the head is inside the grid.
   double thickest = 0.0;
   for (double r : chain.radii) thickest = std::max(thickest, r);
@@ -82,8 +84,8 @@ std::shared_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain,
   const Eigen::Vector3d anchor = hb.q.conjugate() * (chain.anchor(world) - hb.x);
   const double reach = chain.length * static_cast<double>(chain.links.size()) + pad;
   const Eigen::AlignedBox3d region(anchor.array() - reach, anchor.array() + reach);
-  std::shared_ptr<const SignedDistanceGrid> grid = cachedGrid(vertices, indices, params.cell, pad, region, error);
-  if (!grid) return nullptr;
+  std::shared_ptr<const SignedDistanceGrid> grid;
+  if (Status s = cachedGrid(vertices, indices, params.cell, pad, region, grid); !s.ok()) return s;
   CollisionParams cp;
   cp.friction = params.friction;
   cp.restitution = params.restitution;
@@ -116,7 +118,8 @@ std::shared_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain,
     col->addConeLimit(head_body, axis, chain.links[0], Eigen::Vector3d::UnitZ(),
                       params.root_cone * std::numbers::pi / 180.0);
   }
-  return col;
+  collisions = col;
+  return {};
 }
 
 }  // namespace ponyhop

@@ -7,11 +7,11 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
-#include <string>
 #include <vector>
 
 #include "physics/collisions.h"
 #include "physics/models/chain.h"
+#include "physics/status.h"
 
 namespace ponyhop {
 
@@ -56,11 +56,10 @@ struct HeadCollisionParams {
 // The root link is held by the cone, not by contact (its top sits on the head at the anchor).
 // Optional: a swing cone and a twist limit at every joint between links, and capsule pairs
 // between links two or more apart.
-// Returns null and sets *error when the mesh cannot make a collider.
-std::shared_ptr<Collisions> makeHeadCollisions(World& world, const Chain& chain, int head_body,
-                                               const std::vector<Eigen::Vector3d>& vertices,
-                                               const std::vector<uint32_t>& indices, const HeadCollisionParams& params,
-                                               std::string* error);
+// The collider into `collisions`, or what failed when the mesh cannot make one.
+Status makeHeadCollisions(World& world, const Chain& chain, int head_body, const std::vector<Eigen::Vector3d>& vertices,
+                          const std::vector<uint32_t>& indices, const HeadCollisionParams& params,
+                          std::shared_ptr<Collisions>& collisions);
 
 // makeHeadCollisions keeps the last grid it built and hands it out again for the same triangles,
 // cell, padding and region (a scene rebuilt for a panel edit of friction or damping does not build

@@ -27,35 +27,39 @@ Eigen::Vector3d axisOf(const RigidBody& b, int i) { return b.q * Eigen::Vector3d
 
 }  // namespace
 
-std::string validate(const HopperParams& p, const std::string& prefix) {
-  if (std::string e = checkRanges(p, prefix); !e.empty()) return e;
+Status validate(const HopperParams& p, const std::string& prefix) {
+  if (Status s = checkRanges(p, prefix); !s.ok()) return s;
   if (!(p.body_mass > 0.0) || !(p.upper_mass > 0.0) || !(p.foot_mass > 0.0)) {
-    return prefix + ": body_mass, upper_mass and foot_mass must be positive";
+    return Status::error(prefix + ": body_mass, upper_mass and foot_mass must be positive");
   }
-  if (!(p.body_inertia.minCoeff() > 0.0)) return prefix + ".body_inertia: every component must be positive";
+  if (!(p.body_inertia.minCoeff() > 0.0))
+    return Status::error(prefix + ".body_inertia: every component must be positive");
   if (!(p.min_length < p.rest_length && p.rest_length < p.max_length)) {
-    return prefix + ": leg lengths must satisfy min_length < rest_length < max_length (got " + number(p.min_length) +
-           ", " + number(p.rest_length) + ", " + number(p.max_length) + " m)";
+    return Status::error(prefix + ": leg lengths must satisfy min_length < rest_length < max_length (got " +
+                         number(p.min_length) + ", " + number(p.rest_length) + ", " + number(p.max_length) + " m)");
   }
   if (!(p.foot_length + p.toe_radius < p.min_length)) {
-    return prefix + ".foot_length + toe_radius = " + number(p.foot_length + p.toe_radius) +
-           " m: must be less than min_length (the foot's upper end would hit the hip at full compression)";
+    return Status::error(
+        prefix + ".foot_length + toe_radius = " + number(p.foot_length + p.toe_radius) +
+        " m: must be less than min_length (the foot's upper end would hit the hip at full compression)");
   }
   if (!(p.max_length - p.toe_radius - p.foot_length < p.upper_length)) {
-    return prefix + ".upper_length = " + number(p.upper_length) +
-           " m: must exceed max_length - toe_radius - foot_length (the foot would leave the upper leg)";
+    return Status::error(prefix + ".upper_length = " + number(p.upper_length) +
+                         " m: must exceed max_length - toe_radius - foot_length (the foot would leave the upper leg)");
   }
   if (p.position.z() - p.hip_offset - p.rest_length < 0.0) {
-    return prefix + ".position.z = " + number(p.position.z()) +
-           " m: the foot would start below the ground (needs >= " + number(p.hip_offset + p.rest_length) + " m)";
+    return Status::error(prefix + ".position.z = " + number(p.position.z()) +
+                         " m: the foot would start below the ground (needs >= " + number(p.hip_offset + p.rest_length) +
+                         " m)");
   }
   for (size_t i = 1; i < p.script.size(); ++i) {
     if (p.script[i].t < p.script[i - 1].t) {
-      return prefix + ".script." + std::to_string(i) + ".t = " + number(p.script[i].t) +
-             " s: keys must be in time order (the previous key is at " + number(p.script[i - 1].t) + " s)";
+      return Status::error(prefix + ".script." + std::to_string(i) + ".t = " + number(p.script[i].t) +
+                           " s: keys must be in time order (the previous key is at " + number(p.script[i - 1].t) +
+                           " s)");
     }
   }
-  return "";
+  return {};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -165,8 +169,8 @@ std::shared_ptr<Hopper> Hopper::add(World& world, const HopperParams& params, st
 Hopper::Hopper(Key, World& world, const HopperParams& params, std::shared_ptr<const Terrain> terrain)
     : params_(params) {
   mem_.command = params.command;
-  if (std::string e = validate(params); !e.empty()) {
-    world.fail(e);
+  if (Status s = validate(params); !s.ok()) {
+    world.fail(s.message());
     return;
   }
   const HopperParams& p = params_;
@@ -235,11 +239,11 @@ void Hopper::restoreState(const std::any& s) {
   params_.command = mem_.command;
 }
 
-std::string Hopper::setCommand(const HopperCommand& command) {
-  if (std::string e = checkRanges(command, "hopper.command"); !e.empty()) return e;
+Status Hopper::setCommand(const HopperCommand& command) {
+  if (Status s = checkRanges(command, "hopper.command"); !s.ok()) return s;
   params_.command = command;
   mem_.command = command;
-  return "";
+  return {};
 }
 
 HopperCommand Hopper::commandAt(double t) const {

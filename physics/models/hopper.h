@@ -25,6 +25,7 @@
 #include "physics/controller.h"
 #include "physics/models/hopper_foot.h"
 #include "physics/models/hopper_params.h"
+#include "physics/status.h"
 #include "physics/world.h"
 
 namespace ponyhop {
@@ -65,8 +66,8 @@ LegState legState(const HopperModel& m, const std::vector<RigidBody>& bodies);
 // bodies' accumulators. Uses only the bodies' current state, t and the setpoints.
 void computeHopperForces(const HopperModel& m, const HopperSetpoints& s, double t, std::vector<RigidBody>& bodies);
 
-// Physical nonsense in the parameters: "" or a message naming the field.
-std::string validate(const HopperParams& p, const std::string& prefix = "hopper");
+// Physical nonsense in the parameters: ok or a message naming the field.
+Status validate(const HopperParams& p, const std::string& prefix = "hopper");
 
 // The drawable pose of the hopper.
 struct HopperShape {
@@ -110,9 +111,9 @@ class Hopper final : public Controller {
   // The command in force at time t (the script's last key with key.t <= t, else params.command).
   HopperCommand commandAt(double t) const;
   // Replaces params().command while it runs (the panel's velocity pad, height and heading): the
-  // state machine keeps its phase, the next think() reads it. Returns "" or the range error
+  // state machine keeps its phase, the next think() reads it. Returns ok or the range error
   // ("hopper.command.height = 9: must be ..."), leaving the command unchanged.
-  std::string setCommand(const HopperCommand& command);
+  Status setCommand(const HopperCommand& command);
   bool inContact() const { return contact_->inContact(); }
   int hops() const { return mem_.hops; }              // liftoffs so far
   double lastApex() const { return mem_.last_apex; }  // m, body height at the last apex

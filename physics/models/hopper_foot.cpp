@@ -133,7 +133,7 @@ void GroundContact::update(World& world) {
 
 Eigen::VectorXd GroundContact::projectVelocities(World& world, bool& ok) {
   Eigen::VectorXd y;
-  ok = world.projectVelocitiesOntoJoints(&y).empty();
+  ok = world.projectVelocitiesOntoJoints(&y).ok();
   if (!ok || y.size() == 0) return {};
   return y.segment(rowOffset(world), world.joints()[joint_]->dimension());
 }
@@ -152,7 +152,7 @@ GroundContact::Impact GroundContact::impact(World& world, bool& ok) {
   std::vector<RigidBody>& bodies = world.bodies();
   const ContactMode mode = state_->mode;
   state_->mode = ContactMode::Off;  // the joints alone
-  ok = world.projectVelocitiesOntoJoints().empty();
+  ok = world.projectVelocitiesOntoJoints().ok();
   const std::vector<RigidBody> v0 = bodies;
   const RigidBody& f0 = v0[foot_];
   const Eigen::Vector3d& n = state_->normal;
@@ -167,7 +167,7 @@ GroundContact::Impact GroundContact::impact(World& world, bool& ok) {
     RigidBody& f = bodies[foot_];
     f.v += dirs[k] / f.mass;
     f.w += f.worldInverseInertia() * (p - f.x).cross(dirs[k]);
-    ok = world.projectVelocitiesOntoJoints().empty();
+    ok = world.projectVelocitiesOntoJoints().ok();
     w[k] = bodies;
     for (int i = 0; i < 3; ++i) d(i, k) = dirs[i].dot(bodies[foot_].velocityAt(p)) - u0(i);
     for (size_t i = 0; i < bodies.size(); ++i) {
@@ -222,8 +222,8 @@ void GroundContact::touchdown(World& world, const Terrain::Surface& ground) {
 
   // No penetration is left: positions onto C = 0 (the landing point lifted to the surface).
   const ProjectionResult p = world.projectPositionsOntoJoints();
-  if (!p.problem.empty() || !(p.error < 1e-6)) {
-    world.fail("ground contact: touchdown projection failed (" + p.problem + ")");
+  if (!p.status.ok() || !(p.error < 1e-6)) {
+    world.fail("ground contact: touchdown projection failed (" + p.status.message() + ")");
     return;
   }
   bool ok = true;

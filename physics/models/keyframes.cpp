@@ -212,45 +212,35 @@ Eigen::Vector3d angularAcceleration(const QuatJet& j) { return 2.0 * (j.ddq * j.
 
 // ---------------------------------------------------------------------------------------------
 
-namespace {
-
-std::optional<KeyframeTrack> fail(std::string* error, const std::string& msg) {
-  if (error) *error = msg;
-  return std::nullopt;
-}
-
-}  // namespace
-
-std::optional<KeyframeTrack> KeyframeTrack::fromKeyframes(const std::vector<Keyframe>& keys,
-                                                          const TrackOptions& options, std::string* error) {
+Status KeyframeTrack::fromKeyframes(const std::vector<Keyframe>& keys, const TrackOptions& options,
+                                    KeyframeTrack& track) {
   std::vector<PoseSample> samples(keys.size());
   for (size_t i = 0; i < keys.size(); ++i) {
     const std::string key = "key " + std::to_string(i);
-    if (!finite3(keys[i].rotation)) return fail(error, key + ": field \"rotation\" is not a finite number");
+    if (!finite3(keys[i].rotation)) return Status::error(key + ": field \"rotation\" is not a finite number");
     samples[i] = {keys[i].t, keys[i].position, eulerDegToQuat(keys[i].rotation)};
   }
-  return fromSamples(samples, options, error);
+  return fromSamples(samples, options, track);
 }
 
-std::optional<KeyframeTrack> KeyframeTrack::fromSamples(const std::vector<PoseSample>& in, const TrackOptions& opt,
-                                                        std::string* error) {
+Status KeyframeTrack::fromSamples(const std::vector<PoseSample>& in, const TrackOptions& opt, KeyframeTrack& track) {
   // ---- validate
   if (!std::isfinite(opt.speed) || opt.speed <= 0.0)
-    return fail(error, "field \"speed\" = " + fmt("%g", opt.speed) + " must be a finite number > 0");
+    return Status::error("field \"speed\" = " + fmt("%g", opt.speed) + " must be a finite number > 0");
   if (!std::isfinite(opt.amplitude) || opt.amplitude < 0.0)
-    return fail(error, "field \"amplitude\" = " + fmt("%g", opt.amplitude) + " must be a finite number >= 0");
-  if (in.empty()) return fail(error, "field \"keys\": at least one key is needed");
+    return Status::error("field \"amplitude\" = " + fmt("%g", opt.amplitude) + " must be a finite number >= 0");
+  if (in.empty()) return Status::error("field \"keys\": at least one key is needed");
   for (size_t i = 0; i < in.size(); ++i) {
     const std::string key = "key " + std::to_string(i);
-    if (!std::isfinite(in[i].t)) return fail(error, key + ": field \"t\" is not a finite number");
-    if (!finite3(in[i].position)) return fail(error, key + ": field \"position\" is not a finite number");
+    if (!std::isfinite(in[i].t)) return Status::error(key + ": field \"t\" is not a finite number");
+    if (!finite3(in[i].position)) return Status::error(key + ": field \"position\" is not a finite number");
     const double qn = in[i].rotation.coeffs().norm();
     if (!std::isfinite(qn) || qn < 1e-12)
-      return fail(error, key + ": field \"rotation\" is not a finite, non-zero quaternion");
+      return Status::error(key + ": field \"rotation\" is not a finite, non-zero quaternion");
     if (i > 0 && !(in[i].t > in[i - 1].t))
-      return fail(error, key + ": field \"t\" = " + fmt("%g", in[i].t) + " s must be greater than key " +
-                             std::to_string(i - 1) + "'s t = " + fmt("%g", in[i - 1].t) +
-                             " s (times must be strictly increasing)");
+      return Status::error(key + ": field \"t\" = " + fmt("%g", in[i].t) + " s must be greater than key " +
+                           std::to_string(i - 1) + "'s t = " + fmt("%g", in[i - 1].t) +
+                           " s (times must be strictly increasing)");
   }
 
   auto d = std::make_shared<Data>();
@@ -284,10 +274,10 @@ std::optional<KeyframeTrack> KeyframeTrack::fromSamples(const std::vector<PoseSa
     // in this chart (exp(r + 2 pi k n) != exp(r) for r not along n).
     if (r.back().norm() > 1e-6) {
       const Eigen::Vector3d axis = r.back().normalized();
-      return fail(error, "loop mode: the keys turn a net " + fmt("%.0f", r.back().norm() * 180.0 / kPi) +
-                             " deg about (" + fmt("%.3g", axis.x()) + ", " + fmt("%.3g", axis.y()) + ", " +
-                             fmt("%.3g", axis.z()) + ") from key 0 back to key 0; a looping clip must return to" +
-                             " its first orientation without a full turn (use mode clamp, or key the turn back)");
+      return Status::error("loop mode: the keys turn a net " + fmt("%.0f", r.back().norm() * 180.0 / kPi) +
+                           " deg about (" + fmt("%.3g", axis.x()) + ", " + fmt("%.3g", axis.y()) + ", " +
+                           fmt("%.3g", axis.z()) + ") from key 0 back to key 0; a looping clip must return to" +
+                           " its first orientation without a full turn (use mode clamp, or key the turn back)");
     }
     p.back() = p.front();
     r.back().setZero();
@@ -305,9 +295,8 @@ std::optional<KeyframeTrack> KeyframeTrack::fromSamples(const std::vector<PoseSa
     d->Y.resize(1, 6);
     d->Y << p[0].transpose(), r[0].transpose();
     d->M = Rows6::Zero(1, 6);
-    KeyframeTrack track;
     track.d_ = d;
-    return track;
+    return {};
   }
 
   // ---- knots and free knots
@@ -345,10 +334,9 @@ std::optional<KeyframeTrack> KeyframeTrack::fromSamples(const std::vector<PoseSa
     }
   }
   if (!solveSpline(s, d->Y, freeKnots, opt.mode == LoopMode::Loop, d->M))
-    return fail(error, "field \"keys\": the spline through the keys could not be solved (key times too close?)");
-  KeyframeTrack track;
+    return Status::error("field \"keys\": the spline through the keys could not be solved (key times too close?)");
   track.d_ = d;
-  return track;
+  return {};
 }
 
 double KeyframeTrack::startTime() const { return d_->tFirst; }
@@ -407,11 +395,11 @@ KinematicMotion makeMotion(const KeyframeTrack& track) {
   return [track](double t) { return track.evaluate(t); };
 }
 
-std::optional<KinematicMotion> makeMotion(const std::vector<Keyframe>& keys, const TrackOptions& options,
-                                          std::string* error) {
-  std::optional<KeyframeTrack> track = KeyframeTrack::fromKeyframes(keys, options, error);
-  if (!track) return std::nullopt;
-  return makeMotion(*track);
+Status makeMotion(const std::vector<Keyframe>& keys, const TrackOptions& options, KinematicMotion& motion) {
+  KeyframeTrack track;
+  if (Status s = KeyframeTrack::fromKeyframes(keys, options, track); !s.ok()) return s;
+  motion = makeMotion(track);
+  return {};
 }
 
 }  // namespace ponyhop

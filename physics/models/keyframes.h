@@ -20,12 +20,12 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <memory>
-#include <optional>
 #include <string>
 #include <vector>
 
 #include "physics/kinematic.h"
 #include "physics/models/keyframe_params.h"
+#include "physics/status.h"
 
 namespace ponyhop {
 
@@ -62,13 +62,11 @@ Eigen::Vector3d angularAcceleration(const QuatJet& j);
 
 class KeyframeTrack {
  public:
-  // From keys of the scene file / clips (rotation: Euler degrees). On bad input returns nullopt
-  // and writes an error that names the key index and the field into *error (when not null).
-  static std::optional<KeyframeTrack> fromKeyframes(const std::vector<Keyframe>& keys, const TrackOptions& options,
-                                                    std::string* error = nullptr);
+  // From keys of the scene file / clips (rotation: Euler degrees) into `track`. On bad input
+  // returns an error that names the key index and the field, and leaves `track` as it was.
+  static Status fromKeyframes(const std::vector<Keyframe>& keys, const TrackOptions& options, KeyframeTrack& track);
   // From pose samples (quaternions; need not be normalized, must not be zero).
-  static std::optional<KeyframeTrack> fromSamples(const std::vector<PoseSample>& samples, const TrackOptions& options,
-                                                  std::string* error = nullptr);
+  static Status fromSamples(const std::vector<PoseSample>& samples, const TrackOptions& options, KeyframeTrack& track);
 
   // Pose, velocity, acceleration, orientation, angular velocity and angular acceleration (world
   // frame) at time t (s), all analytic. Clip time is speed * t.
@@ -88,8 +86,7 @@ class KeyframeTrack {
 
 // A KinematicMotion (std::function) that plays the track.
 KinematicMotion makeMotion(const KeyframeTrack& track);
-// Shortcut for keys + options; nullopt and *error on bad input.
-std::optional<KinematicMotion> makeMotion(const std::vector<Keyframe>& keys, const TrackOptions& options,
-                                          std::string* error = nullptr);
+// Shortcut for keys + options into `motion`; the error of fromKeyframes on bad input.
+Status makeMotion(const std::vector<Keyframe>& keys, const TrackOptions& options, KinematicMotion& motion);
 
 }  // namespace ponyhop

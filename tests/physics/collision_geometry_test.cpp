@@ -162,8 +162,8 @@ TEST(MeshSdf, SphereMeshFieldMatchesTheTrianglesNearTheSurface) {
   std::vector<uint32_t> idx;
   icosphere(0.1, 4, v, idx);  // 5120 triangles
   SignedDistanceGrid g;
-  std::string err;
-  ASSERT_TRUE(g.build(v, idx, 0.004, 0.02, &err)) << err;
+  const Status built = g.build(v, idx, 0.004, 0.02);
+  ASSERT_TRUE(built.ok()) << built.message();
   std::mt19937 rng(7);
   std::normal_distribution<double> n(0.0, 1.0);
   std::uniform_real_distribution<double> r(0.08, 0.12);
@@ -189,8 +189,8 @@ TEST(MeshSdf, BoxMeshFieldIsExactOnFacesAndBoundedAtEdges) {
   const std::vector<uint32_t> idx = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
                                      1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7};
   SignedDistanceGrid g;
-  std::string err;
-  ASSERT_TRUE(g.build(v, idx, 0.005, 0.02, &err)) << err;
+  const Status built = g.build(v, idx, 0.005, 0.02);
+  ASSERT_TRUE(built.ok()) << built.message();
   const Shape exact = Shape::box(Vector3d(0.1, 0.05, 0.08));
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-0.13, 0.13);
@@ -209,8 +209,9 @@ TEST(MeshSdf, BoxMeshFieldIsExactOnFacesAndBoundedAtEdges) {
   }
   EXPECT_LT(worst_face, 1e-6);    // float storage
   EXPECT_LT(worst, 0.3 * 0.005);  // at edges and corners: a fraction of a cell
-  EXPECT_FALSE(g.build(v, {}, 0.005, 0.0, &err));
-  EXPECT_NE(err.find("no triangles"), std::string::npos);
+  const Status empty = g.build(v, {}, 0.005, 0.0);
+  EXPECT_FALSE(empty.ok());
+  EXPECT_NE(empty.message().find("no triangles"), std::string::npos);
 }
 
 TEST(MeshSdf, CapsuleAgainstTheGridFindsTheDeepestPointAlongTheLink) {
@@ -218,8 +219,8 @@ TEST(MeshSdf, CapsuleAgainstTheGridFindsTheDeepestPointAlongTheLink) {
   std::vector<uint32_t> idx;
   icosphere(0.1, 4, v, idx);
   auto g = std::make_shared<SignedDistanceGrid>();
-  std::string err;
-  ASSERT_TRUE(g->build(v, idx, 0.004, 0.03, &err)) << err;
+  const Status built = g->build(v, idx, 0.004, 0.03);
+  ASSERT_TRUE(built.ok()) << built.message();
   const Shape head = Shape::grid(g);
   const Shape head_exact = Shape::sphere(0.1);
   // A horizontal capsule across the top of the sphere, tapered.

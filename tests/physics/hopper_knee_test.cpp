@@ -134,18 +134,19 @@ TEST(HopperKnee, HoldsWhileTumblingWithoutStabilization) {
 
 TEST(HopperKnee, PhysicalNonsenseIsRefused) {
   HopperParams p;
-  EXPECT_EQ(validate(p), "");
+  EXPECT_TRUE(validate(p).ok()) << validate(p).message();
   p.min_length = 0.9;
-  EXPECT_NE(validate(p).find("min_length < rest_length < max_length"), std::string::npos) << validate(p);
+  EXPECT_NE(validate(p).message().find("min_length < rest_length < max_length"), std::string::npos)
+      << validate(p).message();
   p = HopperParams{};
   p.body_mass = 0.0;
-  EXPECT_NE(validate(p).find("hopper.body_mass"), std::string::npos) << validate(p);
+  EXPECT_NE(validate(p).message().find("hopper.body_mass"), std::string::npos) << validate(p).message();
   p = HopperParams{};
   p.position.z() = 0.5;
-  EXPECT_NE(validate(p).find("below the ground"), std::string::npos) << validate(p);
+  EXPECT_NE(validate(p).message().find("below the ground"), std::string::npos) << validate(p).message();
   p = HopperParams{};
   p.script = {HopperCommandKey{.t = 5.0}, HopperCommandKey{.t = 2.0}};
-  EXPECT_NE(validate(p).find("time order"), std::string::npos) << validate(p);
+  EXPECT_NE(validate(p).message().find("time order"), std::string::npos) << validate(p).message();
 
   PhysicsParams pp;
   World world(pp);

@@ -129,12 +129,12 @@ TEST(HopperRun, SetCommandWhileRunning) {
   ASSERT_GT(hops, 0);
   HopperCommand bad = run.hopper->params().command;
   bad.height = 99.0;
-  const std::string e = run.hopper->setCommand(bad);
-  EXPECT_NE(e.find("hopper.command.height"), std::string::npos) << e;
+  const Status e = run.hopper->setCommand(bad);
+  EXPECT_NE(e.message().find("hopper.command.height"), std::string::npos) << e.message();
   EXPECT_DOUBLE_EQ(run.hopper->params().command.height, HopperParams{}.command.height);
   HopperCommand go = run.hopper->params().command;
   go.vx = 0.8;
-  EXPECT_EQ(run.hopper->setCommand(go), "");
+  EXPECT_TRUE(run.hopper->setCommand(go).ok());
   EXPECT_EQ(run.hopper->hops(), hops);  // nothing was rebuilt
   const Eigen::Vector2d v = run.meanVelocity(10.0, 14.0);
   EXPECT_NEAR(v.x(), 0.8, 0.08);

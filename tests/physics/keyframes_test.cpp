@@ -39,11 +39,11 @@ std::vector<Keyframe> busyKeys() {
 }
 
 KeyframeTrack mustBuild(const std::vector<Keyframe>& keys, TrackOptions opt) {
-  std::string err;
-  auto tr = KeyframeTrack::fromKeyframes(keys, opt, &err);
-  EXPECT_TRUE(tr.has_value()) << err;
-  if (!tr) std::abort();
-  return *tr;
+  KeyframeTrack tr;
+  const Status s = KeyframeTrack::fromKeyframes(keys, opt, tr);
+  EXPECT_TRUE(s.ok()) << s.message();
+  if (!s.ok()) std::abort();
+  return tr;
 }
 
 // Times at and around every key and in between, plus random ones, spanning [a, b].
@@ -277,10 +277,10 @@ TEST(Keyframes, SpinOf720DegreesUnwrapsWithoutFlips) {
   std::vector<PoseSample> samples;
   for (int i = 0; i <= 6; ++i)
     samples.push_back({0.3 * i, Vector3d::Zero(), Quaterniond(Eigen::AngleAxisd(i * 2 * kPi / 3, axis))});
-  std::string err;
-  const auto tr = KeyframeTrack::fromSamples(samples, {LoopMode::Clamp, 1.0, 1.0}, &err);
-  ASSERT_TRUE(tr) << err;
-  for (int i = 1; i < 180; ++i) EXPECT_GT(tr->evaluate(1.8 * i / 180).w.dot(axis), 0.0) << i;
+  KeyframeTrack tr;
+  const Status s = KeyframeTrack::fromSamples(samples, {LoopMode::Clamp, 1.0, 1.0}, tr);
+  ASSERT_TRUE(s.ok()) << s.message();
+  for (int i = 1; i < 180; ++i) EXPECT_GT(tr.evaluate(1.8 * i / 180).w.dot(axis), 0.0) << i;
 }
 
 TEST(Keyframes, SpeedScalesTime) {
@@ -299,9 +299,11 @@ TEST(Keyframes, SpeedScalesTime) {
 
 TEST(Keyframes, BadInputsAreRejectedWithTheKeyAndField) {
   auto expectError = [](const std::vector<Keyframe>& keys, TrackOptions opt, std::vector<std::string> words) {
-    std::string err;
-    EXPECT_FALSE(KeyframeTrack::fromKeyframes(keys, opt, &err).has_value());
-    for (const auto& w : words) EXPECT_NE(err.find(w), std::string::npos) << "'" << w << "' not in: " << err;
+    KeyframeTrack tr;
+    const Status s = KeyframeTrack::fromKeyframes(keys, opt, tr);
+    EXPECT_FALSE(s.ok());
+    for (const auto& w : words)
+      EXPECT_NE(s.message().find(w), std::string::npos) << "'" << w << "' not in: " << s.message();
   };
   const TrackOptions ok{LoopMode::Clamp, 1.0, 1.0};
   expectError({}, ok, {"at least one key"});
@@ -329,29 +331,31 @@ TEST(Keyframes, BadInputsAreRejectedWithTheKeyAndField) {
                {3, {0, 0, 0}, {0, 0, 360}}},
               {LoopMode::Loop, 1.0, 1.0}, {"loop", "net 360 deg"});
   // Quaternion samples: zero quaternion.
-  std::string err;
+  KeyframeTrack tr;
   std::vector<PoseSample> s{{0, Vector3d::Zero(), Quaterniond::Identity()},
                             {1, Vector3d::Zero(), Quaterniond(0, 0, 0, 0)}};
-  EXPECT_FALSE(KeyframeTrack::fromSamples(s, ok, &err));
-  EXPECT_NE(err.find("key 1"), std::string::npos) << err;
+  const Status zero = KeyframeTrack::fromSamples(s, ok, tr);
+  EXPECT_FALSE(zero.ok());
+  EXPECT_NE(zero.message().find("key 1"), std::string::npos) << zero.message();
   // The same spin keys are fine in clamp mode.
   EXPECT_TRUE(KeyframeTrack::fromKeyframes({{0, {0, 0, 0}, {0, 0, 0}},
                                             {1, {0, 0, 0}, {0, 0, 120}},
                                             {2, {0, 0, 0}, {0, 0, 240}},
                                             {3, {0, 0, 0}, {0, 0, 360}}},
-                                           ok));
+                                           ok, tr)
+                  .ok());
 }
 
 TEST(Keyframes, MakeMotionPlaysTheTrack) {
-  std::string err;
   AnimationParams p;
   p.keys = busyKeys();
   p.speed = 1.5;
-  auto motion = makeMotion(p.keys, trackOptions(p), &err);
-  ASSERT_TRUE(motion) << err;
+  KinematicMotion motion;
+  const Status s = makeMotion(p.keys, trackOptions(p), motion);
+  ASSERT_TRUE(s.ok()) << s.message();
   const KeyframeTrack tr = mustBuild(p.keys, trackOptions(p));
-  expectNear3((*motion)(0.9).x, tr.evaluate(0.9).x, 1e-15, "x", 0.9);
-  EXPECT_FALSE(makeMotion({}, trackOptions(p), &err));
+  expectNear3(motion(0.9).x, tr.evaluate(0.9).x, 1e-15, "x", 0.9);
+  EXPECT_FALSE(makeMotion({}, trackOptions(p), motion).ok());
 }
 
 // The shipped clips: valid, looping seamlessly (first key = last key), lively but plausible
@@ -376,12 +380,12 @@ TEST(Keyframes, ShippedClipsAreValidAndPlausible) {
     EXPECT_EQ(p.mode, LoopMode::Loop) << path;
     EXPECT_LE((p.keys.front().position - p.keys.back().position).norm(), 1e-12) << path << ": first != last key";
     EXPECT_LE((p.keys.front().rotation - p.keys.back().rotation).norm(), 1e-12) << path << ": first != last key";
-    std::string err;
-    const auto tr = KeyframeTrack::fromKeyframes(p.keys, trackOptions(p), &err);
-    ASSERT_TRUE(tr) << path << ": " << err;
+    KeyframeTrack tr;
+    const Status built = KeyframeTrack::fromKeyframes(p.keys, trackOptions(p), tr);
+    ASSERT_TRUE(built.ok()) << path << ": " << built.message();
     double vmax = 0, amax = 0, wmax = 0, alphamax = 0, zmin = 1e9, zmax = -1e9;
     for (int i = 0; i <= 4000; ++i) {
-      const KinematicState s = tr->evaluate(tr->period() * i / 4000);
+      const KinematicState s = tr.evaluate(tr.period() * i / 4000);
       vmax = std::max(vmax, s.v.norm());
       amax = std::max(amax, s.a.norm());
       wmax = std::max(wmax, s.w.norm());
@@ -397,8 +401,8 @@ TEST(Keyframes, ShippedClipsAreValidAndPlausible) {
     EXPECT_GT(zmin, 0.15) << path;        // the head stays around its rest height 0.35 m
     EXPECT_LT(zmax, 0.8) << path;
     if (name == "showcase") {
-      EXPECT_GE(tr->period(), 8.0);
-      EXPECT_LE(tr->period(), 14.0);
+      EXPECT_GE(tr.period(), 8.0);
+      EXPECT_LE(tr.period(), 14.0);
     }
   }
 }

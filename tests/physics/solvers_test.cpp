@@ -48,8 +48,8 @@ double lambdaMismatch(const World& world, int* loop_rows = nullptr) {
   DenseSolver dense;
   TreeSolver tree;
   std::vector<RigidBody> b1 = bodies, b2 = bodies;
-  EXPECT_EQ(dense.solveJointForces(b1, system, gains), "");
-  EXPECT_EQ(tree.solveJointForces(b2, system, gains), "");
+  EXPECT_TRUE(dense.solveJointForces(b1, system, gains).ok());
+  EXPECT_TRUE(tree.solveJointForces(b2, system, gains).ok());
   if (loop_rows) *loop_rows = tree.loopRows();
   EXPECT_GT(dense.lambda().norm(), 0.0);
   double accel = 0.0;
@@ -235,7 +235,7 @@ TEST(PhysicsSolver, TreeSolverScalesToLongChains) {
     system.evaluate(bodies, cw.world.joints());
     TreeSolver tree;
     const auto t0 = std::chrono::steady_clock::now();
-    ASSERT_EQ(tree.solveJointForces(bodies, system, {}), "");
+    ASSERT_TRUE(tree.solveJointForces(bodies, system, {}).ok());
     const auto t1 = std::chrono::steady_clock::now();
     EXPECT_EQ(tree.nodeCount(), 2 * links);
     EXPECT_EQ(tree.loopRows(), 0);

@@ -18,11 +18,15 @@ namespace {
   if (text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
   return ::testing::AssertionFailure() << "\"" << part << "\" not in \"" << text << "\"";
 }
+::testing::AssertionResult Contains(const Status& status, const std::string& part) {
+  if (status.ok()) return ::testing::AssertionFailure() << "ok, expected an error with \"" << part << "\"";
+  return Contains(status.message(), part);
+}
 
 TEST(PhysicsParams, DefaultsAreValid) {
-  EXPECT_EQ(validate(PhysicsParams{}), "");
-  EXPECT_EQ(validate(ChainParams{}), "");
-  EXPECT_EQ(validate(AnchorParams{}), "");
+  EXPECT_TRUE(validate(PhysicsParams{}).ok());
+  EXPECT_TRUE(validate(ChainParams{}).ok());
+  EXPECT_TRUE(validate(AnchorParams{}).ok());
 }
 
 TEST(PhysicsParams, BadValuesNameFieldAndRange) {
