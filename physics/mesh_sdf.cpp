@@ -10,11 +10,9 @@
 
 namespace ponyhop {
 
-namespace {
-
 // Where the line {x_u = pu, x_v = pv} (along axis a) crosses the triangle, or false.
-bool crossAlong(int a, const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double pu,
-                double pv, double& at) {
+bool lineCrossesTriangle(int a, const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
+                         double pu, double pv, double& at) {
   const int u = (a + 1) % 3, v = (a + 2) % 3;
   const double e1u = p1(u) - p0(u), e1v = p1(v) - p0(v), e2u = p2(u) - p0(u), e2v = p2(v) - p0(v);
   const double d = e1u * e2v - e1v * e2u;
@@ -26,8 +24,6 @@ bool crossAlong(int a, const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, con
   at = p0(a) + w1 * (p1(a) - p0(a)) + w2 * (p2(a) - p0(a));
   return true;
 }
-
-}  // namespace
 
 Status SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices,
                                  double cell, double padding, long max_nodes, const Eigen::AlignedBox3d* region) {
@@ -133,7 +129,8 @@ Status SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, c
       for (int iv = v0; iv <= v1; ++iv)
         for (int iu = u0; iu <= u1; ++iu) {
           double at = 0.0;
-          if (crossAlong(a, vert(t, 0), vert(t, 1), vert(t, 2), origin_(u) + cell_ * iu, origin_(v) + cell_ * iv, at))
+          if (lineCrossesTriangle(a, vert(t, 0), vert(t, 1), vert(t, 2), origin_(u) + cell_ * iu,
+                                  origin_(v) + cell_ * iv, at))
             lines[static_cast<size_t>(iv) * dims_(u) + iu].push_back(at);
         }
     }
@@ -220,7 +217,7 @@ double signedDistanceToTriangles(const std::vector<Eigen::Vector3d>& vertices, c
     best = std::min(best, (p - closestPointOnTriangle(p, a, b, c)).norm());
     for (int ax = 0; ax < 3; ++ax) {
       double at = 0.0;
-      if (crossAlong(ax, a, b, c, p((ax + 1) % 3), p((ax + 2) % 3), at) && at > p(ax)) ++crossings[ax];
+      if (lineCrossesTriangle(ax, a, b, c, p((ax + 1) % 3), p((ax + 2) % 3), at) && at > p(ax)) ++crossings[ax];
     }
   }
   const int odd = (crossings[0] % 2) + (crossings[1] % 2) + (crossings[2] % 2);

@@ -62,6 +62,11 @@ class SignedDistanceGrid {
   std::vector<float> values_;
 };
 
+// Where the line {x_u = pu, x_v = pv} along axis a (u = a + 1, v = a + 2, mod 3) crosses the
+// triangle p0 p1 p2: true and the crossing's coordinate along a in `at`, or false.
+bool lineCrossesTriangle(int a, const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
+                         double pu, double pv, double& at);
+
 // Exact signed distance from p to a closed triangle mesh by brute force over every triangle, the
 // sign by ray parity (majority of the +x, +y, +z rays). For tests and measurements: O(triangles).
 double signedDistanceToTriangles(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices,

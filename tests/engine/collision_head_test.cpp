@@ -10,13 +10,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <unordered_map>
 
 #include "engine/asset_loader.h"
 #include "engine/mesh.h"
 #include "physics/mesh_sdf.h"
 #include "physics/models/head_collisions.h"
 #include "physics/shapes.h"
+#include "physics/triangle_distance.h"
 #include "sim/scene_io.h"
 #include "sim/sim.h"
 
@@ -31,52 +31,6 @@ void writeObj(const MeshData& m, const std::string& path) {
   for (size_t i = 0; i < m.indices.size(); i += 3)
     f << "f " << m.indices[i] + 1 << ' ' << m.indices[i + 1] + 1 << ' ' << m.indices[i + 2] + 1 << '\n';
 }
-
-// Exact signed distance to the triangles: the distance over the triangles in nearby buckets
-// (a uniform grid), the sign by ray parity (majority of +x, +y, +z) over all triangles.
-class TriangleDistance {
- public:
-  TriangleDistance(std::vector<Vector3d> v, std::vector<uint32_t> idx, double bucket)
-      : v_(std::move(v)), idx_(std::move(idx)), bucket_(bucket) {
-    for (size_t t = 0; t < idx_.size() / 3; ++t) {
-      const Vector3d c = (v_[idx_[3 * t]] + v_[idx_[3 * t + 1]] + v_[idx_[3 * t + 2]]) / 3.0;
-      double reach = 0.0;
-      for (int k = 0; k < 3; ++k) reach = std::max(reach, (v_[idx_[3 * t + k]] - c).norm());
-      max_reach_ = std::max(max_reach_, reach);
-      buckets_[key(c)].push_back(static_cast<int>(t));
-    }
-  }
-  // Exact |distance| when it is below `within` (else a value >= within), with the parity sign.
-  double signedDistance(const Vector3d& p, double within) const {
-    const int span = static_cast<int>(std::ceil((within + max_reach_) / bucket_));
-    const Eigen::Vector3i c = cellOf(p);
-    double best = within;
-    for (int dz = -span; dz <= span; ++dz)
-      for (int dy = -span; dy <= span; ++dy)
-        for (int dx = -span; dx <= span; ++dx) {
-          const auto it = buckets_.find(key(Eigen::Vector3i(c + Eigen::Vector3i(dx, dy, dz))));
-          if (it == buckets_.end()) continue;
-          for (int t : it->second)
-            best = std::min(
-                best,
-                (p - closestPointOnTriangle(p, v_[idx_[3 * t]], v_[idx_[3 * t + 1]], v_[idx_[3 * t + 2]])).norm());
-        }
-    if (best >= within) return best;
-    return ponyhop::signedDistanceToTriangles(v_, idx_, p) < 0.0 ? -best : best;
-  }
-
- private:
-  Eigen::Vector3i cellOf(const Vector3d& p) const { return (p / bucket_).array().floor().cast<int>(); }
-  long long key(const Vector3d& p) const { return key(cellOf(p)); }
-  static long long key(const Eigen::Vector3i& c) {
-    return ((static_cast<long long>(c.x()) + 100000) * 200000 + (c.y() + 100000)) * 200000 + (c.z() + 100000);
-  }
-  std::vector<Vector3d> v_;
-  std::vector<uint32_t> idx_;
-  double bucket_;
-  double max_reach_ = 0.0;
-  std::unordered_map<long long, std::vector<int>> buckets_;
-};
 
 struct Result {
   double deepest = 0.0;  // m, deepest point of any link capsule (1..n-1) inside the mesh
@@ -104,9 +58,13 @@ Result play(const std::string& mesh_path, const std::string& clip, double durati
   const Eigen::Affine3d T = sim.head()->mesh_to_body;
   std::vector<Vector3d> v;
   for (const auto& p : mesh.positions) v.push_back(T * p.cast<double>());
-  TriangleDistance exact(v, mesh.indices, 0.01);
-  Result res;
   const Chain& chain = *sim.chain();
+  // The exact distance to the triangles is needed out to the thickest link's radius (5 mm more).
+  double reach = 0.0;
+  for (const CapsuleSegment& s : chain.segments(sim.world()))
+    reach = std::max({reach, s.radius_top + 0.005, s.radius_bottom + 0.005});
+  const TriangleDistance exact(v, mesh.indices, 0.01, reach);
+  Result res;
   const int frames = static_cast<int>(duration * 30.0);
   for (int f = 1; f <= frames && sim.ok(); ++f) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -121,7 +79,7 @@ Result play(const std::string& mesh_path, const std::string& clip, double durati
         const Vector3d p_world = segs[i].top + s * (segs[i].bottom - segs[i].top);
         const double r = segs[i].radius_top + s * (segs[i].radius_bottom - segs[i].radius_top);
         const Vector3d p = head.q.conjugate() * (p_world - head.x);  // head body frame
-        const double d = exact.signedDistance(p, r + 0.005);
+        const double d = exact.signedDistance(p);
         if (r - d > res.deepest) {
           res.deepest = r - d;
           res.frame = f;

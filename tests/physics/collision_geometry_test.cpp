@@ -1,15 +1,18 @@
 // Collision geometry against analytic answers: signed distances, gaps, normals and contact points
 // of every pair the scenes use (physics/shapes.h), and the mesh signed distance grid against the
-// exact distance of spheres and boxes (physics/mesh_sdf.h).
+// exact distance of spheres and boxes (physics/mesh_sdf.h), and the bucketed exact distance the
+// head tests measure with against the brute force over every triangle (physics/triangle_distance.h).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <memory>
 #include <numbers>
 #include <random>
+#include <tuple>
 
 #include "physics/mesh_sdf.h"
 #include "physics/shapes.h"
+#include "physics/triangle_distance.h"
 
 namespace ponyhop {
 namespace {
@@ -232,6 +235,45 @@ TEST(MeshSdf, CapsuleAgainstTheGridFindsTheDeepestPointAlongTheLink) {
     // The mesh lies inside the sphere by at most its faceting (~0.3 mm at this level).
     EXPECT_NEAR(c.gap, e.gap, 6e-4) << z;
     EXPECT_GT(c.normal.dot(e.normal), 0.99) << z;
+  }
+}
+
+// The bucketed query gives the brute force's answer: the same distance within its reach (the same
+// closest-point code over a subset that holds the nearest triangle), a value at least the reach
+// beyond it, and the same sign everywhere, inside and out, near and far. On a fine sphere (small
+// triangles in many buckets) and a box of 12 large triangles (each over thousands of buckets).
+TEST(MeshSdf, BucketedTriangleDistanceIsTheBruteForce) {
+  std::vector<Vector3d> sphere;
+  std::vector<uint32_t> sphere_idx;
+  icosphere(0.1, 3, sphere, sphere_idx);
+  const std::vector<Vector3d> box = {{-0.4, -0.5, -0.45}, {0.4, -0.5, -0.45}, {0.4, 0.5, -0.45}, {-0.4, 0.5, -0.45},
+                                     {-0.4, -0.5, 0.45},  {0.4, -0.5, 0.45},  {0.4, 0.5, 0.45},  {-0.4, 0.5, 0.45}};
+  const std::vector<uint32_t> box_idx = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
+                                         1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7};
+  const double reach = 0.015;
+  for (const auto& [v, idx, size] : {std::tuple{sphere, sphere_idx, 0.1}, std::tuple{box, box_idx, 0.5}}) {
+    const TriangleDistance fast(v, idx, 0.01, reach);
+    std::mt19937 rng(5);
+    std::normal_distribution<double> n(0.0, 1.0);
+    std::uniform_real_distribution<double> r(0.0, 1.3 * size);
+    int near = 0, inside = 0;
+    for (int i = 0; i < 3000; ++i) {
+      // Half the points within a few reaches of the surface, half anywhere in and around it.
+      const Vector3d dir = Vector3d(n(rng), n(rng), n(rng)).normalized();
+      const Vector3d p = i % 2 == 0 ? dir * (size + 0.03 * n(rng)) : dir * r(rng);
+      const double exact = signedDistanceToTriangles(v, idx, p);
+      const double d = fast.signedDistance(p);
+      ASSERT_EQ(d < 0.0, exact < 0.0) << p.transpose();
+      if (std::abs(exact) < reach) {
+        ASSERT_EQ(d, exact) << p.transpose();
+        ++near;
+      } else {
+        ASSERT_GE(std::abs(d), reach) << p.transpose();
+      }
+      inside += exact < 0.0;
+    }
+    EXPECT_GT(near, 200);  // the comparison covered the surface, inside and out
+    EXPECT_GT(inside, 300);
   }
 }
 
