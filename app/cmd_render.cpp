@@ -20,6 +20,7 @@
 #include "engine/frame_writer.h"
 #include "engine/render_session.h"
 #include "engine/video.h"
+#include "physics/stage_times.h"
 #include "sim/scene_io.h"
 
 namespace ponyhop {
@@ -27,8 +28,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 struct RenderArgs {
   SceneArgs scene;

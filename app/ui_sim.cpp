@@ -7,13 +7,13 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/asset_loader.h"
+#include "physics/stage_times.h"
 #include "sim/scene_io.h"
 
 namespace ponyhop {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 void flatten(const nlohmann::json& j, const std::string& prefix, std::map<std::string, nlohmann::json>& out) {
   if (j.is_object()) {

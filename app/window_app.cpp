@@ -21,12 +21,12 @@
 #include "engine/frame_writer.h"
 #include "engine/gl_context.h"
 #include "engine/renderer.h"
+#include "physics/stage_times.h"
 
 namespace ponyhop {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 void glfwError(int code, const char* what) { std::fprintf(stderr, "ponyhop run: GLFW error %d: %s\n", code, what); }
 

@@ -10,6 +10,14 @@
 #include <stdexcept>
 
 namespace ponyhop {
+
+std::string loadAverage() {
+  std::ifstream f("/proc/loadavg");
+  std::string a, b, c;
+  f >> a >> b >> c;
+  return a.empty() ? "unknown" : a + " " + b + " " + c;
+}
+
 namespace {
 
 std::ofstream open(const std::string& path) {

@@ -10,6 +10,9 @@
 
 namespace ponyhop {
 
+// The load average over 1, 5 and 15 min ("0.42 0.61 0.70"), printed beside every timing.
+std::string loadAverage();
+
 // One row of bench.csv.
 struct BenchRow {
   const BenchCase* bench_case = nullptr;

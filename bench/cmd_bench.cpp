@@ -201,13 +201,6 @@ PeerChain peerChainOf(const std::string& scene, const std::vector<Override>& ove
 
 std::string dtName(double dt) { return "1/" + fmt(1.0 / dt, "%.0f"); }
 
-std::string loadAverage() {
-  std::ifstream f("/proc/loadavg");
-  std::string a, b, c;
-  f >> a >> b >> c;
-  return a.empty() ? "unknown" : a + " " + b + " " + c;
-}
-
 // The bench's row for ponyhop's default: RATTLE on the tree solver with the 2 deg step rule.
 constexpr const char* kDefaultMethod = "tree/rattle/none+auto";
 

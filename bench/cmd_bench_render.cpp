@@ -23,6 +23,7 @@
 #include <thread>
 
 #include "app/commands.h"
+#include "bench/bench_report.h"
 #include "bench/commands.h"
 #include "engine/render_session.h"
 #include "sim/scene_io.h"
@@ -117,13 +118,6 @@ std::vector<Row> measureAll(const std::string& scene_path, const std::vector<std
   for (const Run& r : runs)
     rows.push_back({median(r.total), median(r.shadow), median(r.main), median(r.aa), median(r.readback), r.map});
   return rows;
-}
-
-std::string loadAverage() {
-  std::ifstream f("/proc/loadavg");
-  std::string a, b, c;
-  f >> a >> b >> c;
-  return a + " " + b + " " + c;
 }
 
 int runBenchRender(const BenchRenderArgs& args) {

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/color.h"
+
 namespace ponyhop {
 namespace {
 
@@ -51,11 +53,6 @@ double hash01(uint32_t a, uint32_t b) {
   h *= 0x846CA68Bu;
   h ^= h >> 16;
   return double(h >> 8) / double(1u << 24);
-}
-
-float srgbToLinear(double c) {
-  c = std::clamp(c, 0.0, 1.0);
-  return float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
 }
 
 void put(float out[3], const Eigen::Vector3d& v) {
@@ -163,7 +160,8 @@ HairMesh buildHair(const HairCurve& curve, const HairParams& hair, const Eigen::
   mesh.shading.shift = float(hair.highlight_shift);
   const size_t m = curve.points.size();
   if (m < 3) return mesh;
-  const Eigen::Vector3d albedo(srgbToLinear(color.x()), srgbToLinear(color.y()), srgbToLinear(color.z()));
+  const Eigen::Vector3d albedo(float(srgbToLinear(color.x())), float(srgbToLinear(color.y())),
+                               float(srgbToLinear(color.z())));
 
   // The core tube: the tail's body, a little darker (light reaches it through the strands).
   std::vector<Eigen::Vector3d> tp, tn;

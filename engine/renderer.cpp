@@ -18,6 +18,7 @@
 #include "engine/primitives.h"
 #include "engine/renderer_impl.h"
 #include "engine/shaders.h"
+#include "physics/stage_times.h"
 
 namespace ponyhop {
 
@@ -27,7 +28,6 @@ namespace ponyhop {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 }  // namespace
 

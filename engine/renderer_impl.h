@@ -20,17 +20,10 @@
 #include <cstdint>
 #include <vector>
 
+#include "engine/color.h"
 #include "engine/renderer.h"
 
 namespace ponyhop {
-
-inline float srgbToLinear(float c) {
-  c = std::clamp(c, 0.0f, 1.0f);
-  return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
-}
-inline Eigen::Vector3f srgbToLinear(const Eigen::Vector3f& c) {
-  return {srgbToLinear(c.x()), srgbToLinear(c.y()), srgbToLinear(c.z())};
-}
 
 struct GpuMesh {
   GLuint vao = 0, vbo = 0, ebo = 0;

@@ -15,11 +15,6 @@ namespace {
 constexpr double kActiveSlop = 1e-6;  // m: a contact this close after the stage persists
 constexpr int kPositionPasses = 4;    // push-out and joint re-projection rounds at most
 
-const RigidBody& bodyOf(const std::vector<RigidBody>& bodies, int i) {
-  return i == kWorldBody ? worldBody() : bodies[i];
-}
-bool dynamicBody(const std::vector<RigidBody>& bodies, int i) { return i != kWorldBody && bodies[i].isDynamic(); }
-
 Vector6d velocityOf(const RigidBody& b) {
   Vector6d v;
   v << b.v, b.w;

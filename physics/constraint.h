@@ -79,6 +79,13 @@ using Constraints = std::vector<std::unique_ptr<Constraint>>;
 
 // The fixed world frame as a (kinematic) body at rest at the origin.
 const RigidBody& worldBody();
+// Body i of `bodies`, or the world's body for kWorldBody; whether body i moves under forces.
+inline const RigidBody& bodyOf(const std::vector<RigidBody>& bodies, int i) {
+  return i == kWorldBody ? worldBody() : bodies[size_t(i)];
+}
+inline bool dynamicBody(const std::vector<RigidBody>& bodies, int i) {
+  return i != kWorldBody && bodies[size_t(i)].isDynamic();
+}
 
 // All constraints of a world evaluated at one state: stacked C, J'q' and the Jacobian blocks
 // (J itself is never stored: each row block touches at most two bodies).

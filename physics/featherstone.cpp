@@ -17,11 +17,6 @@ using Matrix6 = ArticulatedSystem::Matrix6;
 using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 6, 6>;
 using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, 6, 1>;
 
-const RigidBody& bodyOf(const std::vector<RigidBody>& bodies, int i) {
-  return i == kWorldBody ? worldBody() : bodies[i];
-}
-bool dynamicBody(const std::vector<RigidBody>& bodies, int i) { return i != kWorldBody && bodies[i].isDynamic(); }
-
 // X = [ I  -d~ ; 0  I ]: velocity of the point x_i from the twist at x_p (d = x_i - x_p);
 // X^T moves a force from x_i to x_p (same force, torque + d x f).
 Matrix6 shift(const Eigen::Vector3d& d) {

@@ -5,9 +5,6 @@
 namespace ponyhop {
 
 namespace {
-const RigidBody& bodyOf(const std::vector<RigidBody>& bodies, int i) {
-  return i == kWorldBody ? worldBody() : bodies[i];
-}
 void addTorque(std::vector<RigidBody>& bodies, int i, const Eigen::Vector3d& t) {
   if (i != kWorldBody) bodies[i].torque += t;
 }

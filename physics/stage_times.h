@@ -17,6 +17,11 @@
 
 namespace ponyhop {
 
+// Milliseconds of wall time since t0 (the frame and stage readouts of the panel, render and bench).
+inline double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
 enum class Stage { ExternalForces, Controller, JointForces, Integrate, Stabilize, Contact };
 
 struct StageTimes {

@@ -11,8 +11,6 @@ namespace ponyhop {
 
 namespace {
 
-bool dynamicBody(const std::vector<RigidBody>& bodies, int i) { return i != kWorldBody && bodies[i].isDynamic(); }
-
 int findRoot(std::vector<int>& up, int i) {
   while (up[i] != i) i = up[i] = up[up[i]];
   return i;
