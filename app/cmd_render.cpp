@@ -27,7 +27,6 @@ namespace ponyhop {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 struct RenderArgs {
   SceneArgs scene;

@@ -19,6 +19,7 @@
 #include "app/pose_sampling.h"
 #include "app/scene_args.h"
 #include "engine/asset_loader.h"
+#include "physics/stage_times.h"
 #include "sim/scene_io.h"
 #include "sim/sim.h"
 
@@ -112,7 +113,6 @@ int runSummary(const Scene& scene, double duration, const SimArgs& args) {
   next = 1;
   // Progress on long runs: a line every 5 s of wall time (a long chain on a slow solver shows
   // its pace instead of silence).
-  using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
   auto t_report = t_start + std::chrono::seconds(5);
   while (next < rows) {

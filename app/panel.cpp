@@ -21,6 +21,7 @@
 
 #include "app/chain_look.h"
 #include "app/presets.h"
+#include "physics/stage_times.h"
 #include "sim/data_dir.h"
 #include "sim/scene_io.h"
 
@@ -31,7 +32,6 @@ namespace {
 // [SECTION] Helpers: field defaults, JSON, sliders, the velocity pad
 
 using nlohmann::json;
-using Clock = std::chrono::steady_clock;
 
 // Sets every optional section, so that sceneToJson lists every field's default.
 struct EmplaceAll {

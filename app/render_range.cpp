@@ -9,6 +9,7 @@
 
 #include "engine/frame_writer.h"
 #include "engine/render_session.h"
+#include "physics/stage_times.h"
 #include "sim/input_error.h"
 
 namespace ponyhop {
@@ -34,7 +35,6 @@ FrameRange parseFrameRange(const std::string& text, int frames) {
 }
 
 int renderChunk(RenderSession& session, double fps, const std::string& out, FrameRange range, bool resume) {
-  using Clock = std::chrono::steady_clock;
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   if (ec) {

@@ -5,6 +5,8 @@
 #include <chrono>
 #include <stdexcept>
 
+#include "physics/stage_times.h"
+
 namespace ponyhop {
 
 RenderQuality viewQuality(const LiveSim& sim) {
@@ -61,7 +63,6 @@ HeadlessUi::~HeadlessUi() {
 }
 
 void HeadlessUi::frame(const UiInput& in_raw, std::vector<uint8_t>* rgba, std::optional<double> sim_time) {
-  using Clock = std::chrono::steady_clock;
   UiInput in = in_raw;
   in.width = float(layout_.width);
   in.height = float(layout_.height);

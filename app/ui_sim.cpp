@@ -13,8 +13,6 @@
 namespace ponyhop {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 void flatten(const nlohmann::json& j, const std::string& prefix, std::map<std::string, nlohmann::json>& out) {
   if (j.is_object()) {
     for (auto it = j.begin(); it != j.end(); ++it)

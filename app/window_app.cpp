@@ -26,8 +26,6 @@
 namespace ponyhop {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 void glfwError(int code, const char* what) { std::fprintf(stderr, "ponyhop run: GLFW error %d: %s\n", code, what); }
 
 // The panel keeps ~400 px; a narrow window gives it at most 60 % of its width.

@@ -8,11 +8,12 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "physics/stage_times.h"
+
 namespace ponyhop {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 

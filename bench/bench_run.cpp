@@ -5,12 +5,11 @@
 #include <cmath>
 #include <memory>
 
+#include "physics/stage_times.h"
 #include "sim/sim.h"
 
 namespace ponyhop {
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 constexpr double kDriftSample = 1.0 / 240.0;  // s, how often the long run samples energy, joints, speed
 

@@ -33,14 +33,13 @@
 #include "engine/asset_loader.h"
 #include "physics/models/head_collisions.h"
 #include "physics/physics_params.h"
+#include "physics/stage_times.h"
 #include "physics/validate.h"
 #include "sim/data_dir.h"
 #include "sim/sim.h"
 
 namespace ponyhop {
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 constexpr double kConverged = 1e-7;  // m: reference at h and h/2 agree within this
 

@@ -26,12 +26,11 @@
 #include "bench/bench_report.h"
 #include "bench/commands.h"
 #include "engine/render_session.h"
+#include "physics/stage_times.h"
 #include "sim/scene_io.h"
 
 namespace ponyhop {
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 // The scenes `make demo` renders (the Makefile's DEMO_SCENES), and the ponytail on the hopper.
 struct BenchRenderArgs {

@@ -10,6 +10,8 @@
 #include <cstring>
 #include <filesystem>
 
+#include "physics/stage_times.h"
+
 // --- Our own copy of stb_image_write ----------------------------------------------------------
 // STB_IMAGE_WRITE_STATIC: every stbi_write_* symbol is static to this file, so this copy never
 // clashes with the one inside libstb.a. STBIW_ZLIB_COMPRESS: replace stb's simple deflate with
@@ -55,8 +57,6 @@ static const bool kFilterForced = [] {
 namespace ponyhop {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 bool writeFileAtomic(const std::string& path, const unsigned char* data, size_t size, std::string* err) {
   const std::string tmp = path + ".tmp";

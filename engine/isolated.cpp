@@ -17,6 +17,8 @@
 #include <exception>
 #include <new>
 
+#include "physics/stage_times.h"
+
 namespace ponyhop {
 namespace {
 
@@ -110,7 +112,6 @@ bool runIsolated(const std::function<bool(std::string&, std::string&)>& work, co
   }
   ::close(fds[1]);
 
-  using Clock = std::chrono::steady_clock;
   const auto deadline = Clock::now() + std::chrono::duration<double>(limits.seconds);
   std::string data;
   bool timed_out = false;

@@ -25,11 +25,7 @@ namespace ponyhop {
 // ---------------------------------------------------------------------------------------------
 // [SECTION] Pass timing
 
-namespace {
-
-using Clock = std::chrono::steady_clock;
-
-}  // namespace
+namespace {}  // namespace
 
 void Renderer::Impl::beginPass(Pass p) {
   if (software_gl)

@@ -17,9 +17,10 @@
 
 namespace ponyhop {
 
-// Milliseconds of wall time since t0 (the frame and stage readouts of the panel, render and bench).
-inline double msSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+// The clock of every wall-time readout (stages, frames, the bench), and milliseconds since t0 on it.
+using Clock = std::chrono::steady_clock;
+inline double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
 enum class Stage { ExternalForces, Controller, JointForces, Integrate, Stabilize, Contact };
@@ -44,8 +45,6 @@ struct StageTimes {
 // ends, the caller's stage (if any) is paused meanwhile.
 class StageClock {
  public:
-  using Clock = std::chrono::steady_clock;
-
   class Scope {
    public:
     Scope(StageClock* c, int previous) : clock_(c), previous_(previous) {}
