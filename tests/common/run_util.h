@@ -1,6 +1,7 @@
 // Helpers for tests that run the real `ponyhop` executable.
 #pragma once
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <cstdlib>
@@ -8,8 +9,6 @@
 #include <fstream>
 #include <sstream>
 #include <string>
-
-#include <gtest/gtest.h>
 
 namespace ponyhop::testing {
 
