@@ -329,9 +329,22 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
     double worst = 0.0;
     for (const Row& r : rows) worst = std::max(worst, -r.gap);
     if (worst <= kOverlapTolerance) break;
-    buildJacobians(bodies, rows, true);
-    if (!buildDelassus(bodies, joints)) return Status::error("the joints' constraint matrix is singular");
-    const int mo = static_cast<int>(jrows_.size());
+    const int mo = static_cast<int>(rows.size());
+    if (pass == 0) {
+      // The same poses and rows as the impulses: their W_c columns and D, normal rows only (each
+      // block's first), without factoring the joints again.
+      Eigen::MatrixXd normal_d(mo, mo);
+      std::vector<std::vector<Vector6d>> normal_w(mo);
+      for (int i = 0; i < mo; ++i) {
+        for (int k = 0; k < mo; ++k) normal_d(i, k) = delassus_(blocks[i].first, blocks[k].first);
+        normal_w[i] = std::move(w_[blocks[i].first]);
+      }
+      delassus_ = std::move(normal_d);
+      w_ = std::move(normal_w);
+    } else {
+      buildJacobians(bodies, rows, true);
+      if (!buildDelassus(bodies, joints)) return Status::error("the joints' constraint matrix is singular");
+    }
     Eigen::VectorXd gap(mo);
     std::vector<std::pair<int, int>> nb;
     std::vector<double> zero(mo, 0.0);
