@@ -53,9 +53,12 @@ std::string baseHeader(const Sim& sim) {
   return "t,max_joint_error";
 }
 
-// A scene with collisions adds the active contacts and limits after the last contact stage and
-// the deepest overlap (m) that stage found before it pushed the bodies apart.
-std::string header(const Sim& sim) { return baseHeader(sim) + (sim.collisions() ? ",contacts,deepest" : ""); }
+// A scene with collisions adds the active contacts and limits after the last contact stage, the
+// deepest overlap (m) that stage found before it pushed the bodies apart, its projected
+// Gauss-Seidel sweeps (impulses and push-outs) and the solves stopped at their sweep cap so far.
+std::string header(const Sim& sim) {
+  return baseHeader(sim) + (sim.collisions() ? ",contacts,deepest,pgs_sweeps,pgs_capped" : "");
+}
 
 SimRow baseSample(const Sim& sim) {
   SimRow r;
@@ -83,6 +86,8 @@ SimRow sample(const Sim& sim) {
   if (const Collisions* c = sim.collisions()) {
     r.values.push_back(c->stats().active);
     r.values.push_back(c->stats().deepest);
+    r.values.push_back(c->stats().iterations);
+    r.values.push_back(static_cast<double>(c->stats().capped));
   }
   return r;
 }

@@ -21,6 +21,7 @@
 
 #include "app/chain_look.h"
 #include "app/presets.h"
+#include "physics/collisions.h"
 #include "physics/stage_times.h"
 #include "sim/data_dir.h"
 #include "sim/scene_io.h"
@@ -795,6 +796,12 @@ void Panel::drawReadouts() {
     plot("##height", r.hopper_height, "hopper height %.3f m", 1.0);
     plot("##speed", r.hopper_speed, "hopper speed %.2f m/s", 1.0);
     ImGui::Text("Hopper phase: %s", sim_.hopperPhase().c_str());
+  }
+  if (const Collisions* c = sim_.runtime().collisions()) {
+    // The contact solve's own account: sweeps of the last stage, and any solve that stopped at its
+    // cap before its tolerance (physics/collisions.h).
+    const CollisionStats& cs = c->stats();
+    ImGui::Text("Contacts %d, PGS sweeps %d, stopped at the cap %ld", cs.active, cs.iterations, cs.capped);
   }
   if (r.show_wall_clock) {
     ImGui::TextDisabled("Frame: physics %.2f  render %.2f  panel %.2f ms", r.physics_ms, r.render_ms, r.panel_ms);

@@ -61,6 +61,7 @@ struct BenchArgs {
   std::vector<std::string> scaling_solvers;  // empty: every solver of ours
   double scaling_budget = -1.0;              // s per (solver, N); < 0: the mode's
   bool collision = true;
+  bool collision_only = false;
   std::string ponytail_scene = "assets/scenes/ponytail.json";
   std::string command_line;
 };
@@ -434,6 +435,10 @@ struct CollisionCostRow {
   int steps = 0;
   int max_contacts = 0;  // contacts and active limits after a step, at most
   double deepest = 0.0;  // m, deepest overlap a contact stage found (before pushing out)
+  // Per step, of the last repeat: distance-field evaluations, projected Gauss-Seidel sweeps; and
+  // the solves that stopped at their sweep cap (CollisionStats).
+  double queries = 0.0, sweeps = 0.0;
+  long capped = 0;
   std::string status = "ok";
 };
 
@@ -465,6 +470,11 @@ std::vector<CollisionCostRow> benchCollisionCost(const std::string& scene_path, 
         }
         const double wall = std::chrono::duration<double>(Clock::now() - t1).count();
         if (!sim.ok()) r.status = sim.status();
+        if (const Collisions* c = sim.collisions()) {
+          r.queries = static_cast<double>(c->stats().queries) / std::max(1, r.steps);
+          r.sweeps = static_cast<double>(c->stats().sweeps) / std::max(1, r.steps);
+          r.capped = c->stats().capped;
+        }
         per_step.push_back(1e6 * wall / std::max(1, r.steps));
         contact.push_back(1e6 * sim.world().stageTimes()[Stage::Contact] / std::max(1, r.steps));
       }
@@ -475,37 +485,61 @@ std::vector<CollisionCostRow> benchCollisionCost(const std::string& scene_path, 
       r.us_per_step = median(per_step);
       r.contact_us = median(contact);
       r.build_s = median(build);
-      std::fprintf(stderr, "bench: collision %-9s %-3s %9.1f us/step (contact stage %.1f), build %.2f s, %s\n", clip,
-                   on ? "on" : "off", r.us_per_step, r.contact_us, r.build_s, r.status.c_str());
+      std::fprintf(stderr,
+                   "bench: collision %-9s %-3s %9.1f us/step (contact stage %.1f), %.0f queries, %.1f sweeps per step, "
+                   "%ld capped, build %.2f s, %s\n",
+                   clip, on ? "on" : "off", r.us_per_step, r.contact_us, r.queries, r.sweeps, r.capped, r.build_s,
+                   r.status.c_str());
       rows.push_back(std::move(r));
     }
   }
   return rows;
 }
 
+// The section "Collision cost" at the end of the README at `path` (its own, from the row before
+// it on: a --collision-only run replaces only this section), and collision.csv beside it.
 void appendCollisionCost(const std::string& path, const std::string& scene, double seconds,
-                         const std::vector<CollisionCostRow>& rows) {
-  std::ofstream f(path, std::ios::app);
-  f << "\n## Collision cost: the ponytail against its head\n\n"
+                         const std::vector<CollisionCostRow>& rows, const std::string& load_before,
+                         const std::string& load_after) {
+  constexpr const char* kTitle = "\n## Collision cost: the ponytail against its head\n";
+  std::string before;
+  {
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    before = text.str();
+    if (const size_t at = before.find(kTitle); at != std::string::npos) before.resize(at);
+  }
+  std::ofstream f(path);
+  f << before << kTitle << "\n"
     << "`" << scene << "` stepped for " << fmt(seconds, "%g")
     << " s of each clip with its `collision` section (on) and "
     << "without it (off), the scene's own method; the median wall time of `Sim::step` over the repeats, the part of it "
-    << "in the contact stage, and building the scene (on: the head's distance grid as well). The cost of collision per "
-    << "step is on - off; impact splits (a substep redone as two halves) are in on's step time, not in the contact "
-    << "stage.\n\n"
-    << "| clip | collision | us/step | contact stage us/step | build s | steps | max contacts | deepest overlap (mm) | "
-       "status |\n"
-    << "|---|---|---|---|---|---|---|---|---|\n";
+    << "in the contact stage, on / off, and building the scene (on: the head's distance grid as well). The cost of "
+       "collision per step is on - off; impact splits (a substep redone as two halves) are in on's step time, not in "
+       "the contact stage. Per step: the distance-field evaluations of the narrow phase (queries) and the projected "
+       "Gauss-Seidel sweeps (impulses and push-outs); capped: solves that stopped at their sweep cap before their "
+       "tolerance. Load average before / after: "
+    << load_before << " / " << load_after << ".\n\n"
+    << "| clip | collision | us/step | contact stage us/step | on / off | build s | steps | queries/step | PGS "
+       "sweeps/step | capped | max contacts | deepest overlap (mm) | status |\n"
+    << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  double off_us = 0.0;
   for (const CollisionCostRow& r : rows) {
+    if (!r.on) off_us = r.us_per_step;
     f << "| " << r.clip << " | " << (r.on ? "on" : "off") << " | " << fmt(r.us_per_step, "%.1f") << " | "
-      << fmt(r.contact_us, "%.1f") << " | " << fmt(r.build_s, "%.2f") << " | " << r.steps << " | " << r.max_contacts
-      << " | " << fmt(1e3 * r.deepest, "%.2f") << " | " << r.status << " |\n";
+      << fmt(r.contact_us, "%.1f") << " | " << (r.on && off_us > 0.0 ? fmt(r.us_per_step / off_us, "%.2f") : "")
+      << " | " << fmt(r.build_s, "%.2f") << " | " << r.steps << " | " << (r.on ? fmt(r.queries, "%.0f") : "") << " | "
+      << (r.on ? fmt(r.sweeps, "%.1f") : "") << " | " << (r.on ? std::to_string(r.capped) : "") << " | "
+      << r.max_contacts << " | " << fmt(1e3 * r.deepest, "%.2f") << " | " << r.status << " |\n";
   }
   std::ofstream csv(std::filesystem::path(path).parent_path() / "collision.csv");
-  csv << "clip,collision,us_per_step,contact_us_per_step,build_s,steps,max_contacts,deepest_m,status\n";
+  csv << "clip,collision,us_per_step,contact_us_per_step,build_s,steps,queries_per_step,sweeps_per_step,capped,"
+         "max_contacts,deepest_m,status\n";
   for (const CollisionCostRow& r : rows) {
     csv << r.clip << ',' << (r.on ? "on" : "off") << ',' << r.us_per_step << ',' << r.contact_us << ',' << r.build_s
-        << ',' << r.steps << ',' << r.max_contacts << ',' << r.deepest << ',' << r.status << '\n';
+        << ',' << r.steps << ',' << r.queries << ',' << r.sweeps << ',' << r.capped << ',' << r.max_contacts << ','
+        << r.deepest << ',' << r.status << '\n';
   }
 }
 
@@ -528,6 +562,15 @@ int runBench(BenchArgs& args) {
   if (args.scaling_budget >= 0.0) cfg.scaling_budget = args.scaling_budget;
   if (!args.scaling) cfg.scaling_links.clear();
   std::filesystem::create_directories(args.out);
+  const double collision_seconds = args.quick ? 0.5 : 10.0;
+  if (args.collision_only) {
+    // Only the collision cost: its section of the README (the rest kept) and collision.csv.
+    const std::vector<CollisionCostRow> rows = benchCollisionCost(args.ponytail_scene, collision_seconds, cfg.repeats);
+    appendCollisionCost(args.out + "/README.md", args.ponytail_scene, collision_seconds, rows, load_before,
+                        loadAverage());
+    std::fprintf(stderr, "bench: collision cost -> %s/README.md\n", args.out.c_str());
+    return 0;
+  }
   std::vector<std::string> notes;
   notes.push_back("Methods from EnumNames: solvers " + std::to_string(EnumNames<SolverKind>::names.size()) +
                   ", integrators " + std::to_string(EnumNames<Integrator>::names.size()) + ", stabilizations " +
@@ -604,10 +647,12 @@ int runBench(BenchArgs& args) {
     }
   }
 
-  const double collision_seconds = args.quick ? 0.5 : 10.0;
   std::vector<CollisionCostRow> collision_rows;
+  std::string collision_load_before, collision_load_after;
   if (args.collision && !args.scaling_only) {
+    collision_load_before = loadAverage();
     collision_rows = benchCollisionCost(args.ponytail_scene, collision_seconds, cfg.repeats);
+    collision_load_after = loadAverage();
   }
 
   std::vector<BenchRow> rows;
@@ -637,7 +682,8 @@ int runBench(BenchArgs& args) {
     writeMarkdown(args.out + "/README.md", args, cfg, cases, rows, refs, checks, scaling, out_notes, load_before,
                   loadAverage(), wall);
     if (!collision_rows.empty()) {
-      appendCollisionCost(args.out + "/README.md", args.ponytail_scene, collision_seconds, collision_rows);
+      appendCollisionCost(args.out + "/README.md", args.ponytail_scene, collision_seconds, collision_rows,
+                          collision_load_before, collision_load_after);
     }
     std::fprintf(stderr, "bench: %zu runs, %.0f s -> %s/README.md\n", rows.size(), wall, args.out.c_str());
   };
@@ -723,6 +769,8 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
   cmd->add_flag("!--no-collision", args->collision,
                 "Leave out the collision cost (the ponytail with its head collider on and off)");
   cmd->add_option("--ponytail-scene", args->ponytail_scene, "The scene of the collision cost");
+  cmd->add_flag("--collision-only", args->collision_only,
+                "Only the collision cost: rewrites its section of OUT/README.md (the rest kept) and collision.csv");
   cmd->add_option("--scaling-links", args->scaling_links,
                   "Chain lengths of the sweep (default 2,4,...,1024; quick 2..32)")
       ->delimiter(',')
@@ -761,6 +809,7 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
     if (args->scaling_only) args->command_line += " --scaling-only";
     if (!args->chains) args->command_line += " --no-chains";
     if (!args->collision) args->command_line += " --no-collision";
+    if (args->collision_only) args->command_line += " --collision-only";
     if (args->ponytail_scene != BenchArgs{}.ponytail_scene)
       args->command_line += " --ponytail-scene " + args->ponytail_scene;
     if (!args->scaling_links.empty()) args->command_line += " --scaling-links " + list(args->scaling_links);

@@ -152,6 +152,16 @@ Status SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, c
   }
   values_.resize(nodes);
   for (long n = 0; n < nodes; ++n) values_[n] = static_cast<float>(votes[n] >= 2 ? -dist[n] : dist[n]);
+  double steepest = 0.0;
+  for (int k = 0; k < dims_.z(); ++k)
+    for (int j = 0; j < dims_.y(); ++j)
+      for (int i = 0; i < dims_.x(); ++i) {
+        const double v = values_[index(i, j, k)];
+        if (i + 1 < dims_.x()) steepest = std::max(steepest, std::abs(values_[index(i + 1, j, k)] - v));
+        if (j + 1 < dims_.y()) steepest = std::max(steepest, std::abs(values_[index(i, j + 1, k)] - v));
+        if (k + 1 < dims_.z()) steepest = std::max(steepest, std::abs(values_[index(i, j, k + 1)] - v));
+      }
+  lipschitz_ = steepest / cell_;
   return {};
 }
 

@@ -51,6 +51,11 @@ class SignedDistanceGrid {
   const Eigen::Vector3i& dims() const { return dims_; }
   Eigen::Vector3d upper() const { return origin_ + cell_ * (dims_ - Eigen::Vector3i::Ones()).cast<double>(); }
   double node(int i, int j, int k) const { return values_[index(i, j, k)]; }
+  // The largest |difference| of two neighbouring nodes over the cell: each partial derivative of
+  // the trilinear interpolant is an average of such differences, so the interpolant changes by at
+  // most lipschitz() |dx|_1 along dx (1 for exact distances; more where a sign or a propagated
+  // distance is off). The capsule search's bound (physics/shapes.h).
+  double lipschitz() const { return lipschitz_; }
 
  private:
   size_t index(int i, int j, int k) const { return (static_cast<size_t>(k) * dims_.y() + j) * dims_.x() + i; }
@@ -59,6 +64,7 @@ class SignedDistanceGrid {
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
   Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
   double cell_ = 0.0;
+  double lipschitz_ = 0.0;
   std::vector<float> values_;
 };
 

@@ -1,20 +1,99 @@
 #include "physics/pgs.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 
 namespace ponyhop {
 
 namespace {
-constexpr int kMaxSweeps = 5000;  // sweeps at most
+
+// One contact's impulse (normal, two tangents) with the others' fixed: b the velocities of its
+// rows without its own impulse, minus the normal's target; A its 3 x 3 block of D. Returns false
+// when no case fits (degenerate blocks): the caller keeps the row-wise update.
+bool solveContact(const Eigen::Matrix3d& a, const Eigen::Vector3d& b, double mu, Eigen::Vector3d& p) {
+  if (b(0) >= 0.0) {  // separating without an impulse
+    p.setZero();
+    return true;
+  }
+  Eigen::Vector3d stick = Eigen::Vector3d::Zero();
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(a);
+  if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
+    stick = ldlt.solve(-b);
+    if (stick(0) >= 0.0 && stick.tail<2>().norm() <= mu * stick(0)) {
+      p = stick;
+      return true;
+    }
+  }
+  // Sliding along d = (cos t, sin t): p_t = -mu p_n d; the normal row at its target gives
+  // p_n = -b_n / (A_nn - mu A_nt d), the slip u_t = b_t + p_n (A_tn - mu A_tt d) must be +d: the
+  // cross product of d and u_t vanishes with d . u_t >= 0.
+  const auto slip = [&](double t, double& pn, Eigen::Vector2d& ut) {
+    const Eigen::Vector2d d(std::cos(t), std::sin(t));
+    const double den = a(0, 0) - mu * a.block<1, 2>(0, 1).dot(d);
+    if (!(den > 0.0)) return false;
+    pn = -b(0) / den;
+    ut = b.tail<2>() + pn * (a.block<2, 1>(1, 0) - mu * a.block<2, 2>(1, 1) * d);
+    return ut.dot(d) >= 0.0;
+  };
+  const auto cross = [](double t, const Eigen::Vector2d& ut) { return std::cos(t) * ut.y() - std::sin(t) * ut.x(); };
+  constexpr int kAngles = 32;
+  double pn = 0.0;
+  Eigen::Vector2d ut;
+  double lo = 0.0, glo = 0.0;
+  bool has_lo = false;
+  for (int k = 0; k <= kAngles; ++k) {
+    const double t = 2.0 * M_PI * k / kAngles;
+    const bool ok = slip(t, pn, ut);
+    const double g = cross(t, ut);
+    if (ok && has_lo && (g == 0.0 || (g > 0.0) != (glo > 0.0))) {
+      double hi = t;
+      for (int it = 0; it < 60 && hi - lo > 1e-15; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        slip(mid, pn, ut);
+        if ((cross(mid, ut) > 0.0) == (glo > 0.0))
+          lo = mid;
+        else
+          hi = mid;
+      }
+      const double t_end = 0.5 * (lo + hi);
+      if (slip(t_end, pn, ut) && pn >= 0.0) {
+        p << pn, -mu * pn * std::cos(t_end), -mu * pn * std::sin(t_end);
+        return true;
+      }
+    }
+    has_lo = ok;
+    lo = t;
+    glo = g;
+  }
+  // No sliding direction found: the slip is within round-off of zero (the contact is on the
+  // border of sticking, where ut . d changes sign with the noise). The sticking impulse with its
+  // tangents scaled onto the rim is the answer there.
+  if (ldlt.info() != Eigen::Success || !(stick(0) > 0.0)) return false;
+  const double len = stick.tail<2>().norm();
+  p = stick;
+  if (len > 0.0) p.tail<2>() *= mu * stick(0) / len;
+  return true;
+}
+
 }  // namespace
 
-int projectedGaussSeidel(const Eigen::MatrixXd& d, const Eigen::VectorXd& u0, const Eigen::VectorXd& target,
-                         const std::vector<std::pair<int, int>>& blocks, const std::vector<double>& mu,
-                         Eigen::VectorXd& p) {
+PgsResult projectedGaussSeidel(const Eigen::MatrixXd& d, const Eigen::VectorXd& u0, const Eigen::VectorXd& target,
+                               const std::vector<std::pair<int, int>>& blocks, const std::vector<double>& mu,
+                               Eigen::VectorXd& p, const PgsSettings& settings) {
   const int m = static_cast<int>(u0.size());
-  p = Eigen::VectorXd::Zero(m);
   Eigen::VectorXd u = u0;
+  if (settings.warm_start && p.size() == m && p.squaredNorm() > 0.0) {
+    // The problem's energy along the ray a p: E(a) = a p.(u0 - target) + a^2 p.D p / 2, least at
+    // a* = -p.(u0 - target) / p.D p; a in [0, 1] keeps E(a p) <= E(0) = 0 (a feasible start: the
+    // cone is a cone).
+    const double pdp = p.dot(d * p), slope = p.dot(u0 - target);
+    const double a = pdp > 0.0 && slope < 0.0 ? std::min(1.0, -slope / pdp) : 0.0;
+    p *= a;
+    if (a > 0.0) u.noalias() += d * p;
+  } else {
+    p = Eigen::VectorXd::Zero(m);
+  }
   double scale = 1e-300;
   for (int i = 0; i < m; ++i) scale = std::max(scale, std::abs(u0(i) - target(i)) / std::max(d(i, i), 1e-300));
   const auto update = [&](int i, double value) {
@@ -24,11 +103,25 @@ int projectedGaussSeidel(const Eigen::MatrixXd& d, const Eigen::VectorXd& u0, co
     u += d.col(i) * delta;
     return std::abs(delta);
   };
+  // The slip a sticking contact may keep, squared (compared with |u_t|^2 / D_tt^2).
+  const double slip2 = (10.0 * settings.tolerance * scale) * (10.0 * settings.tolerance * scale);
+  PgsResult result;
   int sweep = 0;
-  for (; sweep < kMaxSweeps; ++sweep) {
+  for (; sweep < settings.max_sweeps; ++sweep) {
     double change = 0.0;
     for (size_t c = 0; c < blocks.size(); ++c) {
       const int n = blocks[c].first;
+      if (settings.exact_blocks && blocks[c].second == 3) {
+        const Eigen::Matrix3d a = d.block<3, 3>(n, n);
+        const Eigen::Vector3d own = p.segment<3>(n);
+        Eigen::Vector3d b = u.segment<3>(n) - a * own;
+        b(0) -= target(n);
+        Eigen::Vector3d solved;
+        if (solveContact(a, b, mu[c], solved)) {
+          for (int k = 0; k < 3; ++k) change = std::max(change, update(n + k, solved(k)));
+          continue;
+        }
+      }
       if (d(n, n) > 1e-300) change = std::max(change, update(n, std::max(0.0, p(n) + (target(n) - u(n)) / d(n, n))));
       if (blocks[c].second == 3) {
         for (int t = n + 1; t <= n + 2; ++t)
@@ -44,18 +137,23 @@ int projectedGaussSeidel(const Eigen::MatrixXd& d, const Eigen::VectorXd& u0, co
         // The tangents' change counts too (sticking).
       }
     }
-    double tangent_residual = 0.0;
-    for (size_t c = 0; c < blocks.size(); ++c) {
+    if (change > settings.tolerance * scale) continue;
+    // Sticking contacts (strictly inside the disc) must not slip: squared norms, no hypot (this
+    // check runs every sweep).
+    bool slipping = false;
+    for (size_t c = 0; c < blocks.size() && !slipping; ++c) {
       if (blocks[c].second != 3) continue;
       const int n = blocks[c].first;
-      const bool inside = std::hypot(p(n + 1), p(n + 2)) < mu[c] * p(n) * (1.0 - 1e-12);
-      if (inside)
-        tangent_residual =
-            std::max(tangent_residual, std::hypot(u(n + 1), u(n + 2)) / std::max(d(n + 1, n + 1), 1e-300));
+      const double rim = mu[c] * p(n) * (1.0 - 1e-12);
+      const bool inside = p(n + 1) * p(n + 1) + p(n + 2) * p(n + 2) < rim * rim && rim > 0.0;
+      const double dt = std::max(d(n + 1, n + 1), 1e-300);
+      if (inside && (u(n + 1) * u(n + 1) + u(n + 2) * u(n + 2)) / (dt * dt) > slip2) slipping = true;
     }
-    if (change <= 1e-13 * scale && tangent_residual <= 1e-12 * scale) break;
+    if (!slipping) break;
   }
-  return sweep + 1;
+  result.sweeps = std::min(sweep + 1, settings.max_sweeps);
+  result.capped = sweep == settings.max_sweeps;
+  return result;
 }
 
 }  // namespace ponyhop

@@ -18,7 +18,9 @@
 // exact for every pair: the union of the balls touches b where this is smallest. For a convex b
 // (sphere, capsule, box, plane) D_b is a convex function of space, D_b(p(s)) - r(s) is convex in s
 // and the minimum is found by golden-section search to 1e-12 of the segment; for an sdf it is
-// sampled at half the grid's cell and refined around the smallest sample. The contact normal is
+// sampled at half the grid's cell, only where the grid's Lipschitz bound leaves room for a value
+// below the best sample and below reach (a link far from the head costs two samples), and refined
+// around the smallest sample to a thirtieth of a cell. The contact normal is
 // grad D_b at the core point (unit; from b towards a), the contact point midway between the two
 // surfaces. Signed distances and gradients of the convex shapes are analytic; a capsule's is
 // itself a minimum over its own segment (convex, golden section).
@@ -87,7 +89,9 @@ bool supported(ShapeType a, ShapeType b);
 // deepest point first, then its end spheres when they too are within reach (a capsule lying on a
 // surface rests on a segment); a box its corners (up to 8). Pairs that are only supported the other way round are
 // swapped (and their normals turned). Returns the number appended.
-int collide(const PlacedShape& a, const PlacedShape& b, double reach, std::vector<ContactPoint>& out);
+// `queries`: when given, counts the signed-distance evaluations of b (the narrow phase's cost).
+int collide(const PlacedShape& a, const PlacedShape& b, double reach, std::vector<ContactPoint>& out,
+            long* queries = nullptr);
 
 // Exact geometry used above and by the tests.
 // The point of the triangle (p0, p1, p2) closest to x (Ericson, Real-Time Collision Detection 5.1.5).

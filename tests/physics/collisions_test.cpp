@@ -130,6 +130,40 @@ TEST(Contact, BoxOnASlopeSticksBelowTheFrictionAngleAndSlidesAboveIt) {
   }
 }
 
+// A box sliding on the ground along `heading` (rad from the x axis), turned with it so that only
+// the contact's tangent frame differs between headings: that frame is fixed by the normal
+// (normal.unitOrthogonal(): +y and -x for the ground), so heading 0 slides along one of its
+// axes and heading pi/4 along its diagonal. Returns the velocity after 0.2 s.
+Vector3d slideVelocity(double heading) {
+  World world(params());
+  const Vector3d h(0.05, 0.05, 0.02);
+  const Quaterniond turn(Eigen::AngleAxisd(heading, Vector3d::UnitZ()));
+  const int box = world.addDynamicBody(solidBox(1.0, h, Vector3d(0, 0, h.z()), turn));
+  world.body(box).v = turn * Vector3d(2.0, 0, 0);
+  CollisionParams cp;
+  cp.friction = 0.5;
+  auto shared = std::make_shared<Collisions>(cp);
+  shared->addPair(shared->addShape(box, Shape::box(h)), shared->addShape(kWorldBody, Shape::plane(Vector3d::UnitZ())));
+  shared->attach(world);
+  for (int i = 0; i < 48 && world.ok(); ++i) world.step();
+  EXPECT_TRUE(world.ok()) << world.status();
+  return world.body(box).v;
+}
+
+TEST(Contact, FrictionIsAConeSlidingAlongADiagonalSlowsAsAlongAnAxis) {
+  // A cone: the friction is mu N opposite the slip whatever its direction, so both boxes slow by
+  // mu g t = 0.5 * 9.81 * 0.2 = 0.981 m/s and keep their headings. A box (a clamp of each
+  // tangent to mu N) would slow the diagonal one sqrt(2) times faster.
+  const Vector3d axis = slideVelocity(0.0), diagonal = slideVelocity(M_PI / 4.0);
+  const double expected = 2.0 - 0.5 * 9.81 * 0.2;
+  std::printf("sliding box after 0.2 s: along an axis %.9f m/s, along the diagonal %.9f m/s (mu g t: %.9f)\n",
+              axis.head<2>().norm(), diagonal.head<2>().norm(), expected);
+  EXPECT_NEAR(axis.head<2>().norm(), expected, 1e-3);
+  EXPECT_NEAR(diagonal.head<2>().norm(), axis.head<2>().norm(), 1e-9);
+  EXPECT_NEAR(std::atan2(diagonal.y(), diagonal.x()), M_PI / 4.0, 1e-9);
+  EXPECT_NEAR(std::atan2(axis.y(), axis.x()), 0.0, 1e-9);
+}
+
 TEST(Contact, CapsuleRestingOnTheGroundDoesNotDriftInSixtySeconds) {
   World world(params());
   const double r = 0.03, half = 0.1;

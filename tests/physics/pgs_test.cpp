@@ -19,7 +19,7 @@ struct Solved {
 Solved solve(const Eigen::MatrixXd& d, const Eigen::VectorXd& u0, const Eigen::VectorXd& target,
              const std::vector<std::pair<int, int>>& blocks, const std::vector<double>& mu) {
   Solved s;
-  s.sweeps = projectedGaussSeidel(d, u0, target, blocks, mu, s.p);
+  s.sweeps = projectedGaussSeidel(d, u0, target, blocks, mu, s.p).sweeps;
   s.u = u0 + d * s.p;
   return s;
 }
