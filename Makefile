@@ -2,7 +2,7 @@
 #   make demo   installs what is missing, builds, renders the demo scenes into out/demo/
 #   make test   installs what is missing, builds, runs every test
 # CI (.ci/run) runs `make format-check`, `make test`, `make test-asan` (the same tests built with
-# ASan+UBSan), `make test-tsan`, `make release` and a bounded `make fuzz`.
+# ASan+UBSan), `make test-tsan` and a bounded `make fuzz` (`make release` is `make build` now).
 BUILD      ?= build
 ASAN_BUILD ?= build-asan
 TSAN_BUILD ?= build-tsan
