@@ -26,8 +26,9 @@ PACKAGES=(
   xdotool                              # the window test moves the mouse and presses keys in Xvfb
 )
 
-# `make fuzz` only (scripts/setup.sh --fuzz): libFuzzer comes with clang's runtime libraries.
-if [ "${1:-}" = "--fuzz" ]; then
+# The sanitizer trees only (scripts/setup.sh --clang: `make test-asan`, `make test-tsan`, `make fuzz`):
+# clang, and its runtime libraries for ASan, UBSan, TSan and libFuzzer.
+if [ "${1:-}" = "--clang" ]; then
   PACKAGES+=(clang libclang-rt-14-dev)
 fi
 # `make format-check` only (scripts/setup.sh --format).
