@@ -16,6 +16,7 @@
 #include <numbers>
 #include <tuple>
 
+#include "common/sanitizers.h"
 #include "engine/isolated.h"
 
 using namespace ponyhop;
@@ -190,7 +191,7 @@ TEST(MeshIsolation, CrashAbortHangAndMemoryOfTheChildAreMessages) {
       limits, &out, &err));
   EXPECT_NE(err.find("took longer than 2 s"), std::string::npos) << err;
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0);
-#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+#if !PONYHOP_ALLOCATOR_SANITIZED
   // Sanitizers cap allocations their own way; the address-space limit is for the normal build.
   EXPECT_FALSE(runIsolated(
       [](std::string& r, std::string&) -> bool {

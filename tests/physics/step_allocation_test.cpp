@@ -8,20 +8,12 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "common/sanitizers.h"
 #include "physics/constraint.h"
 #include "physics/models/chain.h"
 #include "physics/tree_solver.h"
 
-#if defined(__SANITIZE_ADDRESS__)
-#define PONYHOP_COUNT_ALLOCATIONS 0
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define PONYHOP_COUNT_ALLOCATIONS 0
-#endif
-#endif
-#ifndef PONYHOP_COUNT_ALLOCATIONS
-#define PONYHOP_COUNT_ALLOCATIONS 1
-#endif
+#define PONYHOP_COUNT_ALLOCATIONS (!PONYHOP_ALLOCATOR_SANITIZED)
 
 namespace {
 long g_allocations = 0;
