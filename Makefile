@@ -48,7 +48,7 @@ test: build
 	@cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
 
 # The same tests under AddressSanitizer + UndefinedBehaviorSanitizer, in their own build by clang
-# (which compiles instrumented code 3-5x faster than GCC), with the libFuzzer targets of `make fuzz`
+# (which compiles instrumented code in about half GCC's time), with the libFuzzer targets of `make fuzz`
 # in the same tree: CI runs it after `make test`. Naming the compiler on the command line makes
 # CMake start the cache afresh when an older tree of this name was configured with GCC.
 SANITIZE_CONFIGURE = cmake -S . -B $(ASAN_BUILD) $(call GENERATOR,$(ASAN_BUILD)) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
