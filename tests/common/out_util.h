@@ -14,7 +14,8 @@ namespace ponyhop::testing {
 // The folder that belongs to the running test: ctest runs tests in parallel, so two tests that
 // picked the same scratch or log name (sim_poses, once) must still not share a folder.
 inline std::string testOut() {
-  std::string dir = std::string(PONYHOP_TEST_OUT) + "/";
+  // One literal, not `std::string(...) + "/"`: GCC 12 at -O3 warns (-Werror=array-bounds) on that.
+  const std::string dir = PONYHOP_TEST_OUT "/";
   const ::testing::TestInfo* t = ::testing::UnitTest::GetInstance()->current_test_info();
   if (t == nullptr) return dir + "suite";
   std::string name = std::string(t->test_suite_name()) + "." + t->name();
@@ -37,10 +38,9 @@ inline void writeFile(const std::string& path, const std::string& text) {
 
 // A folder of the tests' output shared by a test file's tests (not emptied: they write distinct names).
 inline std::string outFolder(const std::string& name) {
-  // A path, not `std::string + "/" + name`: GCC 12 at -O3 warns (-Werror=array-bounds) on that.
-  const std::filesystem::path dir = std::filesystem::path(PONYHOP_TEST_OUT) / name;
+  const std::string dir = PONYHOP_TEST_OUT "/" + name;
   std::filesystem::create_directories(dir);
-  return dir.string();
+  return dir;
 }
 
 // A fresh scratch folder under the running test's output folder.
