@@ -65,7 +65,7 @@ test-asan: setup
 
 # The tests that run threads (the frame writer's encoder threads, renders with signals and locks)
 # under ThreadSanitizer, in their own build (clang, as for ASan) of only what they need.
-TSAN_TESTS := frame_writer_test render_command_test output_safety_test
+TSAN_TESTS := engine_tests app_tests
 test-tsan: setup
 	@bash scripts/setup.sh --clang
 	@cmake -S . -B $(TSAN_BUILD) $(call GENERATOR,$(TSAN_BUILD)) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
@@ -118,7 +118,7 @@ format-check:
 # Re-render every golden image and physics fingerprint on purpose (never done by tests or CI).
 update-snapshots: build
 	@$(PONYHOP) snapshot tests/snapshots/shots.txt --update
-	@PONYHOP_UPDATE_SNAPSHOTS=1 $(BUILD)/tests/snapshot_test --gtest_filter='Scenes/Fingerprint.*'
+	@PONYHOP_UPDATE_SNAPSHOTS=1 $(BUILD)/tests/app_tests --gtest_filter='Scenes/Fingerprint.*'
 	@echo "goldens rewritten in tests/snapshots/: review them with git diff before committing"
 
 # The report in docs/bench/ (about 20 min on 2 cores), with the peer engines installed first

@@ -13,11 +13,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::readFile;
 using testing::scratch;
-
-int sh(const std::string& cmd) {
-  const int status = std::system(cmd.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+using testing::sh;
 
 TEST(Install, InstalledExecutableRunsFromAnyFolder) {
   const std::string root = fs::absolute(scratch("install")).string();

@@ -16,11 +16,7 @@ namespace fs = std::filesystem;
 using testing::readFile;
 using testing::runPonyhop;
 using testing::scratch;
-
-int sh(const std::string& cmd) {
-  const int status = std::system(cmd.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+using testing::sh;
 
 double seconds(const std::string& cmd) {
   const auto t0 = std::chrono::steady_clock::now();

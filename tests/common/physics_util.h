@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <vector>
 
 #include "physics/models/chain.h"
@@ -14,9 +15,11 @@
 
 namespace ponyhop::testing {
 
+constexpr double kRad = 180.0 / std::numbers::pi;  // degrees per radian
+
 // RK4 with projection: the exact multiplier method the solver tests compare (fixed dt unless
-// max_step_rotation is left at its default).
-inline PhysicsParams exactPhysics(SolverKind solver, double dt) {
+// max_step_rotation is left at its default; 1/960 s unless told).
+inline PhysicsParams exactPhysics(SolverKind solver, double dt = 1.0 / 960.0) {
   PhysicsParams pp;
   pp.dt = dt;
   pp.integrator = Integrator::RK4;

@@ -16,6 +16,7 @@
 #include <numbers>
 #include <tuple>
 
+#include "common/out_util.h"
 #include "common/sanitizers.h"
 #include "engine/isolated.h"
 
@@ -23,14 +24,10 @@ using namespace ponyhop;
 
 namespace {
 
-std::string outDir() {
-  const std::string d = PONYHOP_TEST_OUT "/mesh";
-  std::filesystem::create_directories(d);
-  return d;
-}
+using ponyhop::testing::outFolder;
 
 std::string writeFile(const std::string& name, const std::string& text) {
-  const std::string path = outDir() + "/" + name;
+  const std::string path = outFolder("mesh") + "/" + name;
   std::ofstream(path, std::ios::binary) << text;
   return path;
 }
@@ -151,7 +148,7 @@ TEST(Mesh, GltfWithEmbeddedBufferLoads) {
 TEST(Mesh, BadFilesGiveErrorsNamingTheFile) {
   MeshData m;
   std::string err;
-  const std::string missing = outDir() + "/does_not_exist.obj";
+  const std::string missing = outFolder("mesh") + "/does_not_exist.obj";
   EXPECT_FALSE(loadMesh(missing, m, &err));
   EXPECT_NE(err.find(missing), std::string::npos) << err;
   EXPECT_GT(err.size(), missing.size() + 4) << "no reason given: " << err;

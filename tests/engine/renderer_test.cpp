@@ -11,6 +11,7 @@
 #include <memory>
 #include <numeric>
 
+#include "common/out_util.h"
 #include "engine/camera.h"
 #include "engine/frame_writer.h"
 #include "engine/gl_context.h"
@@ -44,11 +45,7 @@ Gl& gl() {
   return g;
 }
 
-std::string outDir() {
-  const std::string d = std::string(PONYHOP_TEST_OUT) + "/renderer";
-  std::filesystem::create_directories(d);
-  return d;
-}
+using ponyhop::testing::outFolder;
 
 Camera testCamera() {
   Camera c;
@@ -108,7 +105,7 @@ Eigen::Vector2d project(const Camera& cam, const Eigen::Vector3d& p, int w = kW,
 
 void save(const std::string& name, const std::vector<uint8_t>& px, int w = kW, int h = kH) {
   std::string err;
-  EXPECT_TRUE(writePngAtomic(outDir() + "/" + name, w, h, px.data(), &err)) << err;
+  EXPECT_TRUE(writePngAtomic(outFolder("renderer") + "/" + name, w, h, px.data(), &err)) << err;
 }
 
 #define REQUIRE_GL()                                       \
@@ -716,7 +713,7 @@ TEST(Renderer, DemoFrame720p) {
   }
   const auto t0 = std::chrono::steady_clock::now();
   std::string werr;
-  ASSERT_TRUE(writePngAtomic(outDir() + "/demo_720p.png", rp.width, rp.height, px.data(), &werr)) << werr;
+  ASSERT_TRUE(writePngAtomic(outFolder("renderer") + "/demo_720p.png", rp.width, rp.height, px.data(), &werr)) << werr;
   const double encode = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   std::printf(
       "demo 1280x720, %zu triangles (%zu in the head), %d samples: render %.1f ms/frame (submit %.1f, "

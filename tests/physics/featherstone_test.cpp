@@ -17,7 +17,7 @@
 namespace ponyhop {
 namespace {
 
-PhysicsParams physics(SolverKind solver, double dt = 1.0 / 960.0) { return testing::exactPhysics(solver, dt); }
+using testing::exactPhysics;
 
 AnchorParams anchor(AnchorMotion m) {
   AnchorParams a;
@@ -34,10 +34,10 @@ World makeSystem(int which, SolverKind solver) {
   if (which == 0) {
     ChainParams cp;
     cp.links = 8;
-    ChainWorld cw = makeChainWorld(physics(solver), cp, anchor(AnchorMotion::Shake));
+    ChainWorld cw = makeChainWorld(exactPhysics(solver), cp, anchor(AnchorMotion::Shake));
     return std::move(cw.world);
   }
-  World world(physics(solver));
+  World world(exactPhysics(solver));
   RigidBody hub;
   hub.name = "hub";
   hub.mass = 0.5;
@@ -74,7 +74,7 @@ World makeSystem(int which, SolverKind solver) {
 }
 
 // Random joint-consistent velocities (Kelvin projection of random ones).
-void stir(World& world, unsigned seed) {
+void stirVelocities(World& world, unsigned seed) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> n(0.0, 1.0);
   for (RigidBody& b : world.bodies()) {
@@ -91,7 +91,7 @@ TEST(PhysicsFeatherstone, AbaAccelerationsEqualTheMultiplierSolvers) {
     World feather = makeSystem(which, SolverKind::Featherstone);
     ASSERT_TRUE(dense.ok()) << dense.status();
     ASSERT_TRUE(feather.ok()) << feather.status();
-    stir(dense, 17u + which);
+    stirVelocities(dense, 17u + which);
     feather.bodies() = dense.bodies();  // the same state at t = 0 (the reduced state is read from it)
     dense.evaluate();
     feather.evaluate();
@@ -114,7 +114,7 @@ TEST(PhysicsFeatherstone, AbaAccelerationsEqualTheMultiplierSolvers) {
 TEST(PhysicsFeatherstone, RneaInvertsAbaAndCrbaAgrees) {
   for (int which : {0, 1, 2}) {
     World world = makeSystem(which, SolverKind::Featherstone);
-    stir(world, 29u + which);
+    stirVelocities(world, 29u + which);
     world.evaluate();  // builds the tree, writes the bodies, fills the force accumulators
     ASSERT_TRUE(world.ok()) << world.status();
     ArticulatedSystem& sys = *world.reduced();
@@ -152,7 +152,7 @@ TEST(PhysicsFeatherstone, RneaInvertsAbaAndCrbaAgrees) {
 // stabilization drifts by centimetres in the same run (docs/PHYSICS.md).
 TEST(PhysicsFeatherstone, HoldsJointsExactlyForFiveSeconds) {
   for (Integrator integrator : {Integrator::RK4, Integrator::SymplecticEuler}) {
-    PhysicsParams pp = physics(SolverKind::Featherstone);
+    PhysicsParams pp = exactPhysics(SolverKind::Featherstone);
     pp.integrator = integrator;
     pp.stabilization = Stabilization::None;  // ignored: nothing to stabilize
     ChainParams cp;
@@ -176,7 +176,7 @@ TEST(PhysicsFeatherstone, HoldsJointsExactlyForFiveSeconds) {
 TEST(PhysicsFeatherstone, ConservesEnergyWithAFixedAnchor) {
   ChainParams cp;
   cp.links = 8;
-  ChainWorld cw = makeChainWorld(physics(SolverKind::Featherstone, 1e-4), cp, anchor(AnchorMotion::Fixed));
+  ChainWorld cw = makeChainWorld(exactPhysics(SolverKind::Featherstone, 1e-4), cp, anchor(AnchorMotion::Fixed));
   EXPECT_LT(testing::maxEnergyDrift(cw.world, 5000), 1e-9);
   ASSERT_TRUE(cw.world.ok()) << cw.world.status();
   EXPECT_LT(cw.chain.tip(cw.world).z(), -0.1);  // it fell
@@ -186,7 +186,7 @@ TEST(PhysicsFeatherstone, ConservesEnergyWithAFixedAnchor) {
 TEST(PhysicsFeatherstone, FloatingBaseConservesMomentum) {
   World world = makeSystem(1, SolverKind::Featherstone);
   PhysicsParams pp = world.params();
-  stir(world, 41u);
+  stirVelocities(world, 41u);
   const auto momentum = [&] {
     Eigen::Vector3d p = Eigen::Vector3d::Zero();
     for (const RigidBody& b : world.bodies()) p += b.mass * b.v;
@@ -209,7 +209,7 @@ TEST(PhysicsFeatherstone, FloatingBaseConservesMomentum) {
 
 // What it cannot express: a plain message naming the solver and what is missing.
 TEST(PhysicsFeatherstone, SaysPlainlyWhenTheSceneHasALoop) {
-  World world(physics(SolverKind::Featherstone));
+  World world(exactPhysics(SolverKind::Featherstone));
   ChainParams cp;
   cp.links = 4;
   cp.direction = Eigen::Vector3d(1, 0, -0.2);
@@ -244,7 +244,7 @@ class Weld final : public Constraint {
 };
 
 TEST(PhysicsFeatherstone, SaysPlainlyWhenAJointTypeIsUnknown) {
-  World world(physics(SolverKind::Featherstone));
+  World world(exactPhysics(SolverKind::Featherstone));
   RigidBody b;
   b.name = "box";
   const int id = world.addDynamicBody(b);
@@ -262,7 +262,7 @@ TEST(PhysicsFeatherstone, SaysPlainlyWhenAJointTypeIsUnknown) {
 TEST(PhysicsFeatherstone, AutomaticSubstepsAndToleranceChooseItsStep) {
   ChainParams cp;
   cp.links = 8;
-  PhysicsParams pp = physics(SolverKind::Featherstone, 1.0 / 60.0);
+  PhysicsParams pp = exactPhysics(SolverKind::Featherstone, 1.0 / 60.0);
   ASSERT_GT(pp.max_step_rotation, 0.0);
   ChainWorld cw = makeChainWorld(pp, cp, anchor(AnchorMotion::Fixed));
   const double e0 = cw.world.energy();

@@ -15,7 +15,7 @@
 namespace ponyhop {
 namespace {
 
-constexpr double kRad = 180.0 / std::numbers::pi;
+using testing::kRad;
 
 // A hopper in its own world (world.step() runs its Think first), with the measurements every test
 // here needs.

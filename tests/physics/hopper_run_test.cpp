@@ -14,12 +14,12 @@
 namespace ponyhop {
 namespace {
 
-constexpr double kRad = 180.0 / std::numbers::pi;
+using testing::kRad;
 
-struct HopRun : testing::HopperWorld {
+struct Runner : testing::HopperWorld {
   double max_tilt = 0.0;
 
-  explicit HopRun(const HopperParams& hp) : HopperWorld(hp) {}
+  explicit Runner(const HopperParams& hp) : HopperWorld(hp) {}
   Eigen::Vector3d position() const { return body().x; }
   void until(double T) {
     while (world.ok() && world.time() < T - 1e-9) {
@@ -44,7 +44,7 @@ TEST(HopperRun, RunsAlongXThenYThenDiagonallyThenStops) {
   HopperParams hp;
   const double d = std::sqrt(0.5);
   hp.script = {key(0.0, 0.0, 0.0), key(2.0, 1.0, 0.0), key(16.0, 0.0, 1.0), key(30.0, d, d), key(44.0, 0.0, 0.0)};
-  HopRun run(hp);
+  Runner run(hp);
   struct Leg {
     const char* name;
     double t0, t1;
@@ -73,7 +73,7 @@ TEST(HopperRun, RunsAlongXThenYThenDiagonallyThenStops) {
 TEST(HopperRun, HeadingFollowsItsCommand) {
   HopperParams hp;
   hp.script = {key(0.0, 0.0, 0.0, 0.0), key(2.0, 0.0, 0.0, 90.0), key(8.0, 0.5, 0.0, -45.0)};
-  HopRun run(hp);
+  Runner run(hp);
   run.until(7.5);
   ASSERT_TRUE(run.world.ok()) << run.world.status();
   const double yaw1 = run.hopper->attitude(run.world)[2] * kRad;
@@ -97,7 +97,7 @@ TEST(HopperRun, SpeedRangeThatTracksWithinTenPercent) {
   for (double s : speeds) {
     HopperParams hp;
     hp.command.vx = s;
-    HopRun run(hp);
+    Runner run(hp);
     const Eigen::Vector2d v = run.meanVelocity(8.0, 14.0);
     const bool ok = run.world.ok() && run.max_tilt * kRad < 15.0;
     const double error = ok ? std::abs(v.x() - s) / s : 1e9;
@@ -123,7 +123,7 @@ TEST(HopperRun, SpeedRangeThatTracksWithinTenPercent) {
 // machine and its hop count, refuses an out-of-range command with the field named (and keeps the
 // old one), and the new velocity is tracked.
 TEST(HopperRun, SetCommandWhileRunning) {
-  HopRun run{HopperParams{}};
+  Runner run{HopperParams{}};
   run.until(3.0);
   const int hops = run.hopper->hops();
   ASSERT_GT(hops, 0);

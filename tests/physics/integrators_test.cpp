@@ -314,7 +314,7 @@ TEST(PhysicsIntegrator, ToleranceCountsSubstepsItCouldNotBringBelow) {
 
 // ---------------------------------------------------------------------------------------------
 // Tables for docs/STABILITY.md (not run by ctest):
-//   build-integ/tests/integrators_test --gtest_also_run_disabled_tests --gtest_filter='*Table*'
+//   build-integ/tests/physics_tests --gtest_also_run_disabled_tests --gtest_filter='*Table*'
 
 // The default method on the canonical chain: N = 8, 32; fixed and shaking anchor; dt 1/60..1/1920;
 // 5 s each.

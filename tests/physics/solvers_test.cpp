@@ -18,11 +18,10 @@
 namespace ponyhop {
 namespace {
 
+using testing::exactPhysics;
 using testing::linkPositions;
 using testing::maxDistance;
 using testing::runFor;
-
-PhysicsParams physics(SolverKind solver, double dt = 1.0 / 960.0) { return testing::exactPhysics(solver, dt); }
 
 AnchorParams shake() {
   AnchorParams a;
@@ -33,7 +32,7 @@ AnchorParams shake() {
 ChainWorld chainWorld(SolverKind solver, int links, AnchorParams anchor = {}, double dt = 1.0 / 960.0) {
   ChainParams cp;
   cp.links = links;
-  ChainWorld cw = makeChainWorld(physics(solver, dt), cp, anchor);
+  ChainWorld cw = makeChainWorld(exactPhysics(solver, dt), cp, anchor);
   EXPECT_TRUE(cw.world.ok()) << cw.world.status();
   return cw;
 }
@@ -107,7 +106,7 @@ int addHub(World& world) {
 // end of the first (a branch below a branch), plus a V of two chains from the world joined at
 // their tips (joints to the world are leaves of the graph: a path through the world is no loop).
 TEST(PhysicsSolver, TreeLambdaMatchesDenseOnBranchedTrees) {
-  World world(physics(SolverKind::Dense));
+  World world(exactPhysics(SolverKind::Dense));
   const int h = addHub(world);
   ChainParams cp;
   cp.links = 5;
@@ -137,7 +136,7 @@ TEST(PhysicsSolver, TreeLambdaMatchesDenseOnBranchedTrees) {
 // steps (with projection through the same solver) keep the loop closed.
 TEST(PhysicsSolver, TreeSolverHandlesALoopAsExtraRows) {
   for (SolverKind kind : {SolverKind::Dense, SolverKind::Tree}) {
-    World world(physics(kind));
+    World world(exactPhysics(kind));
     const int h = addHub(world);
     ChainParams cp;
     cp.links = 6;
@@ -160,7 +159,7 @@ TEST(PhysicsSolver, TreeSolverHandlesALoopAsExtraRows) {
 // its back: run it with the dense solver and compare the tree solver's lambda at many states,
 // in flight and in stance.
 TEST(PhysicsSolver, TreeLambdaMatchesDenseOnTheHopperWithAPonytail) {
-  PhysicsParams pp = physics(SolverKind::Dense, 1.0 / 480.0);
+  PhysicsParams pp = exactPhysics(SolverKind::Dense, 1.0 / 480.0);
   World world(pp);
   const auto hopper_ptr = Hopper::add(world, HopperParams{});
   const Hopper& hopper = *hopper_ptr;

@@ -197,7 +197,7 @@ TEST(Sim, TheDefaultMethodKeepsTheEnergyOfAWhippingChainForAMinute) {
 // The default method's energy on the released 8-link chain (docs/STABILITY.md, "Why 1.25x" and
 // "Long runs drift"): max |E - E0| / |E0| over every step (E against the hanging chain, as the
 // bench's energy_drift_rel), at each dt over five starting directions; then 60 s at 1/240. Not
-// run by ctest: build/tests/sim_test --gtest_also_run_disabled_tests --gtest_filter='*EnergyTable*'
+// run by ctest: build/tests/sim_tests --gtest_also_run_disabled_tests --gtest_filter='*EnergyTable*'
 TEST(Sim, DISABLED_DefaultMethodEnergyTable) {
   const char* directions[] = {"[1,0,0]", "[1,0,0.02]", "[1,0.05,0]", "[1,0,-0.03]", "[1,0.02,0.02]"};
   const auto drift = [&](int rate, const char* direction, double seconds) {
