@@ -226,6 +226,7 @@ bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Const
 Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& joints) {
   stats_.active = 0;
   stats_.deepest = 0.0;
+  stats_.overshoot = 0.0;
   stats_.iterations = 0;
   // The rows that overlap (gap < 0) of the rows found at the active set's reach.
   std::vector<Row> rows;
@@ -247,7 +248,9 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
   }
   bool impact = false;
   for (const Row& r : rows) {
-    stats_.deepest = std::max(stats_.deepest, -r.gap);
+    // Contacts' gaps are lengths, limits' angles: each has its own readout.
+    double& worst = r.angular ? stats_.overshoot : stats_.deepest;
+    worst = std::max(worst, -r.gap);
     if (!memory_.active.count({r.key0, r.key1})) impact = true;
   }
   if (impact) ++stats_.impacts;

@@ -65,7 +65,8 @@ struct CollisionParams {
 
 struct CollisionStats {
   int active = 0;                   // contact and limit rows' constraints active after the last stage
-  double deepest = 0.0;             // m, deepest overlap found by the last stage (before pushing out)
+  double deepest = 0.0;             // m, deepest contact overlap found by the last stage (before pushing out)
+  double overshoot = 0.0;           // rad, furthest a joint limit was passed at the last stage
   double max_energy_gain = -1e300;  // J, kinetic energy after - before the impulses, any stage
   int impacts = 0;                  // stages with at least one newly touching contact
   int iterations = 0;               // projected Gauss-Seidel sweeps of the last stage (impulses + push-outs)
