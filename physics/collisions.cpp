@@ -283,22 +283,9 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
       if (b.isDynamic()) e += b.kineticEnergy();
     return e;
   }();
-  const Eigen::VectorXd p_start = p;
-  PgsSettings settings = pgsSettings(rows, true);
-  PgsResult solved = projectedGaussSeidel(delassus_, u0, target, blocks, mu, p, settings);
+  const PgsResult solved = projectedGaussSeidel(delassus_, u0, target, blocks, mu, p, pgsSettings(rows, true));
   stats_.iterations = solved.sweeps;
   stats_.sweeps += solved.sweeps;
-  if (solved.capped) {
-    // Block sweeps that do not settle (two sliding contacts trading their directions, a few in
-    // a thousand stages): row by row from the same start, to 5000 sweeps, as before issue 31. A
-    // capped block solve left the toss 3 mm deep at the next stage.
-    p = p_start;
-    settings.exact_blocks = false;
-    settings.max_sweeps = 5000;
-    solved = projectedGaussSeidel(delassus_, u0, target, blocks, mu, p, settings);
-    stats_.iterations += solved.sweeps;
-    stats_.sweeps += solved.sweeps;
-  }
   stats_.capped += solved.capped ? 1 : 0;
   memory_.impulses.clear();
   for (const auto& [first, count] : blocks) {
