@@ -146,6 +146,8 @@ double signedDistance(const PlacedShape& p, const Eigen::Vector3d& x, Eigen::Vec
       g = Eigen::Vector3d::UnitZ();
       break;
     case ShapeType::Sdf:
+      // The search's samples need no gradient (the same value, a third of the interpolation).
+      if (!gradient) return s.sdf->distance(local);
       d = s.sdf->distanceAndGradient(local, g);
       break;
   }
