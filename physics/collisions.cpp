@@ -196,16 +196,20 @@ bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Const
   joint_system_.evaluate(bodies, joints);
   const bool has_joints = joint_system_.rows() > 0;
   if (has_joints && !solver_->factor(bodies, joint_system_)) return false;
-  w_.assign(m, std::vector<Vector6d>(n, Vector6d::Zero()));
+  // The columns' storage and the joint solves' work space are kept from stage to stage: a
+  // steady stage allocates nothing here.
+  w_.resize(m);
   for (int k = 0; k < m; ++k) {
     const JRow& j = jrows_[k];
     std::vector<Vector6d>& w = w_[k];
+    w.assign(n, Vector6d::Zero());
     if (dynamicBody(bodies, j.a)) w[j.a] += applyInverseMass(bodies[j.a], j.ja);
     if (dynamicBody(bodies, j.b)) w[j.b] += applyInverseMass(bodies[j.b], j.jb);
     if (has_joints) {
-      const Eigen::VectorXd y = solver_->solve(joint_system_.times(w));
-      const std::vector<Vector6d> corr = solver_->massWeightedTranspose(bodies, joint_system_, y);
-      for (size_t i = 0; i < n; ++i) w[i] -= corr[i];
+      joint_system_.timesInto(w, joint_rhs_);
+      solver_->solveInto(joint_rhs_, joint_y_);
+      solver_->massWeightedTransposeInto(bodies, joint_system_, joint_y_, joint_corr_);
+      for (size_t i = 0; i < n; ++i) w[i] -= joint_corr_[i];
     }
   }
   delassus_.resize(m, m);

@@ -171,6 +171,8 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
   };
   std::vector<JRow> jrows_;
   std::vector<std::vector<Vector6d>> w_;  // per row: W_c column (per body)
+  Eigen::VectorXd joint_rhs_, joint_y_;   // a column's joint solve: J_j M^-1 J_c^T, its multipliers
+  std::vector<Vector6d> joint_corr_;      // and their mass-weighted correction
   Eigen::MatrixXd delassus_;
   // touching()'s rows and the state they belong to.
   mutable std::vector<Row> touching_;
