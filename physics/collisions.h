@@ -23,9 +23,10 @@
 //      better than a few 1e-2) and 200 sweeps at most, with analytic shapes only at 1e-13 and
 //      5000 (a stop at the cap is counted: CollisionStats::capped). With e = 0 the kinetic energy cannot rise:
 //      dK = P.v' - P^T D P / 2 <= 0, since P_n v_n' = 0 and P_t.v_t' <= 0.
-//   2. Positions. What still overlaps by more than 1 um (10 um against a grid) is pushed out by the least mass-weighted
-//      displacement that keeps the joints (the same W_c with the gaps as targets, normal rows
-//      only), then the joints are projected back onto C = 0 (their second-order error).
+//   2. Positions. What still overlaps by more than 1 um (10 um against a grid) is pushed out by
+//      the least mass-weighted displacement that keeps the joints (the same W_c with the gaps as
+//      targets, normal rows only), then the joints are projected back onto C = 0 (their
+//      second-order error).
 //   3. The active set: contacts that are touching after the stage are "active"; the next step
 //      treats them as persisting.
 // Contacts are found once per state: every search runs at the active set's reach (1 um) and the
