@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "physics/mesh_sdf.h"
 #include "physics/pgs.h"
 #include "physics/solver_factory.h"
 #include "physics/stabilization.h"
@@ -74,6 +75,7 @@ void Collisions::attach(World& world) {
     return;
   }
   world.addContactSet(shared_from_this());
+  memory_.cores = coresInGrids(world.bodies());  // the first substep's moves count from here
 }
 
 void Collisions::update(World& world) {
@@ -167,6 +169,67 @@ bool Collisions::impactIn(const std::vector<RigidBody>& bodies) const {
   for (const Row& r : touching(bodies)) {
     if (r.gap < -params_.impact_tolerance && !memory_.active.count({r.key0, r.key1})) return true;
   }
+  return movedTooFar(bodies);
+}
+
+bool Collisions::coreInGrid(const std::vector<RigidBody>& bodies, const Pair& pair, Eigen::Vector3d ends[2],
+                            const Shape** rounded, const Shape** grid) const {
+  int ri = pair.a, gi = pair.b;
+  if (shapes_[ri].type == ShapeType::Sdf) std::swap(ri, gi);
+  if (shapes_[gi].type != ShapeType::Sdf || !shapes_[ri].rounded()) return false;
+  const Shape& r = shapes_[ri];
+  const Shape& g = shapes_[gi];
+  const RigidBody& R = bodyOf(bodies, owners_[ri]);
+  const RigidBody& G = bodyOf(bodies, owners_[gi]);
+  // World to the grid's frame: the inverse of its body's pose times its local pose.
+  const Eigen::Quaterniond to_grid = (G.q * g.rotation).conjugate();
+  const Eigen::Vector3d grid_origin = G.x + G.q * g.offset;
+  const double half = r.type == ShapeType::Capsule ? r.half_length : 0.0;
+  for (int k = 0; k < 2; ++k) {
+    const Eigen::Vector3d local = r.offset + r.rotation * Eigen::Vector3d(0.0, 0.0, k == 0 ? half : -half);
+    ends[k] = to_grid * (R.x + R.q * local - grid_origin);
+  }
+  *rounded = &r;
+  *grid = &g;
+  return true;
+}
+
+std::vector<Eigen::Vector3d> Collisions::coresInGrids(const std::vector<RigidBody>& bodies) const {
+  std::vector<Eigen::Vector3d> cores;
+  for (const Pair& pr : pairs_) {
+    Eigen::Vector3d ends[2];
+    const Shape *r = nullptr, *g = nullptr;
+    if (!coreInGrid(bodies, pr, ends, &r, &g)) continue;
+    cores.push_back(ends[0]);
+    cores.push_back(ends[1]);
+  }
+  return cores;
+}
+
+// Why this bounds what passes between two stages: docs/PHYSICS.md, "No pass-through". Every core
+// point moves (in the grid's frame) by an affine mix of its ends' displacements, so by at most the
+// larger; the true distance is 1-Lipschitz, so a core whose points all move less than their
+// clearance plus half the thinnest radius never reaches the surface.
+bool Collisions::movedTooFar(const std::vector<RigidBody>& bodies) const {
+  size_t at = 0;
+  for (const Pair& pr : pairs_) {
+    Eigen::Vector3d ends[2];
+    const Shape *r = nullptr, *g = nullptr;
+    if (!coreInGrid(bodies, pr, ends, &r, &g)) continue;
+    if (at + 2 > memory_.cores.size()) return false;  // no stage yet: nothing to compare with
+    const Eigen::Vector3d& a0 = memory_.cores[at];
+    const Eigen::Vector3d& b0 = memory_.cores[at + 1];
+    at += 2;
+    const double moved = std::max((ends[0] - a0).norm(), (ends[1] - b0).norm());
+    const double ra = r->type == ShapeType::Capsule ? r->radius_a : r->radius;
+    const double rb = r->type == ShapeType::Capsule ? r->radius_b : r->radius;
+    const double allowed = 0.5 * std::min(ra, rb);
+    if (moved <= allowed) continue;  // the common case: no query
+    // The clearance at the last stage, from the grid at the core's ends there (the grid does not
+    // move in its own frame); the margin is skin, not clearance.
+    const double clearance = gridGapBound(*g->sdf, a0, b0, ra, rb) - params_.margin;
+    if (moved > allowed + std::max(0.0, clearance)) return true;
+  }
   return false;
 }
 
@@ -238,6 +301,9 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
   stats_.deepest = 0.0;
   stats_.overshoot = 0.0;
   stats_.iterations = 0;
+  // The World splits a substep in which a link moved too far (impactIn) until its splits run out:
+  // one accepted anyway is counted.
+  if (movedTooFar(bodies)) ++stats_.too_fast;
   // The rows that overlap (gap < 0) of the rows found at the active set's reach.
   std::vector<Row> rows;
   const auto overlapping = [&rows](const std::vector<Row>& found) {
@@ -246,6 +312,7 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
       if (r.gap < 0.0) rows.push_back(r);
   };
   const auto finish = [&](const std::vector<Row>& found) {
+    memory_.cores = coresInGrids(bodies);
     memory_.active.clear();
     for (const Row& r : found) memory_.active.insert({r.key0, r.key1});
     stats_.active = static_cast<int>(memory_.active.size());
