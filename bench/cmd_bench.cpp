@@ -445,7 +445,8 @@ struct CollisionCostRow {
 
 std::vector<CollisionCostRow> benchCollisionCost(const std::string& scene_path, double seconds, int repeats) {
   std::vector<CollisionCostRow> rows;
-  for (const char* clip : {"showcase", "whip", "toss"}) {
+  // snap: the stress clip, 4x the toss's peak angular speed (tests/engine/collision_head_test.cpp).
+  for (const char* clip : {"showcase", "whip", "toss", "snap"}) {
     for (bool on : {false, true}) {
       CollisionCostRow r;
       r.clip = clip;
