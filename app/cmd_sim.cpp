@@ -54,10 +54,11 @@ std::string baseHeader(const Sim& sim) {
 }
 
 // A scene with collisions adds the active contacts and limits after the last contact stage, the
-// deepest overlap (m) that stage found before it pushed the bodies apart, its projected
-// Gauss-Seidel sweeps (impulses and push-outs) and the solves stopped at their sweep cap so far.
+// deepest contact overlap (m) that stage found before it pushed the bodies apart, the furthest a
+// joint limit was passed there (rad), its projected Gauss-Seidel sweeps (impulses and push-outs)
+// and the solves stopped at their sweep cap so far.
 std::string header(const Sim& sim) {
-  return baseHeader(sim) + (sim.collisions() ? ",contacts,deepest,pgs_sweeps,pgs_capped" : "");
+  return baseHeader(sim) + (sim.collisions() ? ",contacts,deepest,limit_overshoot,pgs_sweeps,pgs_capped" : "");
 }
 
 SimRow baseSample(const Sim& sim) {
@@ -86,6 +87,7 @@ SimRow sample(const Sim& sim) {
   if (const Collisions* c = sim.collisions()) {
     r.values.push_back(c->stats().active);
     r.values.push_back(c->stats().deepest);
+    r.values.push_back(c->stats().overshoot);
     r.values.push_back(c->stats().iterations);
     r.values.push_back(static_cast<double>(c->stats().capped));
   }

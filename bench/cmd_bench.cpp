@@ -433,8 +433,9 @@ struct CollisionCostRow {
   double us_per_step = 0.0;  // wall time of Sim::step, median of the repeats
   double contact_us = 0.0;   // of which the contact stage (impulses, push-out, the impact check's splits elsewhere)
   int steps = 0;
-  int max_contacts = 0;  // contacts and active limits after a step, at most
-  double deepest = 0.0;  // m, deepest overlap a contact stage found (before pushing out)
+  int max_contacts = 0;    // contacts and active limits after a step, at most
+  double deepest = 0.0;    // m, deepest contact overlap a contact stage found (before pushing out)
+  double overshoot = 0.0;  // rad, furthest a joint limit (the root cone) was passed at a contact stage
   // Per step, of the last repeat: distance-field evaluations, projected Gauss-Seidel sweeps; and
   // the solves that stopped at their sweep cap (CollisionStats).
   double queries = 0.0, sweeps = 0.0;
@@ -444,7 +445,8 @@ struct CollisionCostRow {
 
 std::vector<CollisionCostRow> benchCollisionCost(const std::string& scene_path, double seconds, int repeats) {
   std::vector<CollisionCostRow> rows;
-  for (const char* clip : {"showcase", "whip", "toss"}) {
+  // snap: the stress clip, 4x the toss's peak angular speed (tests/engine/collision_head_test.cpp).
+  for (const char* clip : {"showcase", "whip", "toss", "snap"}) {
     for (bool on : {false, true}) {
       CollisionCostRow r;
       r.clip = clip;
@@ -466,6 +468,7 @@ std::vector<CollisionCostRow> benchCollisionCost(const std::string& scene_path, 
           if (const Collisions* c = sim.collisions()) {
             r.max_contacts = std::max(r.max_contacts, c->stats().active);
             r.deepest = std::max(r.deepest, c->stats().deepest);
+            r.overshoot = std::max(r.overshoot, c->stats().overshoot);
           }
         }
         const double wall = std::chrono::duration<double>(Clock::now() - t1).count();
@@ -519,11 +522,13 @@ void appendCollisionCost(const std::string& path, const std::string& scene, doub
        "collision per step is on - off; impact splits (a substep redone as two halves) are in on's step time, not in "
        "the contact stage. Per step: the distance-field evaluations of the narrow phase (queries) and the projected "
        "Gauss-Seidel sweeps (impulses and push-outs); capped: solves that stopped at their sweep cap before their "
-       "tolerance. Load average before / after: "
+       "tolerance. Deepest contact: the deepest overlap (mm, against the grid, margin included) a contact stage found "
+       "before it pushed the links out; limit overshoot: the furthest (mrad) the root cone was passed there. Load "
+       "average before / after: "
     << load_before << " / " << load_after << ".\n\n"
     << "| clip | collision | us/step | contact stage us/step | on / off | build s | steps | queries/step | PGS "
-       "sweeps/step | capped | max contacts | deepest overlap (mm) | status |\n"
-    << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+       "sweeps/step | capped | max contacts | deepest contact (mm) | limit overshoot (mrad) | status |\n"
+    << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   double off_us = 0.0;
   for (const CollisionCostRow& r : rows) {
     if (!r.on) off_us = r.us_per_step;
@@ -531,15 +536,16 @@ void appendCollisionCost(const std::string& path, const std::string& scene, doub
       << fmt(r.contact_us, "%.1f") << " | " << (r.on && off_us > 0.0 ? fmt(r.us_per_step / off_us, "%.2f") : "")
       << " | " << fmt(r.build_s, "%.2f") << " | " << r.steps << " | " << (r.on ? fmt(r.queries, "%.0f") : "") << " | "
       << (r.on ? fmt(r.sweeps, "%.1f") : "") << " | " << (r.on ? std::to_string(r.capped) : "") << " | "
-      << r.max_contacts << " | " << fmt(1e3 * r.deepest, "%.2f") << " | " << r.status << " |\n";
+      << r.max_contacts << " | " << fmt(1e3 * r.deepest, "%.2f") << " | " << fmt(1e3 * r.overshoot, "%.2f") << " | "
+      << r.status << " |\n";
   }
   std::ofstream csv(std::filesystem::path(path).parent_path() / "collision.csv");
   csv << "clip,collision,us_per_step,contact_us_per_step,build_s,steps,queries_per_step,sweeps_per_step,capped,"
-         "max_contacts,deepest_m,status\n";
+         "max_contacts,deepest_m,overshoot_rad,status\n";
   for (const CollisionCostRow& r : rows) {
     csv << r.clip << ',' << (r.on ? "on" : "off") << ',' << r.us_per_step << ',' << r.contact_us << ',' << r.build_s
         << ',' << r.steps << ',' << r.queries << ',' << r.sweeps << ',' << r.capped << ',' << r.max_contacts << ','
-        << r.deepest << ',' << r.status << '\n';
+        << r.deepest << ',' << r.overshoot << ',' << r.status << '\n';
   }
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "physics/mesh_sdf.h"
 #include "physics/pgs.h"
 #include "physics/solver_factory.h"
 #include "physics/stabilization.h"
@@ -14,9 +15,15 @@ namespace {
 
 constexpr double kActiveSlop = 1e-6;  // m: a contact this close after the stage persists
 constexpr int kPositionPasses = 4;    // push-out and joint re-projection rounds at most
-// m: an overlap this small is left (the grid is accurate to about 0.1 mm; a push-out to the last
-// 1e-10 m only repeats searches), and a contact this close is active.
-constexpr double kOverlapTolerance = kActiveSlop;
+// m: an overlap this small is left. Between analytic shapes 1 um (a push-out to the last 1e-10 m
+// only repeats searches). Against a grid (accurate to about 0.1 mm) 10 um, a tenth of the impact
+// tolerance: a link resting on the head sinks a few um a substep, and pushing each of those out
+// took a second search of every link, most of the stage.
+double overlapTolerance(const std::vector<Collisions::Row>& rows) {
+  for (const Collisions::Row& r : rows)
+    if (r.grid) return 1e-5;
+  return kActiveSlop;
+}
 // The solves stop at the accuracy of the geometry. Against a grid: 1e-4 of the impulse (or
 // push-out) scale, at most 200 sweeps (its normals are good to a few 1e-2, its gaps to 0.1 mm).
 // Analytic shapes only: 1e-13, at most 5000 (exact normals: a box rests without creeping).
@@ -68,6 +75,7 @@ void Collisions::attach(World& world) {
     return;
   }
   world.addContactSet(shared_from_this());
+  memory_.cores = coresInGrids(world.bodies());  // the first substep's moves count from here
 }
 
 void Collisions::update(World& world) {
@@ -161,6 +169,67 @@ bool Collisions::impactIn(const std::vector<RigidBody>& bodies) const {
   for (const Row& r : touching(bodies)) {
     if (r.gap < -params_.impact_tolerance && !memory_.active.count({r.key0, r.key1})) return true;
   }
+  return movedTooFar(bodies);
+}
+
+bool Collisions::coreInGrid(const std::vector<RigidBody>& bodies, const Pair& pair, Eigen::Vector3d ends[2],
+                            const Shape** rounded, const Shape** grid) const {
+  int ri = pair.a, gi = pair.b;
+  if (shapes_[ri].type == ShapeType::Sdf) std::swap(ri, gi);
+  if (shapes_[gi].type != ShapeType::Sdf || !shapes_[ri].rounded()) return false;
+  const Shape& r = shapes_[ri];
+  const Shape& g = shapes_[gi];
+  const RigidBody& R = bodyOf(bodies, owners_[ri]);
+  const RigidBody& G = bodyOf(bodies, owners_[gi]);
+  // World to the grid's frame: the inverse of its body's pose times its local pose.
+  const Eigen::Quaterniond to_grid = (G.q * g.rotation).conjugate();
+  const Eigen::Vector3d grid_origin = G.x + G.q * g.offset;
+  const double half = r.type == ShapeType::Capsule ? r.half_length : 0.0;
+  for (int k = 0; k < 2; ++k) {
+    const Eigen::Vector3d local = r.offset + r.rotation * Eigen::Vector3d(0.0, 0.0, k == 0 ? half : -half);
+    ends[k] = to_grid * (R.x + R.q * local - grid_origin);
+  }
+  *rounded = &r;
+  *grid = &g;
+  return true;
+}
+
+std::vector<Eigen::Vector3d> Collisions::coresInGrids(const std::vector<RigidBody>& bodies) const {
+  std::vector<Eigen::Vector3d> cores;
+  for (const Pair& pr : pairs_) {
+    Eigen::Vector3d ends[2];
+    const Shape *r = nullptr, *g = nullptr;
+    if (!coreInGrid(bodies, pr, ends, &r, &g)) continue;
+    cores.push_back(ends[0]);
+    cores.push_back(ends[1]);
+  }
+  return cores;
+}
+
+// Why this bounds what passes between two stages: docs/PHYSICS.md, "No pass-through". Every core
+// point moves (in the grid's frame) by an affine mix of its ends' displacements, so by at most the
+// larger; the true distance is 1-Lipschitz, so a core whose points all move less than their
+// clearance plus half the thinnest radius never reaches the surface.
+bool Collisions::movedTooFar(const std::vector<RigidBody>& bodies) const {
+  size_t at = 0;
+  for (const Pair& pr : pairs_) {
+    Eigen::Vector3d ends[2];
+    const Shape *r = nullptr, *g = nullptr;
+    if (!coreInGrid(bodies, pr, ends, &r, &g)) continue;
+    if (at + 2 > memory_.cores.size()) return false;  // no stage yet: nothing to compare with
+    const Eigen::Vector3d& a0 = memory_.cores[at];
+    const Eigen::Vector3d& b0 = memory_.cores[at + 1];
+    at += 2;
+    const double moved = std::max((ends[0] - a0).norm(), (ends[1] - b0).norm());
+    const double ra = r->type == ShapeType::Capsule ? r->radius_a : r->radius;
+    const double rb = r->type == ShapeType::Capsule ? r->radius_b : r->radius;
+    const double allowed = 0.5 * std::min(ra, rb);
+    if (moved <= allowed) continue;  // the common case: no query
+    // The clearance at the last stage, from the grid at the core's ends there (the grid does not
+    // move in its own frame); the margin is skin, not clearance.
+    const double clearance = gridGapBound(*g->sdf, a0, b0, ra, rb) - params_.margin;
+    if (moved > allowed + std::max(0.0, clearance)) return true;
+  }
   return false;
 }
 
@@ -196,16 +265,20 @@ bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Const
   joint_system_.evaluate(bodies, joints);
   const bool has_joints = joint_system_.rows() > 0;
   if (has_joints && !solver_->factor(bodies, joint_system_)) return false;
-  w_.assign(m, std::vector<Vector6d>(n, Vector6d::Zero()));
+  // The columns' storage and the joint solves' work space are kept from stage to stage: a
+  // steady stage allocates nothing here.
+  w_.resize(m);
   for (int k = 0; k < m; ++k) {
     const JRow& j = jrows_[k];
     std::vector<Vector6d>& w = w_[k];
+    w.assign(n, Vector6d::Zero());
     if (dynamicBody(bodies, j.a)) w[j.a] += applyInverseMass(bodies[j.a], j.ja);
     if (dynamicBody(bodies, j.b)) w[j.b] += applyInverseMass(bodies[j.b], j.jb);
     if (has_joints) {
-      const Eigen::VectorXd y = solver_->solve(joint_system_.times(w));
-      const std::vector<Vector6d> corr = solver_->massWeightedTranspose(bodies, joint_system_, y);
-      for (size_t i = 0; i < n; ++i) w[i] -= corr[i];
+      joint_system_.timesInto(w, joint_rhs_);
+      solver_->solveInto(joint_rhs_, joint_y_);
+      solver_->massWeightedTransposeInto(bodies, joint_system_, joint_y_, joint_corr_);
+      for (size_t i = 0; i < n; ++i) w[i] -= joint_corr_[i];
     }
   }
   delassus_.resize(m, m);
@@ -226,7 +299,11 @@ bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Const
 Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& joints) {
   stats_.active = 0;
   stats_.deepest = 0.0;
+  stats_.overshoot = 0.0;
   stats_.iterations = 0;
+  // The World splits a substep in which a link moved too far (impactIn) until its splits run out:
+  // one accepted anyway is counted.
+  if (movedTooFar(bodies)) ++stats_.too_fast;
   // The rows that overlap (gap < 0) of the rows found at the active set's reach.
   std::vector<Row> rows;
   const auto overlapping = [&rows](const std::vector<Row>& found) {
@@ -235,6 +312,7 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
       if (r.gap < 0.0) rows.push_back(r);
   };
   const auto finish = [&](const std::vector<Row>& found) {
+    memory_.cores = coresInGrids(bodies);
     memory_.active.clear();
     for (const Row& r : found) memory_.active.insert({r.key0, r.key1});
     stats_.active = static_cast<int>(memory_.active.size());
@@ -247,7 +325,9 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
   }
   bool impact = false;
   for (const Row& r : rows) {
-    stats_.deepest = std::max(stats_.deepest, -r.gap);
+    // Contacts' gaps are lengths, limits' angles: each has its own readout.
+    double& worst = r.angular ? stats_.overshoot : stats_.deepest;
+    worst = std::max(worst, -r.gap);
     if (!memory_.active.count({r.key0, r.key1})) impact = true;
   }
   if (impact) ++stats_.impacts;
@@ -280,22 +360,9 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
       if (b.isDynamic()) e += b.kineticEnergy();
     return e;
   }();
-  const Eigen::VectorXd p_start = p;
-  PgsSettings settings = pgsSettings(rows, true);
-  PgsResult solved = projectedGaussSeidel(delassus_, u0, target, blocks, mu, p, settings);
+  const PgsResult solved = projectedGaussSeidel(delassus_, u0, target, blocks, mu, p, pgsSettings(rows, true));
   stats_.iterations = solved.sweeps;
   stats_.sweeps += solved.sweeps;
-  if (solved.capped) {
-    // Block sweeps that do not settle (two sliding contacts trading their directions, a few in
-    // a thousand stages): row by row from the same start, to 5000 sweeps, as before issue 31. A
-    // capped block solve left the toss 3 mm deep at the next stage.
-    p = p_start;
-    settings.exact_blocks = false;
-    settings.max_sweeps = 5000;
-    solved = projectedGaussSeidel(delassus_, u0, target, blocks, mu, p, settings);
-    stats_.iterations += solved.sweeps;
-    stats_.sweeps += solved.sweeps;
-  }
   stats_.capped += solved.capped ? 1 : 0;
   memory_.impulses.clear();
   for (const auto& [first, count] : blocks) {
@@ -323,7 +390,7 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
     if (pass > 0) overlapping(touching(bodies));
     double worst = 0.0;
     for (const Row& r : rows) worst = std::max(worst, -r.gap);
-    if (worst <= kOverlapTolerance) break;
+    if (worst <= overlapTolerance(rows)) break;
     const int mo = static_cast<int>(rows.size());
     if (pass == 0) {
       // The same poses and rows as the impulses: their W_c columns and D, normal rows only (each

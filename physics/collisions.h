@@ -23,9 +23,10 @@
 //      better than a few 1e-2) and 200 sweeps at most, with analytic shapes only at 1e-13 and
 //      5000 (a stop at the cap is counted: CollisionStats::capped). With e = 0 the kinetic energy cannot rise:
 //      dK = P.v' - P^T D P / 2 <= 0, since P_n v_n' = 0 and P_t.v_t' <= 0.
-//   2. Positions. What still overlaps by more than 1 um is pushed out by the least mass-weighted
-//      displacement that keeps the joints (the same W_c with the gaps as targets, normal rows
-//      only), then the joints are projected back onto C = 0 (their second-order error).
+//   2. Positions. What still overlaps by more than 1 um (10 um against a grid) is pushed out by
+//      the least mass-weighted displacement that keeps the joints (the same W_c with the gaps as
+//      targets, normal rows only), then the joints are projected back onto C = 0 (their
+//      second-order error).
 //   3. The active set: contacts that are touching after the stage are "active"; the next step
 //      treats them as persisting.
 // Contacts are found once per state: every search runs at the active set's reach (1 um) and the
@@ -65,7 +66,8 @@ struct CollisionParams {
 
 struct CollisionStats {
   int active = 0;                   // contact and limit rows' constraints active after the last stage
-  double deepest = 0.0;             // m, deepest overlap found by the last stage (before pushing out)
+  double deepest = 0.0;             // m, deepest contact overlap found by the last stage (before pushing out)
+  double overshoot = 0.0;           // rad, furthest a joint limit was passed at the last stage
   double max_energy_gain = -1e300;  // J, kinetic energy after - before the impulses, any stage
   int impacts = 0;                  // stages with at least one newly touching contact
   int iterations = 0;               // projected Gauss-Seidel sweeps of the last stage (impulses + push-outs)
@@ -73,6 +75,10 @@ struct CollisionStats {
   long queries = 0;  // distance-field evaluations of the narrow phase
   long sweeps = 0;   // projected Gauss-Seidel sweeps
   long capped = 0;   // solves stopped at the sweep cap before their tolerance
+  // Substeps accepted although a link moved further against a distance grid than the check
+  // between two stages allows (the World's splits ran out: 1/1024 of a substep); 0 keeps the
+  // promise that nothing passes through (docs/PHYSICS.md, "No pass-through").
+  long too_fast = 0;
 };
 
 class Collisions final : public ContactSet, public std::enable_shared_from_this<Collisions> {
@@ -104,8 +110,13 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
   // The contact stage on the state just reached (joints: the world's). Returns ok or a problem.
   Status resolve(std::vector<RigidBody>& bodies, const Constraints& joints);
   // True when a contact not active at the start of the substep now overlaps by more than
-  // impact_tolerance (the World splits the substep).
+  // impact_tolerance, or when a link moved too far against a distance grid for the check to
+  // bound what it passed (movedTooFar): the World splits the substep.
   bool impactIn(const std::vector<RigidBody>& bodies) const;
+  // True when, since the last stage, an end of a rounded shape's core moved in the frame of a
+  // distance grid it is paired with by more than half the shape's thinnest radius plus its
+  // clearance from the grid at that stage (docs/PHYSICS.md, "No pass-through").
+  bool movedTooFar(const std::vector<RigidBody>& bodies) const;
 
   const CollisionParams& params() const { return params_; }
   CollisionParams& params() { return params_; }
@@ -157,7 +168,13 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
   struct Memory {
     std::set<std::pair<int, int>> active;
     std::vector<std::pair<std::pair<int, int>, Eigen::Vector3d>> impulses;  // (key0, key1) -> normal, tangents
+    std::vector<Eigen::Vector3d> cores;  // per pair against a grid: the core's ends in the grid's frame
   };
+  // A pair of a rounded shape and a distance grid (either order): its core's ends in the grid's
+  // frame and the two shapes. False for any other pair.
+  bool coreInGrid(const std::vector<RigidBody>& bodies, const Pair& pair, Eigen::Vector3d ends[2],
+                  const Shape** rounded, const Shape** grid) const;
+  std::vector<Eigen::Vector3d> coresInGrids(const std::vector<RigidBody>& bodies) const;
   Memory memory_;
   mutable CollisionStats stats_;  // touching() counts its queries
   std::unique_ptr<ConstraintSolver> solver_;
@@ -170,6 +187,8 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
   };
   std::vector<JRow> jrows_;
   std::vector<std::vector<Vector6d>> w_;  // per row: W_c column (per body)
+  Eigen::VectorXd joint_rhs_, joint_y_;   // a column's joint solve: J_j M^-1 J_c^T, its multipliers
+  std::vector<Vector6d> joint_corr_;      // and their mass-weighted correction
   Eigen::MatrixXd delassus_;
   // touching()'s rows and the state they belong to.
   mutable std::vector<Row> touching_;

@@ -146,6 +146,8 @@ double signedDistance(const PlacedShape& p, const Eigen::Vector3d& x, Eigen::Vec
       g = Eigen::Vector3d::UnitZ();
       break;
     case ShapeType::Sdf:
+      // The search's samples need no gradient (the same value, a third of the interpolation).
+      if (!gradient) return s.sdf->distance(local);
       d = s.sdf->distanceAndGradient(local, g);
       break;
   }
@@ -173,6 +175,15 @@ ContactPoint contactAt(const Core& c, const PlacedShape& b, double s) {
   return cp;
 }
 
+// S of the search below for the core from la to lb (grid frame), radii ra to rb: f(s) changes by
+// at most S |s - s'|.
+double coreSlope(const SignedDistanceGrid& g, const Eigen::Vector3d& la, const Eigen::Vector3d& lb, double ra,
+                 double rb) {
+  const bool inside = (la.array() >= g.origin().array()).all() && (la.array() <= g.upper().array()).all() &&
+                      (lb.array() >= g.origin().array()).all() && (lb.array() <= g.upper().array()).all();
+  return g.lipschitz() * (lb - la).lpNorm<1>() + std::abs(rb - ra) + (inside ? 0.0 : (lb - la).norm());
+}
+
 // Distance-field queries of one search, counted into *queries when given.
 struct Counted {
   const Core& c;
@@ -198,15 +209,11 @@ struct Counted {
 double gridSearch(const Core& c, const PlacedShape& b, double reach, long* queries, double ends[2], bool* none) {
   const SignedDistanceGrid& g = *b.shape->sdf;
   const Counted f{c, b, queries};
-  const Eigen::Vector3d ab = c.b - c.a;
-  const double len = ab.norm();
+  const double len = (c.b - c.a).norm();
   const int n = std::max(2, static_cast<int>(std::ceil(2.0 * len / g.cell())));
   const Eigen::Matrix3d r = b.pose.linear();
-  const Eigen::Vector3d la = r.transpose() * (c.a - b.pose.translation()),
-                        lb = r.transpose() * (c.b - b.pose.translation());
-  const bool inside = (la.array() >= g.origin().array()).all() && (la.array() <= g.upper().array()).all() &&
-                      (lb.array() >= g.origin().array()).all() && (lb.array() <= g.upper().array()).all();
-  const double slope = g.lipschitz() * (lb - la).lpNorm<1>() + std::abs(c.rb - c.ra) + (inside ? 0.0 : len);
+  const double slope = coreSlope(g, r.transpose() * (c.a - b.pose.translation()),
+                                 r.transpose() * (c.b - b.pose.translation()), c.ra, c.rb);
   std::vector<double> fs(static_cast<size_t>(n) + 1, std::numeric_limits<double>::quiet_NaN());
   fs[0] = f(0.0);
   fs[n] = f(1.0);
@@ -277,6 +284,11 @@ ContactPoint roundedAgainst(const Core& c, const PlacedShape& b, double reach, l
 }
 
 }  // namespace
+
+double gridGapBound(const SignedDistanceGrid& g, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double ra,
+                    double rb) {
+  return 0.5 * (g.distance(a) - ra + g.distance(b) - rb - coreSlope(g, a, b, ra, rb));
+}
 
 // The radius of a sphere about the shape's origin that holds it (infinite for a plane or a grid).
 double boundingRadius(const Shape& s) {

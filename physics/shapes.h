@@ -93,6 +93,13 @@ bool supported(ShapeType a, ShapeType b);
 int collide(const PlacedShape& a, const PlacedShape& b, double reach, std::vector<ContactPoint>& out,
             long* queries = nullptr);
 
+// A lower bound of min_s D(p(s)) - r(s) over the core from a (radius ra) to b (radius rb), both in
+// the grid's own frame: the grid's values at the two ends and its Lipschitz bound over the whole
+// segment (the capsule search's first interval). The link's clearance, never overestimated; two
+// queries.
+double gridGapBound(const SignedDistanceGrid& g, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double ra,
+                    double rb);
+
 // Exact geometry used above and by the tests.
 // The point of the triangle (p0, p1, p2) closest to x (Ericson, Real-Time Collision Detection 5.1.5).
 Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,

@@ -10,6 +10,7 @@
 #include <memory>
 #include <numbers>
 
+#include "physics/mesh_sdf.h"
 #include "physics/models/chain.h"
 #include "physics/world.h"
 
@@ -219,6 +220,41 @@ TEST(Contact, InelasticImpactsNeverRaiseTheEnergy) {
   std::printf("tumbling box: impulse energy gain max %.3g J, step-to-step energy rise max %.3g J\n",
               col.stats().max_energy_gain, worst_rise);
   EXPECT_LT(world.body(box).v.norm(), 1e-6);  // at rest on the ground in the end
+}
+
+// No pass-through (docs/PHYSICS.md, "No pass-through"): a ball of radius 5 mm shot at 10 m/s onto
+// a 1 cm plate given as a distance grid moves 42 mm in a step, through the plate and clear of it,
+// so no contact is found at either end of that step. Only the check of how far a shape moved
+// against the grid since the last stage (Collisions::movedTooFar) catches it: the World splits
+// the step, and the ball stops on the plate instead of falling on below it.
+TEST(Contact, AFastBallDoesNotPassThroughAThinGrid) {
+  const std::vector<Vector3d> v = {{-0.1, -0.1, -0.005}, {0.1, -0.1, -0.005}, {0.1, 0.1, -0.005}, {-0.1, 0.1, -0.005},
+                                   {-0.1, -0.1, 0.005},  {0.1, -0.1, 0.005},  {0.1, 0.1, 0.005},  {-0.1, 0.1, 0.005}};
+  const std::vector<uint32_t> idx = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
+                                     1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7};
+  auto plate = std::make_shared<SignedDistanceGrid>();
+  ASSERT_TRUE(plate->build(v, idx, 0.002, 0.02).ok());
+  World world(params());
+  const double r = 0.005;
+  const int ball = world.addDynamicBody(solidSphere(0.01, r, Vector3d(0.0, 0.0, 0.03)));
+  world.body(ball).v = Vector3d(0.0, 0.0, -10.0);
+  CollisionParams cp;
+  cp.friction = 0.0;
+  auto shared = std::make_shared<Collisions>(cp);
+  Collisions& col = *shared;
+  col.addPair(col.addShape(ball, Shape::sphere(r)), col.addShape(kWorldBody, Shape::grid(plate)));
+  col.attach(world);
+  double lowest = 1e300;
+  for (int i = 0; i < 60 && world.ok(); ++i) {
+    world.step();
+    lowest = std::min(lowest, world.body(ball).x.z());
+  }
+  ASSERT_TRUE(world.ok()) << world.status();
+  std::printf("ball at 10 m/s onto a 1 cm plate: lowest centre %.3f mm (plate top 5 mm, radius 5 mm), %d impacts\n",
+              1e3 * lowest, col.stats().impacts);
+  EXPECT_GT(lowest, 0.005 + r - 1e-3) << "the ball went into or through the plate";
+  EXPECT_GT(col.stats().impacts, 0);
+  EXPECT_EQ(col.stats().too_fast, 0);
 }
 
 TEST(Contact, ChainFallingOnTheGroundKeepsItsJointsAndLosesEnergy) {
