@@ -361,7 +361,7 @@ TEST(Keyframes, MakeMotionPlaysTheTrack) {
 // The shipped clips: valid, looping seamlessly (first key = last key), lively but plausible
 // (bounded speeds and accelerations), the showcase around the head's rest height.
 TEST(Keyframes, ShippedClipsAreValidAndPlausible) {
-  const std::vector<std::string> names{"nod", "shake", "turn_and_look", "jump", "whip", "showcase"};
+  const std::vector<std::string> names{"nod", "shake", "turn_and_look", "jump", "whip", "showcase", "toss", "snap"};
   for (const std::string& name : names) {
     const std::string path = "assets/animations/" + name + ".json";
     std::ifstream f(path);
@@ -393,12 +393,17 @@ TEST(Keyframes, ShippedClipsAreValidAndPlausible) {
       zmin = std::min(zmin, s.x.z());
       zmax = std::max(zmax, s.x.z());
     }
-    EXPECT_LT(vmax, 4.0) << path;         // m/s
-    EXPECT_LT(amax, 60.0) << path;        // m/s^2 (a jump's push-off; about 6 g)
-    EXPECT_LT(wmax, 25.0) << path;        // rad/s (a fast whip is ~15-20 rad/s)
-    EXPECT_LT(alphamax, 600.0) << path;   // rad/s^2
-    EXPECT_GT(wmax + vmax, 0.5) << path;  // it moves
-    EXPECT_GT(zmin, 0.15) << path;        // the head stays around its rest height 0.35 m
+    std::printf("[ %s ] period %.2f s, peak |v| %.2f m/s, |a| %.1f m/s^2, |w| %.1f rad/s, |alpha| %.0f rad/s^2\n",
+                name.c_str(), tr.period(), vmax, amax, wmax, alphamax);
+    // snap is the head collider's stress clip (docs/PHYSICS.md, "No pass-through"): it turns at
+    // more than 4x the toss's peak on purpose, beyond what a head plausibly does.
+    const bool stress = name == "snap";
+    EXPECT_LT(vmax, 4.0) << path;                   // m/s
+    EXPECT_LT(amax, 60.0) << path;                  // m/s^2 (a jump's push-off; about 6 g)
+    EXPECT_LT(wmax, stress ? 50.0 : 25.0) << path;  // rad/s (a fast whip is ~15-20 rad/s)
+    EXPECT_LT(alphamax, 600.0) << path;             // rad/s^2
+    EXPECT_GT(wmax + vmax, 0.5) << path;            // it moves
+    EXPECT_GT(zmin, 0.15) << path;                  // the head stays around its rest height 0.35 m
     EXPECT_LT(zmax, 0.8) << path;
     if (name == "showcase") {
       EXPECT_GE(tr.period(), 8.0);
