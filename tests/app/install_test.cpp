@@ -42,7 +42,11 @@ TEST(Install, InstalledExecutableRunsFromAnyFolder) {
   // A bare scene name works too.
   EXPECT_EQ(sh(in + " sim hopper --duration 0.01 --csv hop.csv > sim.log 2>&1"), 0) << readFile(work + "/sim.log");
   EXPECT_TRUE(fs::exists(work + "/hop.csv"));
-  EXPECT_EQ(sh(in + " bench --quick --links 8 --anchors fixed --dts 240 --no-scaling --out bench > bench.log 2>&1"), 0)
+  // The chain rows only: what is checked here is that the peer modules load (the hopper and the
+  // collider rows cost seconds and are BenchSmoke's).
+  EXPECT_EQ(sh(in + " bench --quick --links 8 --anchors fixed --dts 240 --no-scaling --no-hopper --no-collision --out "
+                    "bench > bench.log 2>&1"),
+            0)
       << readFile(work + "/bench.log");
   EXPECT_TRUE(fs::exists(work + "/bench"));
   // Every peer module built beside the build's executable was installed and loads (the bench's
