@@ -28,6 +28,9 @@ void addRunCommand(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-vsync", args->no_vsync, "Do not wait for the display's refresh (frame-time measurements)");
   cmd->add_option("--quality-log", args->window.quality_log,
                   "Write one line per frame: the scene view's quality (draft/final) and why (tests)");
+  cmd->add_option("--draft-scale", args->window.draft_scale,
+                  "Resolution of the moving (draft) view per direction, upscaled (default 0.5; 1: full)")
+      ->check(CLI::Range(0.25, 1.0));
   cmd->callback([args, &exit_code] {
     exit_code = runCommand("run", [&] {
       const Scene scene = args->scene.load();

@@ -236,6 +236,9 @@ Eigen::Vector3d closestOnSegment(const Eigen::Vector3d& o, const Eigen::Vector3d
   return q;
 }
 
+// A readout's time (ms), smoothed over about ten frames.
+void smoothInto(double& r, double ms) { r = r <= 0.0 ? ms : 0.9 * r + 0.1 * ms; }
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -572,9 +575,11 @@ std::optional<WidgetRect> Panel::widgetRect(const std::string& id) const {
 
 void Panel::setSectionOpen(const std::string& title, bool open) { pending_open_[title] = open; }
 
-void Panel::setRenderMs(double ms) {
-  double& r = sim_.readouts().render_ms;
-  r = r <= 0.0 ? ms : 0.9 * r + 0.1 * ms;
+void Panel::setRenderMs(double ms) { smoothInto(sim_.readouts().render_ms, ms); }
+
+void Panel::setFrameMs(double compose_ms, double frame_ms) {
+  smoothInto(sim_.readouts().compose_ms, compose_ms);
+  smoothInto(sim_.readouts().frame_ms, frame_ms);
 }
 
 bool Panel::sectionHeader(const char* title, bool default_open) {
@@ -595,7 +600,11 @@ void Panel::build(const PanelLayout& layout, bool advance) {
   ImGui::SetNextWindowSize(ImVec2(panel_w, float(layout.height)));
   const ImGuiWindowFlags flags = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
                                  ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoSavedSettings |
-                                 ImGuiWindowFlags_NoBringToFrontOnFocus;
+                                 ImGuiWindowFlags_NoBringToFrontOnFocus |
+                                 // Its background is the compositor's clear (UiGl::compose, the
+                                 // same WindowBg colour): a blended quad over the panel's every
+                                 // pixel cost a software rasterizer more than the clear does.
+                                 ImGuiWindowFlags_NoBackground;
   if (ImGui::Begin("ponyhop##panel", nullptr, flags)) {
     // The title: the scene's name, large and wrapped (never cut off), its file below.
     const Scene& applied = sim_.applied();
@@ -619,8 +628,7 @@ void Panel::build(const PanelLayout& layout, bool advance) {
   handleViewMouse(layout);
   sim_.applyEdits();
   const double panel_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  double& pm = sim_.readouts().panel_ms;
-  pm = pm <= 0.0 ? panel_ms : 0.9 * pm + 0.1 * panel_ms;
+  smoothInto(sim_.readouts().panel_ms, panel_ms);
 
   if (advance) sim_.advance(io.DeltaTime);
   updateCamera(layout, io.DeltaTime);
@@ -804,7 +812,11 @@ void Panel::drawReadouts() {
     ImGui::Text("Contacts %d, PGS sweeps %d, stopped at the cap %ld", cs.active, cs.iterations, cs.capped);
   }
   if (r.show_wall_clock) {
-    ImGui::TextDisabled("Frame: physics %.2f  render %.2f  panel %.2f ms", r.physics_ms, r.render_ms, r.panel_ms);
+    if (r.frame_ms > 0.0)  // the window's (a headless frame has no swap)
+      ImGui::TextDisabled("Frame: %.1f fps, %.1f ms: physics %.2f  panel %.2f  render %.2f  compose %.2f",
+                          1000.0 / r.frame_ms, r.frame_ms, r.physics_ms, r.panel_ms, r.render_ms, r.compose_ms);
+    else
+      ImGui::TextDisabled("Frame: physics %.2f  render %.2f  panel %.2f ms", r.physics_ms, r.render_ms, r.panel_ms);
     ImGui::TextDisabled("View: %s  (shadow %.1f  main %.1f  AA %.1f ms)", r.view_draft ? "draft, moving" : "final",
                         r.shadow_ms, r.main_ms, r.aa_ms);
   } else {

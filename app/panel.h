@@ -93,6 +93,9 @@ class Panel {
   std::string& presetPath() { return preset_path_; }
   // Wall time of the last scene render (ms), shown with the other stage timings.
   void setRenderMs(double ms);
+  // The window's last compose and swap, and its whole frame (ms): the readouts show the frame rate
+  // and where the frame's time goes.
+  void setFrameMs(double compose_ms, double frame_ms);
   // The last message shown under Presets (saved / loaded / why not).
   const std::string& presetMessage() const { return preset_message_; }
 

@@ -22,7 +22,9 @@ void UiGl::compose(const Renderer& renderer, unsigned fbo, int width, int height
   glBindFramebuffer(GL_FRAMEBUFFER, fbo);
   glViewport(0, 0, width, height);
   glDisable(GL_SCISSOR_TEST);
-  glClearColor(0.11f, 0.12f, 0.14f, 1.0f);  // the panel's background, should ImGui leave a gap
+  // The panel's background (it draws none of its own: Panel::build), and any gap ImGui leaves.
+  const ImVec4 bg = ImGui::GetStyle().Colors[ImGuiCol_WindowBg];
+  glClearColor(bg.x, bg.y, bg.z, 1.0f);
   glClear(GL_COLOR_BUFFER_BIT);
   if (scene_width > 0 && renderer.width() > 0) renderer.blitTo(fbo, scene_width, height);
   glBindFramebuffer(GL_FRAMEBUFFER, fbo);

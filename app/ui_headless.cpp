@@ -2,7 +2,9 @@
 
 #include <imgui.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 
 #include "physics/stage_times.h"
@@ -18,10 +20,11 @@ RenderQuality viewQuality(const LiveSim& sim) {
 }
 
 void renderSceneView(Renderer& renderer, LiveSim& sim, const Camera& camera, int width, int height,
-                     RenderQuality quality) {
+                     RenderQuality quality, double draft_scale) {
   RenderParams rp = sim.applied().render;
-  rp.width = std::max(width, 1);
-  rp.height = std::max(height, 1);
+  const double scale = quality == RenderQuality::Draft ? std::clamp(draft_scale, 0.1, 1.0) : 1.0;
+  rp.width = std::max(int(std::lround(width * scale)), 1);
+  rp.height = std::max(int(std::lround(height * scale)), 1);
   rp.quality = quality;
   renderer.beginFrame(camera, sim.applied().light, rp);
   sim.draw(renderer, quality == RenderQuality::Draft);

@@ -54,8 +54,10 @@ class HeadlessUi {
 RenderQuality viewQuality(const LiveSim& sim);
 
 // Draws the scene view of one frame: the applied scene's light and look, at the given size and
-// quality; records the quality and the pass times in sim.readouts().
+// quality; records the quality and the pass times in sim.readouts(). A draft frame is rendered at
+// draft_scale times the size in each direction (the window's draft at half: a quarter of the
+// pixels, which is what a software rasterizer pays for), and the compositor's blit scales it up.
 void renderSceneView(Renderer& renderer, LiveSim& sim, const Camera& camera, int width, int height,
-                     RenderQuality quality);
+                     RenderQuality quality, double draft_scale = 1.0);
 
 }  // namespace ponyhop

@@ -66,6 +66,7 @@ struct Readouts {
   History rtf;            // achieved real-time factor (simulated s per wall s / requested speed)
   // Smoothed per-stage wall times of a displayed frame (ms).
   double physics_ms = 0.0, render_ms = 0.0, panel_ms = 0.0, frame_ms = 0.0;
+  double compose_ms = 0.0;        // the window's compose (scene blit + panel) and swap
   double physics_frame_ms = 0.0;  // this frame's physics, not smoothed (the window's summary adds these up)
   // false: the panel shows no wall-clock figure (step time, frame times), so that two frames of
   // the same scene are the same picture (snapshot and sensitivity tests); true for people.

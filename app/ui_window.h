@@ -14,6 +14,7 @@ struct WindowOptions {
   std::string screenshot;          // PNG of the last frame, written before closing
   bool vsync = true;               // swap interval 1 (off when measuring)
   std::string quality_log;         // a line per frame: its number, the view's quality, what moved (tests)
+  double draft_scale = 0.5;        // the draft view's resolution per direction (1: the window's)
 };
 
 // Runs until the window is closed (or `frames` are shown). Returns the exit code; prints the

@@ -86,11 +86,27 @@ bool screenshot(const std::string& path, int w, int h) {
   return true;
 }
 
-struct FrameStats {
+// The stage times of the frames of one kind (every frame, or one quality), summed.
+struct StageSums {
   std::vector<double> frame_ms;
-  std::vector<double> draft_ms, final_ms;  // the same frames split by the view's quality
   double physics = 0, panel = 0, render = 0, compose = 0;
-  int n = 0;
+  void add(double frame, double physics_ms, double panel_ms, double render_ms, double compose_ms) {
+    frame_ms.push_back(frame);
+    physics += physics_ms;
+    panel += panel_ms;
+    render += render_ms;
+    compose += compose_ms;
+  }
+  double mean() const {
+    double sum = 0;
+    for (double x : frame_ms) sum += x;
+    return frame_ms.empty() ? 0.0 : sum / double(frame_ms.size());
+  }
+};
+
+struct FrameStats {
+  StageSums all;
+  StageSums draft, final;  // the same frames split by the view's quality
 };
 
 }  // namespace
@@ -170,19 +186,22 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
         const RenderQuality quality = viewQuality(sim);
         if (quality_log) {
           const ImGuiIO& io = ImGui::GetIO();
-          std::fprintf(quality_log, "frame %d %s running=%d item_active=%d mouse_down=%d\n", frame,
+          std::fprintf(quality_log, "frame %d %s running=%d item_active=%d mouse_down=%d", frame,
                        quality == RenderQuality::Draft ? "draft" : "final", sim.running() ? 1 : 0,
                        ImGui::IsAnyItemActive() ? 1 : 0,
                        (io.MouseDown[0] || io.MouseDown[1] || io.MouseDown[2]) ? 1 : 0);
-          std::fflush(quality_log);
         }
         ImGui::Render();
         const double build_ms = msSince(t0);
 
         t0 = Clock::now();
-        renderSceneView(renderer, sim, panel.camera(), scene_fb_w, fb_h, quality);
+        renderSceneView(renderer, sim, panel.camera(), scene_fb_w, fb_h, quality, o.draft_scale);
         const double render_ms = msSince(t0);
         panel.setRenderMs(render_ms);
+        if (quality_log) {  // the size the view was rendered at (a draft one is upscaled)
+          std::fprintf(quality_log, " view=%dx%d of %dx%d\n", renderer.width(), renderer.height(), scene_fb_w, fb_h);
+          std::fflush(quality_log);
+        }
 
         t0 = Clock::now();
         gl.compose(renderer, 0, fb_w, fb_h, scene_fb_w);
@@ -192,42 +211,34 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
         const double compose_ms = msSince(t0);
 
         const double frame_ms = msSince(t_frame);
+        panel.setFrameMs(compose_ms, frame_ms);
         if (frame >= 5) {  // warm-up frames (font texture, shaders, first shadow map) are not typical
-          stats.frame_ms.push_back(frame_ms);
-          (quality == RenderQuality::Draft ? stats.draft_ms : stats.final_ms).push_back(frame_ms);
           // This frame's own physics time (the smoothed readout lags: the panel's share came out negative).
-          stats.physics += sim.readouts().physics_frame_ms;
-          stats.panel += build_ms - sim.readouts().physics_frame_ms;
-          stats.render += render_ms;
-          stats.compose += compose_ms;
-          ++stats.n;
+          const double physics_ms = sim.readouts().physics_frame_ms;
+          for (StageSums* s : {&stats.all, quality == RenderQuality::Draft ? &stats.draft : &stats.final})
+            s->add(frame_ms, physics_ms, build_ms - physics_ms, render_ms, compose_ms);
         }
         ++frame;
         if (last) break;
       }
-      if (stats.n > 0) {
-        std::vector<double> v = stats.frame_ms;
+      if (const size_t n = stats.all.frame_ms.size(); n > 0) {
+        std::vector<double> v = stats.all.frame_ms;
         std::sort(v.begin(), v.end());
-        double sum = 0;
-        for (double x : v) sum += x;
-        const double mean = sum / double(v.size());
+        const double mean = stats.all.mean();
         int w = 0, h = 0;
         glfwGetFramebufferSize(window, &w, &h);
         std::fprintf(stderr,
-                     "run: %d frames at %dx%d: frame time mean %.1f ms (median %.1f, p95 %.1f) = %.1f fps; "
+                     "run: %zu frames at %dx%d: frame time mean %.1f ms (median %.1f, p95 %.1f) = %.1f fps; "
                      "physics %.2f, panel %.2f, scene render %.2f, compose+swap %.2f ms\n",
-                     stats.n, w, h, mean, v[v.size() / 2], v[std::min(v.size() - 1, v.size() * 95 / 100)],
-                     1000.0 / mean, stats.physics / stats.n, stats.panel / stats.n, stats.render / stats.n,
-                     stats.compose / stats.n);
+                     n, w, h, mean, v[n / 2], v[std::min(n - 1, n * 95 / 100)], 1000.0 / mean, stats.all.physics / n,
+                     stats.all.panel / n, stats.all.render / n, stats.all.compose / n);
       }
-      for (const auto& [name, v] :
-           {std::pair<const char*, const std::vector<double>&>{"draft (moving)", stats.draft_ms},
-            {"final (still)", stats.final_ms}}) {
-        if (v.empty()) continue;
-        double sum = 0;
-        for (double x : v) sum += x;
-        std::fprintf(stderr, "run: %zu %s frames: mean %.1f ms = %.1f fps\n", v.size(), name, sum / double(v.size()),
-                     1000.0 * double(v.size()) / sum);
+      for (const auto& [name, s] :
+           {std::pair<const char*, const StageSums&>{"draft (moving)", stats.draft}, {"final (still)", stats.final}}) {
+        if (s.frame_ms.empty()) continue;
+        const double n = double(s.frame_ms.size());
+        std::fprintf(stderr, "run: %zu %s frames: mean %.1f ms = %.1f fps (scene render %.2f, compose+swap %.2f ms)\n",
+                     s.frame_ms.size(), name, s.mean(), 1000.0 / s.mean(), s.render / n, s.compose / n);
       }
       if (!sim.ok()) std::fprintf(stderr, "run: the simulation stopped: %s\n", sim.stopMessage().c_str());
     }  // GL objects go while the context is current

@@ -81,8 +81,9 @@ namespace {
 
 // The scene view renders draft while something moves and final when everything is still
 // (issue 14): the real window under Xvfb, driven by xdotool (play, pause with Space, drag in the
-// view), and `run --quality-log` telling per frame which quality it showed and what moved.
-// Asserts the mode, never the time.
+// view), and `run --quality-log` telling per frame which quality it showed, what moved and the
+// size the view was rendered at: a draft at half the view's size each way (issue 37), a final
+// frame at the full size. Asserts the mode and the sizes, never the time.
 TEST(WindowTest, ViewIsDraftWhileMovingAndFinalWhenStill) {
 #ifndef PONYHOP_WINDOW
   GTEST_SKIP() << "built without the window (-DPONYHOP_WINDOW=OFF): no `ponyhop run`";
@@ -114,6 +115,13 @@ TEST(WindowTest, ViewIsDraftWhileMovingAndFinalWhenStill) {
     ++lines;
     const bool moving = running || active || mouse;
     EXPECT_STREQ(mode, moving ? "draft" : "final") << line;
+    int rw = 0, rh = 0, vw = 0, vh = 0;
+    const size_t at = line.find(" view=");
+    ASSERT_NE(at, std::string::npos) << line;
+    ASSERT_EQ(std::sscanf(line.c_str() + at, " view=%dx%d of %dx%d", &rw, &rh, &vw, &vh), 4) << line;
+    const int div = moving ? 2 : 1;
+    EXPECT_EQ(rw, (vw + div - 1) / div) << line;  // the half size rounded (lround of an odd size's half)
+    EXPECT_EQ(rh, (vh + div - 1) / div) << line;
     playing_draft += running && std::string(mode) == "draft";
     dragging_draft += !running && mouse && std::string(mode) == "draft";
     still_final += !moving && std::string(mode) == "final";
