@@ -57,8 +57,16 @@ std::string baseHeader(const Sim& sim) {
 // deepest contact overlap (m) that stage found before it pushed the bodies apart, the furthest a
 // joint limit was passed there (rad), its projected Gauss-Seidel sweeps (impulses and push-outs)
 // and the solves stopped at their sweep cap so far.
+// Adaptive dynamics on (physics.adaptive_joints or adaptive_tolerance) adds the joints that
+// moved in the step (docs/SOLVERS.md).
+bool adaptive(const Sim& sim) {
+  const PhysicsParams& p = sim.world().params();
+  return sim.world().reduced() && (p.adaptive_joints > 0 || p.adaptive_tolerance > 0.0);
+}
+
 std::string header(const Sim& sim) {
-  return baseHeader(sim) + (sim.collisions() ? ",contacts,deepest,limit_overshoot,pgs_sweeps,pgs_capped" : "");
+  return baseHeader(sim) + (sim.collisions() ? ",contacts,deepest,limit_overshoot,pgs_sweeps,pgs_capped" : "") +
+         (adaptive(sim) ? ",active_joints" : "");
 }
 
 SimRow baseSample(const Sim& sim) {
@@ -91,6 +99,7 @@ SimRow sample(const Sim& sim) {
     r.values.push_back(c->stats().iterations);
     r.values.push_back(static_cast<double>(c->stats().capped));
   }
+  if (adaptive(sim)) r.values.push_back(sim.world().reduced()->activeJoints());
   return r;
 }
 

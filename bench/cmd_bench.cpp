@@ -26,6 +26,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "bench/bench_adaptive.h"
 #include "bench/bench_peers.h"
 #include "bench/bench_report.h"
 #include "bench/bench_run.h"
@@ -63,6 +64,8 @@ struct BenchArgs {
   bool collision = true;
   bool collision_only = false;
   std::string ponytail_scene = "assets/scenes/ponytail.json";
+  bool adaptive_only = false;
+  AdaptiveBenchOptions adaptive;
   std::string command_line;
 };
 
@@ -787,6 +790,16 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--scaling-budget", args->scaling_budget,
                   "Seconds of stepping per solver and N in the sweep (default 0.5; quick 0.02; longer for perf)")
       ->check(CLI::Range(0.0, 3600.0));
+  cmd->add_flag("--adaptive-only", args->adaptive_only,
+                "Only adaptive dynamics against the full step on long chains: writes OUT/adaptive.md");
+  cmd->add_option("--adaptive-links", args->adaptive.links, "Chain lengths of --adaptive-only (default 64,256,1024)")
+      ->delimiter(',')
+      ->check(CLI::Range(2, 65536));
+  cmd->add_option("--adaptive-budgets", args->adaptive.budgets, "Budgets of --adaptive-only (default 4,8,16,32,64)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 65536));
+  cmd->add_option("--adaptive-seconds", args->adaptive.seconds, "Simulated seconds per run of --adaptive-only (2)")
+      ->check(CLI::Range(0.01, 600.0));
   cmd->callback([args, &exit_code] {
     const auto list = [](const auto& v) {
       std::string s;
@@ -820,6 +833,15 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
       args->command_line += " --ponytail-scene " + args->ponytail_scene;
     if (!args->scaling_links.empty()) args->command_line += " --scaling-links " + list(args->scaling_links);
     try {
+      if (args->adaptive_only) {
+        AdaptiveBenchOptions& a = args->adaptive;
+        a.out = args->out;
+        if (args->repeats > 0) a.repeats = args->repeats;
+        a.command_line = args->command_line + " --adaptive-only --adaptive-links " + list(a.links) +
+                         " --adaptive-budgets " + list(a.budgets) + " --adaptive-seconds " + fmt(a.seconds, "%g");
+        exit_code = runAdaptiveBench(a);
+        return;
+      }
       exit_code = runBench(*args);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "ponyhop bench: %s\n", e.what());

@@ -99,6 +99,7 @@ void SceneDraw::draw(const Sim& sim, Renderer& renderer, const Scene& drawing, u
   if (const Chain* chain = sim.chain(); chain && !(hide & kChain))
     drawChain(sim, *chain, drawing.chain ? *drawing.chain : *scene.chain, renderer);
   if (drawing.render.colliders) drawColliders(sim, renderer);
+  if (drawing.render.active_joints) drawActiveJoints(sim, renderer);
 }
 
 HairMesh SceneDraw::chainHair(const Sim& sim, const Chain& chain, const ChainSection& look) const {
@@ -214,6 +215,27 @@ void SceneDraw::drawColliders(const Sim& sim, Renderer& renderer) const {
     const Eigen::Vector3d u = row.normal.unitOrthogonal(), v = row.normal.cross(u);
     renderer.drawLine(row.point - 0.015 * u, row.point + 0.015 * u, red);
     renderer.drawLine(row.point - 0.015 * v, row.point + 0.015 * v, red);
+  }
+}
+
+// Adaptive dynamics (docs/SOLVERS.md): where the simulation spends, joint by joint. A ring in the
+// plane across the link, at its top (the joint), 1.8 link radii wide.
+void SceneDraw::drawActiveJoints(const Sim& sim, Renderer& renderer) const {
+  const World& world = sim.world();
+  const ArticulatedSystem* system = world.reduced();
+  const Chain* chain = sim.chain();
+  if (!system || !chain || !system->adaptive()) return;
+  std::vector<int> link(world.bodyCount(), -1);  // body -> link index
+  for (size_t k = 0; k < chain->links.size(); ++k) link[chain->links[k]] = static_cast<int>(k);
+  const std::vector<char> active = system->activeNodes();
+  const Eigen::Vector3f orange(1.0f, 0.55f, 0.05f);
+  for (int i = 0; i < system->nodeCount(); ++i) {
+    const int k = link[system->nodeBody(i)];
+    if (!active[i] || k < 0) continue;
+    const Eigen::Vector3d top = chain->top(world, k);
+    const Eigen::Vector3d axis = (chain->bottom(world, k) - top).normalized();
+    const Eigen::Vector3d u = axis.unitOrthogonal();
+    circle(renderer, top, u, axis.cross(u), 1.8 * chain->radii[k], orange);
   }
 }
 

@@ -35,6 +35,8 @@ class SceneDraw {
   void drawChain(const Sim& sim, const Chain& chain, const ChainSection& look, Renderer& renderer) const;
   // render.colliders: the collision shapes as wireframes and the contacts as normals, on top.
   void drawColliders(const Sim& sim, Renderer& renderer) const;
+  // render.active_joints: an orange ring about every chain joint that moved in the last step.
+  void drawActiveJoints(const Sim& sim, Renderer& renderer) const;
   bool draft_ = false;
   Renderer* renderer_ = nullptr;
   MeshHandle head_;

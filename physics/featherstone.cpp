@@ -1,6 +1,7 @@
 #include "physics/featherstone.h"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <limits>
 #include <type_traits>
 
@@ -305,7 +306,14 @@ Status ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Cons
   frames_.resize(nodes_.size());
   pass_.resize(nodes_.size());
   for (Coordinates* c : {&c0_, &y_, &r_[0], &r_[1], &r_[2], &r_[3]}) *c = coords_;
-  for (Eigen::VectorXd* v : {&u0_, &us_, &k_[0], &k_[1], &k_[2], &k_[3]}) v->setZero(dofs_);
+  for (Eigen::VectorXd* v : {&u0_, &us_, &k_[0], &k_[1], &k_[2], &k_[3], &lock_tau_}) v->setZero(dofs_);
+  joint_count_ = 0;
+  for (const Node& nd : nodes_) joint_count_ += nd.type == Type::Free ? 0 : 1;
+  rigid_.assign(nodes_.size(), 0);
+  active_.assign(nodes_.size(), 1);
+  score_.assign(nodes_.size(), 0.0);
+  order_.reserve(nodes_.size());
+  setAdaptive(budget_, tolerance_);
   built_ = {};
   return built_;
 }
@@ -515,8 +523,16 @@ void ArticulatedSystem::abaInward(size_t r, const Eigen::VectorXd* tau) {
   p.U.leftCols<D>() = U;
   p.dinv.topLeftCorner<D, D>() = dinv;
   p.u.head<D>() = u;
+  if (adaptive_) p.d.topLeftCorner<D, D>() = d;
   if (nd.parent_node < 0) return;
   Pass& parent = pass_[nd.parent_node];
+  if (adaptive_ && rigid_[r]) {
+    // A rigid joint carries its subtree whole (u' = 0): I^a = I^A, p^a = p^A + I^A c. U, D and
+    // u above are kept for the score: the acceleration the joint would take if freed.
+    parent.ia += shiftInertia(k.d, p.ia);
+    parent.pa += shiftForce(k.d, Vector6d(p.pa + p.ia * k.c));
+    return;
+  }
   if constexpr (D == 3) {
     // I^a = I^A - U D^-1 U^T annihilates S_w (I^a S_w = U - U D^-1 D = 0): a spherical joint
     // passes no torque about its point P, and I^a is fixed by its top-left block
@@ -591,6 +607,15 @@ void ArticulatedSystem::abaOutward(size_t i, Eigen::VectorXd& udot) {
     }
     double ud[3];
     for (int m = 0; m < 3; ++m) ud[m] = p.dinv(m, 0) * v[0] + p.dinv(m, 1) * v[1] + p.dinv(m, 2) * v[2];
+    if (adaptive_) {
+      const Eigen::Vector3d speed = k.Rp * u_.segment<3>(nd.dof);  // world axes, as D
+      score<3>(i, speed.data(), ud);
+      if (rigid_[i]) {
+        udot.segment<3>(nd.dof).setZero();
+        for (int j = 0; j < 6; ++j) p.acc(j) = a[j];
+        return;
+      }
+    }
     for (int j = 0; j < 3; ++j) udot(nd.dof + j) = k.Rp(0, j) * ud[0] + k.Rp(1, j) * ud[1] + k.Rp(2, j) * ud[2];
     const Eigen::Vector3d& r = k.r_i;
     p.acc(0) = a[0] + (r(1) * ud[2] - r(2) * ud[1]);
@@ -603,6 +628,15 @@ void ArticulatedSystem::abaOutward(size_t i, Eigen::VectorXd& udot) {
     const Vector6d a_prime = (nd.parent_node >= 0 ? shiftMotion(k.d, pass_[nd.parent_node].acc) : k.a_base) + k.c;
     const Eigen::Matrix<double, D, 1> ud =
         p.dinv.topLeftCorner<D, D>() * (p.u.head<D>() - p.U.leftCols<D>().transpose() * a_prime);
+    if (adaptive_ && nd.type != Type::Free) {
+      const Eigen::Matrix<double, D, 1> speed = u_.segment<D>(nd.dof);
+      score<D>(i, speed.data(), ud.data());
+      if (rigid_[i]) {
+        udot.segment<D>(nd.dof).setZero();
+        p.acc = a_prime;
+        return;
+      }
+    }
     udot.segment<D>(nd.dof) = ud;
     p.acc = a_prime + k.S.leftCols<D>() * ud;
   }
@@ -713,6 +747,154 @@ Eigen::MatrixXd ArticulatedSystem::massMatrix(const std::vector<RigidBody>& bodi
 }
 
 // ---------------------------------------------------------------------------------------------
+// Adaptive dynamics (docs/SOLVERS.md, "Adaptive dynamics"; Redon, Galoppo & Lin 2005)
+
+namespace {
+// Below this score (J) a joint's motion is round-off: a chain at rest scores ~1e-40 J.
+constexpr double kRoundOffScore = 1e-24;
+}  // namespace
+
+void ArticulatedSystem::setAdaptive(int budget, double tolerance) {
+  budget_ = budget;
+  tolerance_ = tolerance;
+  const bool on = tolerance > 0.0 || (budget > 0 && budget < joint_count_);
+  if (!on) std::fill(rigid_.begin(), rigid_.end(), 0);  // every joint moves (rigid ones at rest relative)
+  adaptive_ = on;
+}
+
+int ArticulatedSystem::activeJoints() const {
+  int n = 0;
+  for (size_t i = 0; i < nodes_.size(); ++i) n += nodes_[i].type != Type::Free && !rigid_[i] ? 1 : 0;
+  return n;
+}
+
+std::vector<char> ArticulatedSystem::activeNodes() const {
+  std::vector<char> out(nodes_.size());
+  for (size_t i = 0; i < nodes_.size(); ++i) out[i] = rigid_[i] ? 0 : 1;
+  return out;
+}
+
+// score = 1/2 v^T D v + 1/2 h^2 a^T D a: the velocity metric (the kinetic energy of the joint's
+// relative motion through the articulated inertia it drives) plus the acceleration metric (the
+// energy its acceleration would put into that motion in one step), both in J.
+template <int D>
+void ArticulatedSystem::score(size_t i, const double* speed, const double* accel) {
+  const Matrix6& d = pass_[i].d;
+  double sv = 0.0, sa = 0.0;
+  for (int a = 0; a < D; ++a) {
+    for (int b = 0; b < D; ++b) {
+      sv += speed[a] * d(a, b) * speed[b];
+      sa += accel[a] * d(a, b) * accel[b];
+    }
+  }
+  score_[i] = 0.5 * (sv + score_h_ * score_h_ * sa);
+}
+
+// The inelastic lock (docs/SOLVERS.md): w = the speeds of the joints turning rigid (zero
+// elsewhere); the impulses at those joints give du with H du = S_L^T lambda and du_L = -w_L, so
+// on the free joints H_FF du_F = (H w)_F. H w by RNEA on the twists Phi w alone (no velocity
+// products, no base), then du_F by the ABA of H_FF (the rigid joints carry their subtrees whole,
+// no bias). Both O(n), once per switch. Momentum: the impulses are internal to the system.
+// Energy: u+ = u + du is H-orthogonal to du (u+_L = 0), so T(u) = T(u+) + 1/2 du^T H du.
+void ArticulatedSystem::lock(std::vector<RigidBody>& bodies, const std::vector<char>& active) {
+  const size_t n = nodes_.size();
+  bool moving = false;
+  for (size_t i = 0; i < n; ++i) {
+    rigid_[i] = nodes_[i].type != Type::Free && !active[i] ? 1 : 0;
+    if (rigid_[i] && !u_.segment(nodes_[i].dof, nodes_[i].dofs).isZero(0.0)) moving = true;
+  }
+  if (!moving) return;
+  jointKinematics(bodies, kin_);  // S (spherical included) and d at the pose the bodies hold
+  // Twists Phi w (pass_.acc), then momenta M V carried inward (pass_.pa): (H w)_i = S_i^T F_i.
+  for (size_t i = 0; i < n; ++i) {
+    const Node& nd = nodes_[i];
+    Pass& p = pass_[i];
+    p.acc = nd.parent_node >= 0 ? shiftMotion(kin_[i].d, pass_[nd.parent_node].acc) : Vector6d::Zero();
+    if (rigid_[i]) p.acc += kin_[i].S.leftCols(nd.dofs) * u_.segment(nd.dof, nd.dofs);
+    p.ia = spatialInertia(bodies[nd.body]);
+    p.pa = p.ia * p.acc;
+  }
+  for (size_t r = n; r-- > 0;) {
+    const Node& nd = nodes_[r];
+    lock_tau_.segment(nd.dof, nd.dofs) = kin_[r].S.leftCols(nd.dofs).transpose() * pass_[r].pa;
+    if (nd.parent_node >= 0) addShiftedForce(kin_[r].d, pass_[r].pa, pass_[nd.parent_node].pa);
+  }
+  // ABA of H_FF du_F = (H w)_F: inward (I^A from the bodies' inertias, p^A from zero) ...
+  for (size_t i = 0; i < n; ++i) pass_[i].pa.setZero();
+  for (size_t r = n; r-- > 0;) {
+    const Node& nd = nodes_[r];
+    Pass& p = pass_[r];
+    Matrix6 ia = p.ia;
+    Vector6d pa = p.pa;
+    if (!rigid_[r]) {
+      const auto S = kin_[r].S.leftCols(nd.dofs);
+      const Small U = p.ia * S;
+      const Small dinv = (S.transpose() * U).llt().solve(Small::Identity(nd.dofs, nd.dofs));
+      const SmallVec u = lock_tau_.segment(nd.dof, nd.dofs) - S.transpose() * p.pa;
+      ia -= U * dinv * U.transpose();
+      pa += U * (dinv * u);
+      p.U.leftCols(nd.dofs) = U;
+      p.dinv.topLeftCorner(nd.dofs, nd.dofs) = dinv;
+      p.u.head(nd.dofs) = u;
+    }
+    if (nd.parent_node < 0) continue;
+    pass_[nd.parent_node].ia += shiftInertia(kin_[r].d, ia);
+    addShiftedForce(kin_[r].d, pa, pass_[nd.parent_node].pa);
+  }
+  // ... and outward: du_i = D^-1 (u - U^T A'), A = A' + S du_i; du = -w on the rigid joints.
+  for (size_t i = 0; i < n; ++i) {
+    const Node& nd = nodes_[i];
+    Pass& p = pass_[i];
+    const Vector6d a = nd.parent_node >= 0 ? shiftMotion(kin_[i].d, pass_[nd.parent_node].acc) : Vector6d::Zero();
+    if (rigid_[i]) {
+      u_.segment(nd.dof, nd.dofs).setZero();
+      p.acc = a;
+      continue;
+    }
+    const SmallVec du =
+        p.dinv.topLeftCorner(nd.dofs, nd.dofs) * (p.u.head(nd.dofs) - p.U.leftCols(nd.dofs).transpose() * a);
+    u_.segment(nd.dof, nd.dofs) += du;
+    p.acc = a + kin_[i].S.leftCols(nd.dofs) * du;
+  }
+  writeState(bodies);
+}
+
+// Scores at (t, y) from the ABA with the current rigid set (rigid joints: the acceleration they
+// would take if freed), then the new set: the joints above the tolerance (or the round-off
+// floor), the `budget` highest of them when there are more (nth_element: O(n)). Unchanged, the
+// ABA just run is the step's first stage (fresh); changed, the joints turning rigid are locked.
+Status ArticulatedSystem::chooseActive(double t, double h, std::vector<RigidBody>& bodies, const ReducedHooks& hooks,
+                                       bool& written, bool& fresh) {
+  score_h_ = h;
+  if (Status st = derivative(t, coords_, u_, bodies, hooks, k_[0], written); !st.ok() || stopped_) return st;
+  written = true;  // the bodies hold (t, y) now
+  fresh = true;
+  const double floor = std::max(tolerance_, kRoundOffScore);
+  order_.clear();
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    if (nodes_[i].type != Type::Free && score_[i] > floor) order_.push_back(static_cast<int>(i));
+  }
+  if (budget_ > 0 && static_cast<int>(order_.size()) > budget_) {
+    // Ties by node index, so the choice does not depend on the library's nth_element.
+    std::nth_element(order_.begin(), order_.begin() + budget_, order_.end(),
+                     [&](int a, int b) { return score_[a] > score_[b] || (score_[a] == score_[b] && a < b); });
+    order_.resize(budget_);
+  }
+  for (size_t i = 0; i < nodes_.size(); ++i) active_[i] = nodes_[i].type == Type::Free ? 1 : 0;
+  for (int i : order_) active_[i] = 1;
+  bool same = true;
+  for (size_t i = 0; i < nodes_.size() && same; ++i) {
+    const Node& nd = nodes_[i];
+    // A rigid joint that moves again (the bodies were set from outside) is locked again.
+    same = (rigid_[i] != 0) == (active_[i] == 0) && (active_[i] || u_.segment(nd.dof, nd.dofs).isZero(0.0));
+  }
+  if (same) return {};
+  lock(bodies, active_);
+  fresh = false;  // the first stage again, with the new set (and the new speeds)
+  return {};
+}
+
+// ---------------------------------------------------------------------------------------------
 // Time stepping in joint space
 
 Status ArticulatedSystem::derivative(double t, const Coordinates& c, const Eigen::VectorXd& u,
@@ -758,8 +940,12 @@ Status ArticulatedSystem::step(double t, double h, Integrator integrator, std::v
                                const ReducedHooks& hooks) {
   // Unless someone changed the bodies, they hold what the last step wrote at this very t (its
   // kinematics at t + h, which is this step's t): the first stage skips forward kinematics.
-  const bool written = have_state_ && t == written_time_ && !bodiesChanged(bodies);
+  bool written = have_state_ && t == written_time_ && !bodiesChanged(bodies);
   if (!written) readState(bodies);
+  bool fresh = false;  // k_[0] already holds u'(t, y) (adaptive: the choice ran the ABA)
+  if (adaptive_) {
+    if (Status st = chooseActive(t, h, bodies, hooks, written, fresh); !st.ok() || stopped_) return st;
+  }
   const auto axpy = [&](const Coordinates& base, double s, const Coordinates& rate, Coordinates& out) {
     out = base;
     for (size_t i = 0; i < nodes_.size(); ++i) {
@@ -773,7 +959,9 @@ Status ArticulatedSystem::step(double t, double h, Integrator integrator, std::v
     case Integrator::SymplecticEuler: {
       // u += h u'(t, y); positions with the new speeds (exact exponential map for rotations).
       // In place: the step needs the coordinates at t only through u'(t, y).
-      if (Status st = derivative(t, coords_, u_, bodies, hooks, k[0], written); !st.ok() || stopped_) return st;
+      if (!fresh) {
+        if (Status st = derivative(t, coords_, u_, bodies, hooks, k[0], written); !st.ok() || stopped_) return st;
+      }
       u_ += h * k[0];
       for (size_t i = 0; i < nodes_.size(); ++i) {
         const Node& nd = nodes_[i];
@@ -799,7 +987,9 @@ Status ArticulatedSystem::step(double t, double h, Integrator integrator, std::v
       u0_ = u_;
       Coordinates* r = r_;
       rates(c0_, u0_, r[0]);
-      if (Status st = derivative(t, c0_, u0_, bodies, hooks, k[0], written); !st.ok() || stopped_) return st;
+      if (!fresh) {
+        if (Status st = derivative(t, c0_, u0_, bodies, hooks, k[0], written); !st.ok() || stopped_) return st;
+      }
       axpy(c0_, 0.5 * h, r[0], y_);
       us_ = u0_ + 0.5 * h * k[0];
       rates(y_, us_, r[1]);

@@ -89,7 +89,29 @@ class ArticulatedSystem {
 
   int dofs() const { return dofs_; }
   int nodeCount() const { return static_cast<int>(nodes_.size()); }
+  int nodeBody(int node) const { return nodes_[node].body; }  // the body a node moves
   const Eigen::VectorXd& velocities() const { return u_; }
+
+  // Adaptive dynamics (physics.adaptive_joints, physics.adaptive_tolerance; docs/SOLVERS.md,
+  // "Adaptive dynamics"). At the start of every step each joint gets a score, the kinetic energy
+  // of its relative motion plus h^2 times that of its relative acceleration, both weighted by the
+  // articulated inertia D = S^T I^A S it drives (a rigid joint scores the acceleration it would
+  // have if it alone were freed). At most `budget` joints (0 = no cap) whose score is above
+  // `tolerance` (J; 0 = only the round-off floor) move; every other joint is rigid for the step:
+  // u = 0, u' = 0, its subtree carried whole by the ABA. A joint that turns rigid is locked by an
+  // internal impulse (momentum kept, kinetic energy never rises: lock()). Off (every joint moves,
+  // the plain ABA step to the bit) when tolerance = 0 and budget is 0 or at least jointCount().
+  void setAdaptive(int budget, double tolerance);
+  bool adaptive() const { return adaptive_; }
+  int jointCount() const { return joint_count_; }  // spherical and prismatic joints (a free root is none)
+  int activeJoints() const;                        // joints that moved in the last step
+  // Per node: 1 when its joint moved in the last step (a free root always does).
+  std::vector<char> activeNodes() const;
+  // The switch: the joints of the nodes with active[i] = 0 become rigid. Their relative speeds are
+  // removed by impulses at those joints alone (H du = S_L^T lambda, du_L = -u_L): the system's
+  // momentum is unchanged and its kinetic energy (relative to a prescribed base) cannot rise. The
+  // bodies are written at the new speeds; kinematic bodies must be at the current time.
+  void lock(std::vector<RigidBody>& bodies, const std::vector<char>& active);
 
  private:
   enum class Type { Free, Spherical, Prismatic };
@@ -130,6 +152,7 @@ class ArticulatedSystem {
     Vector6d pa;   // p^A
     Matrix6 U;     // I^A S (first dofs columns)
     Matrix6 dinv;  // D^-1 (top-left dofs x dofs)
+    Matrix6 d;     // D (top-left dofs x dofs; adaptive only, for the score)
     Vector6d u;    // tau - S^T p^A (first dofs)
     Vector6d acc;  // A
   };
@@ -151,6 +174,14 @@ class ArticulatedSystem {
   void rates(const Coordinates& c, const Eigen::VectorXd& u, Coordinates& out) const;
   bool bodiesChanged(const std::vector<RigidBody>& bodies) const;
   void remember(const std::vector<RigidBody>& bodies);
+  // Adaptive: the score of node i's joint (abaOutward) from its speed and acceleration in the
+  // axes of D (world axes for a spherical joint).
+  template <int D>
+  void score(size_t i, const double* speed, const double* accel);
+  // Adaptive, at the start of a step: scores at (t, y) with the current rigid set, the new set,
+  // the lock of the joints that turned rigid. fresh: k_[0] holds u'(t, y) for the set chosen.
+  Status chooseActive(double t, double h, std::vector<RigidBody>& bodies, const ReducedHooks& hooks, bool& written,
+                      bool& fresh);
 
   std::vector<int> signature_;
   Status built_;             // what build() could not express (ok when fine)
@@ -175,6 +206,17 @@ class ArticulatedSystem {
   Coordinates c0_, y_, r_[4];
   Eigen::VectorXd u0_, us_, k_[4];
   bool stopped_ = false;  // the last derivative's force hook stopped the world
+  // Adaptive dynamics (setAdaptive()).
+  int budget_ = 0;
+  double tolerance_ = 0.0;
+  bool adaptive_ = false;
+  int joint_count_ = 0;
+  double score_h_ = 0.0;                                            // the step the scores look ahead by (s)
+  std::vector<char> rigid_;                                         // per node: the joint is rigid this step
+  std::vector<double> score_;                                       // per node (J), from the last ABA while adaptive
+  std::vector<int> order_;                                          // work space of the choice
+  std::vector<char> active_;                                        // work space of the choice: the set chosen
+  Eigen::VectorXd lock_tau_;                                        // work space of lock(): H w, then the speed change
   double written_time_ = std::numeric_limits<double>::quiet_NaN();  // time of the bodies step() wrote last
 };
 

@@ -53,6 +53,12 @@ struct PhysicsParams {
   // that the estimated position error of each substep stays below it (World::lastSubsteps(),
   // lastErrorEstimate()). 0 = off (then max_step_rotation applies).
   double tolerance = 0.0;  // m
+  // Adaptive dynamics (docs/SOLVERS.md; solver featherstone): each step only the joints that
+  // matter move, the rest are held rigid. adaptive_joints: at most this many joints move (0 = no
+  // cap); adaptive_tolerance: a joint moves when its score (kinetic energy of its relative motion
+  // plus h^2 times that of its acceleration) is above it (J; 0 = off). Both 0: off.
+  int adaptive_joints = 0;
+  double adaptive_tolerance = 0.0;  // J
 
   template <class V>
   void reflect(V& v) {
@@ -71,6 +77,19 @@ struct PhysicsParams {
       {.unit = "deg", .min = 0, .max = 180, .help = "Largest turn of a body per substep; sets the substeps (0 = off)"});
     v("tolerance", tolerance,
       {.unit = "m", .min = 0, .max = 1, .help = "Position error per substep; picks the substeps (0 = off)"});
+    v("adaptive_joints", adaptive_joints,
+      {.min = 0,
+       .max = 1000000,
+       .help = "Adaptive dynamics: at most this many joints move per step, the rest rigid (0 = off)",
+       .soft_max = 256});
+    v("adaptive_tolerance", adaptive_tolerance,
+      {.unit = "J",
+       .min = 0,
+       .max = 1e6,
+       .help = "Adaptive dynamics: a joint moves when its motion score is above this (0 = off)",
+       .log = true,
+       .soft_min = 1e-12,
+       .soft_max = 1});
   }
 };
 

@@ -12,6 +12,11 @@ Status validate(const PhysicsParams& p, const std::string& prefix) {
                          "': solver 'featherstone' integrates in joint space with rk4 or symplectic_euler ('" +
                          std::string(enumName(p.integrator)) + "' belongs to the multiplier formulation)");
   }
+  if ((p.adaptive_joints > 0 || p.adaptive_tolerance > 0.0) && p.solver != SolverKind::Featherstone) {
+    return Status::error(prefix + (p.adaptive_joints > 0 ? ".adaptive_joints" : ".adaptive_tolerance") +
+                         ": adaptive dynamics runs on solver 'featherstone' only (physics.solver = '" +
+                         std::string(enumName(p.solver)) + "'; the multiplier solvers have no rigid joints)");
+  }
   return {};
 }
 

@@ -523,7 +523,13 @@ void World::reducedStep(double h) {
                              return ok();
                            }};
   Status s = reduced_->build(bodies_, joints_);
+  if (s.ok() && params_.adaptive_joints > reduced_->jointCount()) {
+    s = Status::error("physics.adaptive_joints = " + std::to_string(params_.adaptive_joints) + " is more than the " +
+                      std::to_string(reduced_->jointCount()) + " joints of the scene (0 to " +
+                      std::to_string(reduced_->jointCount()) + ")");
+  }
   if (s.ok()) {
+    reduced_->setAdaptive(params_.adaptive_joints, params_.adaptive_tolerance);
     s = h > 0.0 ? reduced_->step(state_.time, h, scheme_->kind(), bodies_, hooks)
                 : reduced_->evaluate(state_.time, bodies_, hooks);
   }

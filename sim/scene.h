@@ -107,6 +107,7 @@ struct RenderParams {
   double ground_height = 0.0;                      // m, height of the drawn ground plane (z)
   bool transparent = false;                        // no background: PNGs with alpha (the ground is drawn when `ground`)
   bool colliders = false;                          // draw the collision shapes and the contacts over the picture
+  bool active_joints = false;                      // adaptive dynamics: ring the joints that moved in the last step
 
   template <class V>
   void reflect(V& v) {
@@ -129,6 +130,8 @@ struct RenderParams {
       {.help = "No background: PNG frames with alpha (set ground false for the object alone)"});
     v("colliders", colliders,
       {.help = "Draw the collision shapes (cyan wireframes) and each contact (a red normal) over the picture"});
+    v("active_joints", active_joints,
+      {.help = "Adaptive dynamics: ring the joints that moved in the last step (orange) over the picture"});
   }
 };
 

@@ -10,6 +10,7 @@
 #include <type_traits>
 
 #include "physics/models/hopper.h"
+#include "physics/validate.h"
 #include "sim/data_dir.h"
 #include "sim/input_file.h"
 
@@ -564,6 +565,15 @@ void validateScene(const Scene& scene_in, const std::string& source) {
     }
     for (size_t i = 0; i < scene.hoppers.size(); ++i) {
       if (Status s = validate(scene.hoppers[i], "hoppers." + std::to_string(i)); !s.ok()) errors.push_back(s.message());
+    }
+  }
+  if (const PhysicsParams& p = scene.physics; p.adaptive_joints > 0 || p.adaptive_tolerance > 0.0) {
+    // Adaptive dynamics (docs/SOLVERS.md): the reduced solver only, and no more joints than the
+    // chain has (a scene on that solver has no other joints: the hoppers need contact rows).
+    if (Status s = validate(p, "physics"); !s.ok()) errors.push_back(s.message());
+    if (scene.chain && p.adaptive_joints > scene.chain->links) {
+      errors.push_back("physics.adaptive_joints: " + std::to_string(p.adaptive_joints) + " is more than the " +
+                       std::to_string(scene.chain->links) + " joints of the chain (allowed: 0 to chain.links)");
     }
   }
   if (scene.render.width % 2 || scene.render.height % 2) {

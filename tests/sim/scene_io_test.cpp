@@ -272,6 +272,26 @@ TEST(SceneIo, ReferenceListsEveryField) {
   EXPECT_NE(md.find("`head.animation.keys.N.t`"), std::string::npos);
 }
 
+// Adaptive dynamics: the reduced solver only, and no more joints than the chain has; a negative
+// budget is out of range. Each message names the field.
+TEST(SceneIo, AdaptiveDynamicsRefusesBadBudgetsAndTheMultiplierSolvers) {
+  const std::string over = errorOf(json::parse(
+      R"({"anchor": {}, "chain": {"links": 6}, "physics": {"solver": "featherstone", "adaptive_joints": 7}})"));
+  EXPECT_NE(over.find("physics.adaptive_joints: 7 is more than the 6 joints of the chain"), std::string::npos) << over;
+  const std::string negative = errorOf(
+      json::parse(R"({"anchor": {}, "chain": {}, "physics": {"solver": "featherstone", "adaptive_joints": -1}})"));
+  EXPECT_NE(negative.find("physics.adaptive_joints"), std::string::npos) << negative;
+  const std::string tree =
+      errorOf(json::parse(R"({"anchor": {}, "chain": {}, "physics": {"adaptive_tolerance": 1e-6}})"));
+  EXPECT_NE(tree.find("physics.adaptive_tolerance: adaptive dynamics runs on solver 'featherstone' only"),
+            std::string::npos)
+      << tree;
+  EXPECT_EQ(errorOf(json::parse(
+                R"({"anchor": {}, "chain": {"links": 6},
+                    "physics": {"solver": "featherstone", "integrator": "rk4", "adaptive_joints": 6}})")),
+            "");
+}
+
 // A collision section names collisions the scene can build: the ponytail against a head, on a
 // solver that takes contact rows.
 TEST(SceneIo, CollisionSectionNeedsAChainOnAHeadAndASolverThatTakesRows) {

@@ -1,0 +1,27 @@
+// `ponyhop bench --adaptive-only`: adaptive dynamics (physics.adaptive_joints,
+// physics.adaptive_tolerance; docs/SOLVERS.md) against the full featherstone step on long chains,
+// at the same dt: the tip's error, the energy drift, the CPU cost per simulated second and the
+// joints that moved. Its table goes to OUT/adaptive.md (docs/bench/adaptive.md).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace ponyhop {
+
+struct AdaptiveBenchOptions {
+  std::vector<int> links{64, 256, 1024};
+  std::vector<std::string> anchors{"fixed", "shake"};
+  std::vector<int> budgets{4, 8, 16, 32, 64};        // budgets at or above N are left out (the full run)
+  std::vector<double> tolerances{1e-9, 1e-7, 1e-5};  // J, the threshold form
+  double seconds = 2.0;                              // simulated per run
+  int dt_denominator = 960;                          // dt = 1 / this
+  int repeats = 2;                                   // timed runs per variant, interleaved; the least kept
+  std::string out = "docs/bench";
+  std::string command_line;
+};
+
+// Runs the section and writes OUT/adaptive.md; 0 when every run finished.
+int runAdaptiveBench(const AdaptiveBenchOptions& options);
+
+}  // namespace ponyhop

@@ -1,0 +1,174 @@
+// Adaptive dynamics (physics.adaptive_joints, physics.adaptive_tolerance; docs/SOLVERS.md): every
+// joint active reproduces the full solver, a chain at rest holds no active joint, the lock keeps
+// momentum and never adds energy, the error falls as the budget grows, bad budgets are refused.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "common/physics_util.h"
+#include "physics/featherstone.h"
+#include "physics/models/chain.h"
+
+namespace ponyhop {
+namespace {
+
+using testing::exactPhysics;
+
+ChainWorld chainWorld(int links, int budget, double tolerance, const Eigen::Vector3d& direction) {
+  PhysicsParams pp = exactPhysics(SolverKind::Featherstone);
+  pp.adaptive_joints = budget;
+  pp.adaptive_tolerance = tolerance;
+  ChainParams cp;
+  cp.links = links;
+  cp.direction = direction;
+  return makeChainWorld(pp, cp, AnchorParams{});
+}
+
+// The tip's path over `steps` steps of a chain released from horizontal.
+std::vector<Eigen::Vector3d> tipPath(int links, int budget, double tolerance, int steps, int* max_active = nullptr) {
+  ChainWorld cw = chainWorld(links, budget, tolerance, Eigen::Vector3d::UnitX());
+  std::vector<Eigen::Vector3d> out;
+  for (int i = 0; i < steps && cw.world.ok(); ++i) {
+    cw.world.step();
+    out.push_back(cw.chain.tip(cw.world));
+    if (max_active) *max_active = std::max(*max_active, cw.world.reduced()->activeJoints());
+  }
+  EXPECT_TRUE(cw.world.ok()) << cw.world.status();
+  return out;
+}
+
+double maxGap(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  double gap = 0.0;
+  for (size_t i = 0; i < a.size() && i < b.size(); ++i) gap = std::max(gap, (a[i] - b[i]).norm());
+  return gap;
+}
+
+// Budget = N is the plain step; budget = N with a tiny tolerance runs the adaptive machinery
+// (scores, choice) with every joint active: the same arithmetic, so the same path.
+TEST(PhysicsAdaptive, EveryJointActiveReproducesTheFullSolver) {
+  const int steps = 96;
+  const std::vector<Eigen::Vector3d> full = tipPath(6, 0, 0.0, steps);
+  EXPECT_LT(maxGap(full, tipPath(6, 6, 0.0, steps)), 1e-12);
+  int active = 0;
+  EXPECT_LT(maxGap(full, tipPath(6, 6, 1e-30, steps, &active)), 1e-12);
+  EXPECT_EQ(active, 6);
+}
+
+TEST(PhysicsAdaptive, AChainAtRestHasNoActiveJointAndStaysAtRest) {
+  for (const auto& [budget, tolerance] : {std::pair{3, 0.0}, std::pair{0, 1e-9}}) {
+    ChainWorld cw = chainWorld(6, budget, tolerance, -Eigen::Vector3d::UnitZ());
+    const Eigen::Vector3d tip0 = cw.chain.tip(cw.world);
+    for (int i = 0; i < 48 && cw.world.ok(); ++i) {
+      cw.world.step();
+      EXPECT_EQ(cw.world.reduced()->activeJoints(), 0) << i;
+    }
+    ASSERT_TRUE(cw.world.ok()) << cw.world.status();
+    EXPECT_LT((cw.chain.tip(cw.world) - tip0).norm(), 1e-14);
+    EXPECT_EQ(cw.world.kineticEnergy(), 0.0);
+  }
+}
+
+// A free-floating hub with two 3-link chains (no gravity), stirred: every lock keeps the linear
+// and angular momentum, never raises the kinetic energy, zeroes the locked joints' relative
+// speeds and gives the free joints H_FF^-1 (H u)_F (checked against CRBA's H).
+TEST(PhysicsAdaptive, TheLockKeepsMomentumAndNeverAddsEnergy) {
+  PhysicsParams pp = exactPhysics(SolverKind::Featherstone);
+  pp.gravity.setZero();
+  World world(pp);
+  RigidBody hub;
+  hub.name = "hub";
+  hub.mass = 0.5;
+  hub.inertia = Eigen::Vector3d(2e-3, 3e-3, 4e-3);
+  const int h = world.addDynamicBody(hub);
+  ChainParams cp;
+  cp.links = 3;
+  cp.direction = Eigen::Vector3d(1, 0, -1);
+  addChain(world, cp, h, Eigen::Vector3d(0.05, 0, 0));
+  cp.direction = Eigen::Vector3d(-1, 0.5, -1);
+  addChain(world, cp, h, Eigen::Vector3d(-0.05, 0, 0.01));
+  world.evaluate();
+  ASSERT_TRUE(world.ok()) << world.status();
+  ArticulatedSystem& sys = *world.reduced();
+  ASSERT_EQ(sys.jointCount(), 6);
+  const auto momentum = [&] {
+    Eigen::Matrix<double, 6, 1> out = Eigen::Matrix<double, 6, 1>::Zero();
+    for (const RigidBody& b : world.bodies()) {
+      out.head<3>() += b.mass * b.v;
+      out.tail<3>() += b.x.cross(b.mass * b.v) + b.worldInertia() * b.w;
+    }
+    return out;
+  };
+  std::mt19937 rng(7u);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (int trial = 0; trial < 6; ++trial) {
+    for (RigidBody& b : world.bodies()) {
+      b.v = Eigen::Vector3d(g(rng), g(rng), g(rng));
+      b.w = 8.0 * Eigen::Vector3d(g(rng), g(rng), g(rng));
+    }
+    sys.readState(world.bodies());   // joint speeds from the relative angular velocities
+    sys.writeState(world.bodies());  // and the bodies' velocities from them
+    const Eigen::Matrix<double, 6, 1> p0 = momentum();
+    const double t0 = world.kineticEnergy();
+    const Eigen::MatrixXd H = sys.massMatrix(world.bodies());
+    const Eigen::VectorXd u0 = sys.velocities();
+    std::vector<char> active(sys.nodeCount(), 1);
+    for (size_t i = 1; i < active.size(); ++i) active[i] = (trial >> (i % 3)) & 1 ? 1 : 0;  // node 0: the hub
+    sys.lock(world.bodies(), active);
+    EXPECT_LT((momentum() - p0).norm(), 1e-12 * (1.0 + p0.norm())) << trial;
+    EXPECT_LE(world.kineticEnergy(), t0 * (1.0 + 1e-14)) << trial;
+    // The expected speeds: u_L = 0, u_F = H_FF^-1 (H u0)_F.
+    std::vector<int> free;
+    for (int i = 0; i < sys.nodeCount(); ++i) {
+      const int dofs = i == 0 ? 6 : 3, first = i == 0 ? 0 : 3 + 3 * i;
+      for (int k = 0; k < dofs && active[i]; ++k) free.push_back(first + k);
+    }
+    const Eigen::VectorXd hu = H * u0;
+    Eigen::MatrixXd hff(free.size(), free.size());
+    Eigen::VectorXd rhs(free.size());
+    for (size_t a = 0; a < free.size(); ++a) {
+      rhs(a) = hu(free[a]);
+      for (size_t b = 0; b < free.size(); ++b) hff(a, b) = H(free[a], free[b]);
+    }
+    const Eigen::VectorXd uf = hff.llt().solve(rhs);
+    Eigen::VectorXd expected = Eigen::VectorXd::Zero(u0.size());
+    for (size_t a = 0; a < free.size(); ++a) expected(free[a]) = uf(a);
+    EXPECT_LT((sys.velocities() - expected).norm(), 1e-10 * (1.0 + u0.norm())) << trial;
+    EXPECT_LT(world.maxJointError(), 1e-12);
+  }
+}
+
+// A 10-link chain released from horizontal, 0.15 s: the tip's distance from the full run falls
+// as the budget grows (none at the full budget).
+TEST(PhysicsAdaptive, ErrorFallsAsTheBudgetGrows) {
+  const int steps = 144;
+  const std::vector<Eigen::Vector3d> full = tipPath(10, 0, 0.0, steps);
+  double last = 1e9;
+  for (int budget : {2, 4, 7, 10}) {
+    int active = 0;
+    const double gap = maxGap(full, tipPath(10, budget, 0.0, steps, &active));
+    EXPECT_LE(active, budget);
+    EXPECT_LT(gap, last) << "budget " << budget;
+    last = gap;
+  }
+  EXPECT_LT(last, 1e-12);
+}
+
+TEST(PhysicsAdaptive, RefusesABudgetAboveTheJointsAndTheMultiplierSolvers) {
+  ChainWorld cw = chainWorld(4, 5, 0.0, Eigen::Vector3d::UnitX());
+  cw.world.step();
+  ASSERT_FALSE(cw.world.ok());
+  EXPECT_NE(cw.world.status().find("physics.adaptive_joints = 5 is more than the 4 joints"), std::string::npos)
+      << cw.world.status();
+  PhysicsParams pp = exactPhysics(SolverKind::Tree);
+  pp.adaptive_tolerance = 1e-6;
+  World tree(pp);
+  ASSERT_FALSE(tree.ok());
+  EXPECT_NE(tree.status().find("physics.adaptive_tolerance: adaptive dynamics runs on solver 'featherstone' only"),
+            std::string::npos)
+      << tree.status();
+}
+
+}  // namespace
+}  // namespace ponyhop
