@@ -566,6 +566,7 @@ void validateScene(const Scene& scene_in, const std::string& source) {
       if (Status s = validate(scene.hoppers[i], "hoppers." + std::to_string(i)); !s.ok()) errors.push_back(s.message());
     }
   }
+  checkGoals(scene, errors);
   if (scene.render.width % 2 || scene.render.height % 2) {
     // H.264 in yuv420p needs even sizes; keep every output consistent with the video.
     errors.push_back("render.width/height: must be even (got " + std::to_string(scene.render.width) + "x" +
