@@ -14,6 +14,7 @@ void addRenderCommand(CLI::App& app, int& exit_code);
 void addSimCommand(CLI::App& app, int& exit_code);
 void addExportCommand(CLI::App& app, int& exit_code);  // app/cmd_export.cpp: a glTF bake
 void addVideoCommand(CLI::App& app, int& exit_code);   // app/cmd_video.cpp: frames -> video
+void addSolveCommand(CLI::App& app, int& exit_code);   // app/cmd_solve.cpp: the goal solve
 #ifdef PONYHOP_WINDOW
 void addRunCommand(CLI::App& app, int& exit_code);  // app/cmd_run.cpp: the window with the tuning panel
 #endif

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   ponyhop::addSimCommand(app, exit_code);
   ponyhop::addExportCommand(app, exit_code);
   ponyhop::addVideoCommand(app, exit_code);
+  ponyhop::addSolveCommand(app, exit_code);
   ponyhop::addBenchCommand(app, exit_code);
   ponyhop::addBenchRenderCommand(app, exit_code);
 #ifdef PONYHOP_WINDOW

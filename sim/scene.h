@@ -9,12 +9,14 @@
 #include <vector>
 
 #include "physics/models/chain_params.h"
+#include "physics/models/guide.h"
 #include "physics/models/head_collisions.h"
 #include "physics/models/hopper_params.h"
 #include "physics/models/keyframe_params.h"
 #include "physics/models/terrain.h"
 #include "physics/physics_params.h"
 #include "physics/reflect.h"
+#include "sim/goals.h"
 
 namespace ponyhop {
 
@@ -330,6 +332,9 @@ struct Scene {
   std::optional<TerrainSection> terrain;
   std::vector<std::string> notes;  // what the reader chose for the user (not a field), shown on stderr
 
+  std::vector<Goal> goals;           // where points must be at given times (sim/goals.h, docs/GOALS.md)
+  std::optional<GuideParams> guide;  // the solved torques that meet them (`ponyhop solve`)
+
   template <class V>
   void reflect(V& v) {
     v("name", name, {.help = "Title of the scene", .apply = Apply::Live});
@@ -345,6 +350,8 @@ struct Scene {
     v("camera", camera, {.help = "Camera", .apply = Apply::Live});
     v("light", light, {.help = "Lighting", .apply = Apply::Live});
     v("physics", physics, {.help = "Simulation settings"});
+    v("goals", goals,
+      {.help = "Where a point must be at a time (ponyhop solve meets them; docs/GOALS.md)", .apply = Apply::Live});
     v("head", head, {.help = "Keyframed kinematic head"});
     v("anchor", anchor, {.help = "Prescribed anchor point of a chain scene", .apply = Apply::Restart});
     v("chain", chain, {.help = "Chain of links (the ponytail)"});
@@ -354,6 +361,8 @@ struct Scene {
     v("terrain", terrain,
       {.help = "Boxes on the ground (steps, slopes) for the hoppers' toes and, with collision.ground, their bodies",
        .apply = Apply::Restart});
+    v("guide", guide,
+      {.help = "Solved joint torques of the chain (written by ponyhop solve)", .apply = Apply::Restart});
   }
 };
 

@@ -576,6 +576,7 @@ void validateScene(const Scene& scene_in, const std::string& source) {
                        std::to_string(scene.chain->links) + " joints of the chain (allowed: 0 to chain.links)");
     }
   }
+  checkGoals(scene, errors);
   if (scene.render.width % 2 || scene.render.height % 2) {
     // H.264 in yuv420p needs even sizes; keep every output consistent with the video.
     errors.push_back("render.width/height: must be even (got " + std::to_string(scene.render.width) + "x" +

@@ -153,6 +153,14 @@ void Sim::buildChain() {
     }
   }
   chain_ = addChain(world_, c, parent, anchor_local, v0);
+  if (scene_.guide && scene_.guide->enabled && !chain_->empty()) {
+    // Joint j turns link j against link j - 1 (the root joint against the chain's parent).
+    std::vector<int> parents{chain_->parent};
+    parents.insert(parents.end(), chain_->links.begin(), chain_->links.end() - 1);
+    guide_ = std::make_shared<GuideTorques>(chain_->links, parents);
+    guide_->set(*scene_.guide);
+    world_.addController(guide_);
+  }
 }
 
 bool Sim::step() {

@@ -15,6 +15,7 @@
 
 #include "physics/collisions.h"
 #include "physics/models/chain.h"
+#include "physics/models/guide.h"
 #include "physics/models/hopper.h"
 #include "physics/world.h"
 #include "sim/assets.h"
@@ -48,6 +49,9 @@ class Sim {
   World& world() { return world_; }
   const World& world() const { return world_; }
   const Chain* chain() const { return chain_ ? &*chain_ : nullptr; }
+  // The chain's guide torques (scene section `guide`, enabled), else null. The goal solve
+  // (sim/goal_solve.h) sets its knots between runs.
+  GuideTorques* guide() { return guide_.get(); }
   int headBody() const { return head_body_; }
   int anchorBody() const { return anchor_body_; }
   // The head's mesh and placement (null without a head).
@@ -98,6 +102,7 @@ class Sim {
   int anchor_body_ = -1;
   std::optional<HeadAsset> head_;
   std::optional<Chain> chain_;
+  std::shared_ptr<GuideTorques> guide_;
   std::vector<std::shared_ptr<Hopper>> hoppers_;
   std::shared_ptr<Collisions> collisions_;
   std::shared_ptr<const Terrain> terrain_;  // the scene's terrain section (null: the plane z = 0 alone)

@@ -1,0 +1,95 @@
+// `ponyhop solve SCENE --out SOLVED.json [--knots K] [--iterations N] [--set key=value]...`: the
+// goal solve (sim/goal_solve.h, docs/GOALS.md). Finds the least-effort guide torques that meet the
+// scene's goals, prints each iteration, the goals' errors, the effort and the CPU time, says why
+// a goal is not met, and writes the scene with its `guide` section (guide.enabled false replays
+// the unguided motion). `--check`: no solve, the goals as the scene stands (its guide applied).
+// `--spring`: no solve, the weakest goal spring that meets the goals (what film tools do), its
+// stiffness and the energy it injects, for comparison (docs/GOALS.md).
+// Exit code 0 when every goal is met, 1 when one is not (the scene is still written: the closest
+// control found), 2 for bad input.
+#include <cstdio>
+
+#include "app/commands.h"
+#include "app/output_safety.h"
+#include "app/scene_args.h"
+#include "engine/asset_loader.h"
+#include "sim/goal_solve.h"
+#include "sim/scene_io.h"
+
+namespace ponyhop {
+namespace {
+
+struct SolveArgs {
+  SceneArgs scene;
+  std::string out;
+  bool check = false;
+  bool spring = false;
+  bool no_broyden = false;
+  GoalSolveOptions options;
+};
+
+void printReport(const Scene& scene, const GoalSolveReport& r) {
+  for (const std::string& l : r.log) std::printf("%s\n", l.c_str());
+  for (size_t g = 0; g < r.goals.size(); ++g) {
+    const Goal& goal = scene.goals[g];
+    const GoalOutcome& o = r.goals[g];
+    std::printf("goal %zu: %s at t = %g s: error %.2f mm (tolerance %.2f mm) %s%s%s\n", g, goal.point.c_str(), goal.t,
+                o.error * 1000.0, goal.tolerance * 1000.0, o.met ? "met" : "NOT MET", o.why.empty() ? "" : ": ",
+                o.why.c_str());
+  }
+  std::printf(
+      "iterations %d, simulations %d, effort %.4g N^2 m^2 s, work %.4g J (integral of |power| %.4g J), CPU %.2f s\n",
+      r.iterations, r.simulations, r.effort, r.energy, r.abs_energy, r.cpu_seconds);
+}
+
+int runSolve(const SolveArgs& args) {
+  Scene scene = args.scene.load();
+  if (args.spring) {
+    const SpringOutcome o = weakestGoalSpring(scene, &assimpAssets());
+    for (size_t g = 0; g < o.goals.size(); ++g)
+      std::printf("goal %zu: %s at t = %g s: error %.2f mm %s\n", g, scene.goals[g].point.c_str(), scene.goals[g].t,
+                  o.goals[g].error * 1000.0, o.goals[g].met ? "met" : "NOT MET");
+    std::printf("goal spring: stiffness %.4g N/m, work %.4g J (integral of |power| %.4g J)%s\n", o.stiffness, o.work,
+                o.abs_work, o.all_met ? "" : "; no stiffness up to 1e6 N/m meets every goal");
+    return o.all_met ? 0 : 1;
+  }
+  if (args.check) {
+    const GoalSolveReport r = evaluateGoals(scene, &assimpAssets());
+    printReport(scene, r);
+    return r.all_met ? 0 : 1;
+  }
+  if (args.out.empty()) throw InputError("--out: give the file the solved scene is written to (or --check)");
+  checkOutputFile("--out", args.out, sceneInputs(scene));
+  GoalSolveOptions options = args.options;
+  options.broyden = !args.no_broyden;
+  const GoalSolveReport r = solveGoals(scene, &assimpAssets(), options);
+  printReport(scene, r);
+  scene.guide = r.guide;
+  saveScene(scene, args.out);
+  std::fprintf(stderr, "solve: the scene with its guide -> %s (guide.enabled=false: the unguided motion)\n",
+               args.out.c_str());
+  return r.all_met ? 0 : 1;
+}
+
+}  // namespace
+
+void addSolveCommand(CLI::App& app, int& exit_code) {
+  auto args = std::make_shared<SolveArgs>();
+  auto* cmd = app.add_subcommand(
+      "solve", "Find the gentlest joint torques that meet the scene's goals and write them into the scene (its guide)");
+  args->scene.add(cmd);
+  cmd->add_option("--out", args->out, "The solved scene (JSON)")->check(nonEmpty());
+  cmd->add_flag("--check", args->check, "Solve nothing: the goals' errors as the scene stands (its guide applied)");
+  cmd->add_flag("--spring", args->spring,
+                "Solve nothing: the weakest goal spring that meets the goals, and the energy it injects");
+  cmd->add_option("--knots", args->options.knots, "Knot times per joint over [0, last goal time]")
+      ->check(CLI::Range(2, 64));
+  cmd->add_option("--joints", args->options.joints, "Guide only the root-most N joints (0: every joint)")
+      ->check(CLI::Range(0, 4096));
+  cmd->add_flag("--no-broyden", args->no_broyden, "Differences for the Jacobian at every iteration (no updates)");
+  cmd->add_option("--iterations", args->options.max_iterations, "Most Gauss-Newton iterations")
+      ->check(CLI::Range(1, 1000));
+  cmd->callback([args, &exit_code] { exit_code = runCommand("solve", [&] { return runSolve(*args); }); });
+}
+
+}  // namespace ponyhop

@@ -1,0 +1,594 @@
+#include "sim/goal_solve.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+
+#include "sim/input_error.h"
+#include "sim/sim.h"
+
+namespace ponyhop {
+namespace {
+
+double cpuSeconds() { return double(std::clock()) / CLOCKS_PER_SEC; }
+
+std::string mm(double metres) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.2f mm", metres * 1000.0);
+  return buf;
+}
+
+// The unknowns: K free knots per joint at times_[0..K-1] and one more knot at times_[K], fixed at
+// zero. c[(j K + k) 3 + d] is component d of joint j's torque at knot k.
+struct Layout {
+  int joints = 0;
+  int knots = 0;
+  std::vector<double> times;  // K + 1
+
+  Eigen::Index size() const { return Eigen::Index(joints) * knots * 3; }
+  Eigen::Index index(int j, int k, int d) const { return (Eigen::Index(j) * knots + k) * 3 + d; }
+
+  GuideParams guide(const Eigen::VectorXd& c) const {
+    GuideParams g;
+    for (int j = 0; j < joints; ++j) {
+      for (int k = 0; k <= knots; ++k) {
+        GuideKnot knot;
+        knot.joint = j;
+        knot.t = times[size_t(k)];
+        if (k < knots) knot.torque = c.segment<3>(index(j, k, 0));
+        g.knots.push_back(knot);
+      }
+    }
+    return g;
+  }
+
+  // G_kl = integral of B_k(t) B_l(t) dt over the whole curve, for the free knots: the effort of
+  // one torque component is c^T G c. Four Gauss-Legendre points per interval integrate the
+  // product of two cubics exactly.
+  Eigen::MatrixXd gram() const {
+    static const double xs[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526};
+    static const double ws[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538};
+    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(knots, knots);
+    for (size_t i = 0; i + 1 < times.size(); ++i) {
+      const double a = times[i], b = times[i + 1];
+      for (int q = 0; q < 4; ++q) {
+        const double t = 0.5 * (a + b) + 0.5 * (b - a) * xs[q];
+        std::array<double, 4> w;
+        const int interval = guideWeights(times, t, w);
+        for (int p = 0; p < 4; ++p) {
+          for (int s = 0; s < 4; ++s) {
+            const int kp = interval - 1 + p, ks = interval - 1 + s;
+            if (kp < 0 || ks < 0 || kp >= knots || ks >= knots) continue;
+            G(kp, ks) += 0.5 * (b - a) * ws[q] * w[size_t(p)] * w[size_t(s)];
+          }
+        }
+      }
+    }
+    return G;
+  }
+};
+
+// The simulation run again and again from saved states: the whole clip for the goal errors, and
+// from a knot's snapshot for a Jacobian column (a knot's torque acts from two knots earlier on).
+class Shooter {
+ public:
+  Shooter(const Scene& scene, const AssetLoader* assets, std::vector<double> goal_times)
+      : sim_(scene, assets), start_(sim_.snapshot()), goal_times_(std::move(goal_times)) {
+    for (size_t g = 0; g < goal_times_.size(); ++g) order_.push_back(g);
+    std::sort(order_.begin(), order_.end(), [&](size_t a, size_t b) { return goal_times_[a] < goal_times_[b]; });
+  }
+
+  Sim& sim() { return sim_; }
+
+  // Runs with `guide` from the start, recording each goal's point (world) and the snapshots at
+  // `knot_times` (the last step start at or before each). `energy`, `abs_energy`: the torques'
+  // work and the integral of |power|, J (both or neither).
+  void runWhole(const GuideParams& guide, const std::vector<double>& knot_times, std::vector<Eigen::Vector3d>& points,
+                std::vector<Eigen::Vector3d>* targets = nullptr, double* energy = nullptr,
+                double* abs_energy = nullptr) {
+    sim_.restore(start_);
+    if (sim_.guide()) sim_.guide()->set(guide);
+    snapshots_.assign(knot_times.size(), {});
+    recorded_at_.assign(goal_times_.size(), 0.0);
+    anchors_.assign(goal_times_.size(), Eigen::Vector3d::Zero());
+    points.assign(goal_times_.size(), Eigen::Vector3d::Zero());
+    if (targets) targets->assign(goal_times_.size(), Eigen::Vector3d::Zero());
+    size_t next_knot = 0;
+    const double dt = sim_.scene().physics.dt;
+    for (size_t g : order_) {
+      while (sim_.ok() && sim_.time() + 0.5 * dt <= goal_times_[g]) {
+        while (next_knot < knot_times.size() && knot_times[next_knot] < sim_.time() + dt)
+          snapshots_[next_knot++] = sim_.snapshot();
+        if (energy) {
+          const double P = power();
+          *energy += P * dt;
+          *abs_energy += std::abs(P) * dt;
+        }
+        sim_.step();
+      }
+      recorded_at_[g] = sim_.time();
+      points[g] = point(g);
+      if (sim_.chain()) anchors_[g] = sim_.chain()->anchor(sim_.world());
+      if (targets) (*targets)[g] = target(g);
+    }
+    while (next_knot < knot_times.size()) snapshots_[next_knot++] = sim_.snapshot();
+    ++runs_;
+  }
+
+  // Runs with `guide` from knot `from`'s snapshot: the goals recorded at or after it are run
+  // again, the earlier ones keep `points`' values.
+  void runFrom(size_t from, const GuideParams& guide, std::vector<Eigen::Vector3d>& points) {
+    sim_.restore(snapshots_[from]);
+    sim_.guide()->set(guide);
+    const double start = sim_.time();
+    const double dt = sim_.scene().physics.dt;
+    for (size_t g : order_) {
+      if (recorded_at_[g] < start) continue;
+      while (sim_.ok() && sim_.time() + 0.5 * dt <= goal_times_[g]) sim_.step();
+      points[g] = point(g);
+    }
+    ++runs_;
+  }
+
+  void setGoals(std::vector<GoalPoint> points, std::vector<Goal> goals) {
+    points_ = std::move(points);
+    goals_ = std::move(goals);
+  }
+  int runs() const { return runs_; }
+  // The chain's anchor at goal g's time in the last whole run.
+  const Eigen::Vector3d& anchor(size_t g) const { return anchors_[g]; }
+  const std::string& failure() const { return sim_.status(); }
+
+ private:
+  // The world point of goal g now.
+  Eigen::Vector3d point(size_t g) const {
+    const World& w = sim_.world();
+    switch (points_[g].kind) {
+      case GoalPoint::Kind::Tip:
+        return sim_.chain()->tip(w);
+      case GoalPoint::Kind::Link:
+        return sim_.chain()->bottom(w, points_[g].link);
+      case GoalPoint::Kind::Toe:
+        return sim_.hopper()->footPoint(w);
+      case GoalPoint::Kind::Body:
+        return w.body(sim_.hopper()->model().body).x;
+    }
+    return Eigen::Vector3d::Zero();
+  }
+  Eigen::Vector3d target(size_t g) const {
+    const Goal& goal = goals_[g];
+    if (goal.frame == GoalFrame::Head) return sim_.world().body(sim_.headBody()).pointToWorld(goal.position);
+    return goal.position;
+  }
+  // The torques' power: sum_j tau_j . (w_link - w_parent), W.
+  double power() {
+    GuideTorques* guide = sim_.guide();
+    const Chain* chain = sim_.chain();
+    if (!guide || !chain) return 0.0;
+    const World& w = sim_.world();
+    double p = 0.0;
+    for (size_t j = 0; j < chain->links.size(); ++j) {
+      const int parent = j == 0 ? chain->parent : chain->links[j - 1];
+      const Eigen::Vector3d w_parent = parent == kWorldBody ? Eigen::Vector3d::Zero() : w.body(parent).w;
+      p += guide->torque(j, w.time()).dot(w.body(chain->links[j]).w - w_parent);
+    }
+    return p;
+  }
+
+  Sim sim_;
+  SimSnapshot start_;
+  std::vector<double> goal_times_;
+  std::vector<size_t> order_;
+  std::vector<SimSnapshot> snapshots_;
+  std::vector<double> recorded_at_;
+  std::vector<Eigen::Vector3d> anchors_;
+  std::vector<GoalPoint> points_;
+  std::vector<Goal> goals_;
+  int runs_ = 0;
+};
+
+std::vector<GoalPoint> goalPoints(const Scene& scene) {
+  std::vector<GoalPoint> out;
+  for (const Goal& g : scene.goals) {
+    GoalPoint p;
+    parseGoalPoint(g.point, p);  // validated with the scene (checkGoals)
+    out.push_back(p);
+  }
+  return out;
+}
+
+std::vector<double> goalTimes(const Scene& scene) {
+  std::vector<double> t;
+  for (const Goal& g : scene.goals) t.push_back(g.t);
+  return t;
+}
+
+void fillOutcomes(const Scene& scene, const std::vector<Eigen::Vector3d>& points,
+                  const std::vector<Eigen::Vector3d>& targets, std::vector<GoalOutcome>& out) {
+  out.resize(scene.goals.size());
+  for (size_t g = 0; g < scene.goals.size(); ++g) {
+    out[g].target = targets[g];
+    out[g].reached = points[g];
+    out[g].error = (points[g] - targets[g]).norm();
+    out[g].met = out[g].error <= scene.goals[g].tolerance;
+  }
+}
+
+// d(goal points)/dc by differences: column i from a run with c_i + step, from the snapshot of the
+// knot two before c_i's (where its torque starts to act); central: also c_i - step. `points`:
+// the points at c from a whole run that took the knot snapshots. Rows 3g..3g+2: goal g.
+Eigen::MatrixXd differences(Shooter& shooter, const Layout& layout, const Eigen::VectorXd& c,
+                            const std::vector<Eigen::Vector3d>& points, double step, bool central) {
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(Eigen::Index(points.size()) * 3, layout.size());
+  std::vector<Eigen::Vector3d> plus, minus;
+  for (Eigen::Index i = 0; i < layout.size(); ++i) {
+    const size_t from = size_t(std::max(int((i / 3) % layout.knots) - 2, 0));
+    Eigen::VectorXd cp = c;
+    cp[i] += step;
+    plus = points;
+    shooter.runFrom(from, layout.guide(cp), plus);
+    if (central) {
+      cp[i] = c[i] - step;
+      minus = points;
+      shooter.runFrom(from, layout.guide(cp), minus);
+    }
+    for (size_t g = 0; g < points.size(); ++g)
+      J.block<3, 1>(Eigen::Index(g) * 3, i) =
+          central ? Eigen::Vector3d((plus[g] - minus[g]) / (2 * step)) : Eigen::Vector3d((plus[g] - points[g]) / step);
+  }
+  return J;
+}
+
+// The unknowns for `knots` knots per joint over [0, T], T the last goal's time, on the root-most
+// `joints` joints (0: all).
+Layout makeLayout(const Scene& scene, int knots, int joints = 0) {
+  double T = 0.0;
+  for (const Goal& g : scene.goals) T = std::max(T, g.t);
+  if (T <= 0.0) throw InputError(scene.path + ": goals: every goal is at t = 0, where no control can act yet");
+  Layout layout;
+  layout.joints = joints > 0 ? std::min(joints, scene.chain->links) : scene.chain->links;
+  layout.knots = knots;
+  const double h = T / (knots - 1);
+  for (int k = 0; k <= knots; ++k) layout.times.push_back(k * h);
+  return layout;
+}
+
+}  // namespace
+
+Eigen::MatrixXd goalJacobian(const Scene& scene_in, const AssetLoader* assets, int knots, const Eigen::VectorXd& c,
+                             double step, bool central) {
+  const Layout layout = makeLayout(scene_in, knots);
+  if (c.size() != layout.size()) throw InputError("goalJacobian: c has the wrong size");
+  Scene scene = scene_in;
+  scene.guide = layout.guide(c);
+  Shooter shooter(scene, assets, goalTimes(scene));
+  shooter.setGoals(goalPoints(scene), scene.goals);
+  std::vector<Eigen::Vector3d> points;
+  shooter.runWhole(*scene.guide, std::vector<double>(layout.times.begin(), layout.times.end() - 1), points);
+  return differences(shooter, layout, c, points, step, central);
+}
+
+GoalSolveReport evaluateGoals(const Scene& scene, const AssetLoader* assets) {
+  const double cpu0 = cpuSeconds();
+  GoalSolveReport report;
+  if (scene.guide) report.guide = *scene.guide;
+  Shooter shooter(scene, assets, goalTimes(scene));
+  shooter.setGoals(goalPoints(scene), scene.goals);
+  std::vector<Eigen::Vector3d> points, targets;
+  shooter.runWhole(report.guide, {}, points, &targets, &report.energy, &report.abs_energy);
+  fillOutcomes(scene, points, targets, report.goals);
+  report.all_met = std::all_of(report.goals.begin(), report.goals.end(), [](const GoalOutcome& g) { return g.met; });
+  report.simulations = shooter.runs();
+  // The effort of the guide as applied: the integral of sum_j |tau_j|^2 by the trapezoid rule at dt.
+  if (Sim& sim = shooter.sim(); sim.guide()) {
+    const double dt = scene.physics.dt;
+    double end = 0.0;
+    for (const GuideKnot& k : report.guide.knots) end = std::max(end, k.t);
+    for (double t = 0.0; t <= end; t += dt)
+      for (size_t j = 0; j < sim.guide()->joints(); ++j) report.effort += sim.guide()->torque(j, t).squaredNorm() * dt;
+  }
+  report.cpu_seconds = cpuSeconds() - cpu0;
+  return report;
+}
+
+GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, const GoalSolveOptions& opt) {
+  const double cpu0 = cpuSeconds();
+  const std::string& src = scene_in.path;
+  if (scene_in.goals.empty()) throw InputError(src + ": goals: the scene has no goals to solve for");
+  if (!scene_in.chain) throw InputError(src + ": the goal solve guides a chain, and the scene has none");
+  if (opt.knots < 2) throw InputError(src + ": the goal solve needs at least 2 knots per joint");
+
+  const Layout layout = makeLayout(scene_in, opt.knots, opt.joints);
+  const std::vector<double> knot_times(layout.times.begin(), layout.times.end() - 1);
+
+  Scene scene = scene_in;
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(layout.size());
+  scene.guide = layout.guide(c);
+  GoalSolveReport report;
+  Shooter shooter(scene, assets, goalTimes(scene));
+  shooter.setGoals(goalPoints(scene), scene.goals);
+  const std::vector<GoalPoint> kinds = goalPoints(scene);
+
+  std::vector<Eigen::Vector3d> points, targets;
+  shooter.runWhole(scene.guide.value(), knot_times, points, &targets);
+  if (!shooter.sim().ok()) throw InputError(src + ": the unguided run stopped: " + shooter.failure());
+  fillOutcomes(scene, points, targets, report.goals);
+
+  // Goals no torque can meet are said so and left out of the solve: a hopper point (the chain's
+  // torques do not steer the hopper), a point beyond the chain's reach from the anchor at that
+  // time (the anchor's path is the unguided one: exact on a kinematic head or anchor).
+  std::vector<size_t> active;
+  const ChainParams& ch = *scene.chain;
+  for (size_t g = 0; g < scene.goals.size(); ++g) {
+    GoalOutcome& out = report.goals[g];
+    if (kinds[g].kind == GoalPoint::Kind::Toe || kinds[g].kind == GoalPoint::Kind::Body) {
+      if (!out.met) out.why = "a hopper point: the chain's torques do not steer the hopper (not solved for)";
+      continue;
+    }
+    const int last_link = kinds[g].kind == GoalPoint::Kind::Tip ? ch.links - 1 : kinds[g].link;
+    const double reach = (last_link + 1) * ch.length;
+    const double d = (out.target - shooter.anchor(g)).norm();
+    if (d > reach) {
+      char t[32];
+      std::snprintf(t, sizeof(t), "%g", scene.goals[g].t);
+      out.why = "beyond the chain's reach: at t = " + std::string(t) + " s the target is " + mm(d) +
+                " from the anchor and the point is " + mm(reach) + " of chain from it (" +
+                std::to_string(last_link + 1) + " links x " + mm(ch.length) + "); the closest any control gets is " +
+                mm(d - reach);
+      continue;
+    }
+    active.push_back(g);
+  }
+  char line[256];
+  const auto errorsText = [&](const std::vector<GoalOutcome>& o) {
+    std::string s;
+    for (size_t g = 0; g < o.size(); ++g) s += (s.empty() ? "" : " ") + mm(o[g].error);
+    return s;
+  };
+  const auto allMet = [&](const std::vector<GoalOutcome>& o) {
+    return std::all_of(active.begin(), active.end(), [&](size_t g) { return o[g].met; });
+  };
+  const auto weightedError = [&](const std::vector<Eigen::Vector3d>& p) {
+    double e = 0.0;
+    for (size_t g : active) e += scene.goals[g].weight * (p[g] - targets[g]).squaredNorm();
+    return e;
+  };
+
+  const Eigen::MatrixXd Gk = layout.gram();
+  const Eigen::LLT<Eigen::MatrixXd> Gllt(Gk);
+  const auto effort = [&](const Eigen::VectorXd& x) {
+    double e = 0.0;
+    for (int j = 0; j < layout.joints; ++j)
+      for (int d = 0; d < 3; ++d) {
+        Eigen::VectorXd v(layout.knots);
+        for (int k = 0; k < layout.knots; ++k) v[k] = x[layout.index(j, k, d)];
+        e += v.dot(Gk * v);
+      }
+    return e;
+  };
+
+  std::snprintf(line, sizeof(line), "iteration 0: goal errors %s, effort 0", errorsText(report.goals).c_str());
+  report.log.push_back(line);
+  const Eigen::Index m = Eigen::Index(active.size()) * 3;
+  bool stalled = false;
+  Eigen::MatrixXd Jall;      // d(points)/dc, all goals
+  bool differenced = false;  // Jall is from differences at the current c (not a Broyden update)
+  while (!active.empty() && !allMet(report.goals) && report.iterations < opt.max_iterations) {
+    ++report.iterations;
+    // The Jacobian: forward differences, one partial run per unknown, the first time and after
+    // a Broyden-updated one failed to give a step; otherwise the rank-one update below.
+    if (Jall.size() == 0) {
+      Jall = differences(shooter, layout, c, points, opt.fd_step, false);
+      differenced = true;
+    }
+    Eigen::VectorXd r(m);
+    for (size_t a = 0; a < active.size(); ++a)
+      r.segment<3>(Eigen::Index(a) * 3) =
+          std::sqrt(scene.goals[active[a]].weight) * (points[active[a]] - targets[active[a]]);
+    Eigen::MatrixXd J(m, layout.size());
+    for (size_t a = 0; a < active.size(); ++a)
+      J.middleRows<3>(Eigen::Index(a) * 3) =
+          std::sqrt(scene.goals[active[a]].weight) * Jall.middleRows<3>(Eigen::Index(active[a]) * 3);
+    // Least effort meeting the linearized goals r + J (c' - c) = 0:
+    //   c' = G^-1 J^T lambda,  (J G^-1 J^T + mu I) lambda = J c - r,
+    // with a small mu (a penalty 1/mu on the goal error) so that goals no torque moves leave the
+    // system solvable.
+    Eigen::MatrixXd Y(layout.size(), m);  // G^-1 J^T, per joint and component
+    for (int j = 0; j < layout.joints; ++j)
+      for (int d = 0; d < 3; ++d) {
+        Eigen::MatrixXd block(layout.knots, m);
+        for (int k = 0; k < layout.knots; ++k) block.row(k) = J.col(layout.index(j, k, d)).transpose();
+        block = Gllt.solve(block);
+        for (int k = 0; k < layout.knots; ++k) Y.row(layout.index(j, k, d)) = block.row(k);
+      }
+    Eigen::MatrixXd A = J * Y;
+    const double mu = 1e-10 * std::max(A.trace() / double(m), 1e-300);
+    A.diagonal().array() += mu;
+    const Eigen::VectorXd lambda = A.ldlt().solve(J * c - r);
+    const Eigen::VectorXd target_c = Y * lambda;
+    // Backtracking on the goal error.
+    const double e0 = weightedError(points);
+    double alpha = 1.0;
+    bool accepted = false;
+    std::vector<Eigen::Vector3d> trial;
+    for (int half = 0; half <= opt.max_line_halvings; ++half, alpha *= 0.5) {
+      const Eigen::VectorXd ct = c + alpha * (target_c - c);
+      shooter.runWhole(layout.guide(ct), knot_times, trial);
+      if (shooter.sim().ok() && weightedError(trial) < e0) {
+        if (opt.broyden) {
+          // Broyden's update: J += (dx - J dc) dc^T / (dc^T dc), the secant through the step taken.
+          const Eigen::VectorXd dc = ct - c;
+          Eigen::VectorXd dx(Jall.rows());
+          for (size_t g = 0; g < points.size(); ++g) dx.segment<3>(Eigen::Index(g) * 3) = trial[g] - points[g];
+          Jall += (dx - Jall * dc) * dc.transpose() / dc.squaredNorm();
+          differenced = false;
+        } else {
+          Jall.resize(0, 0);
+        }
+        c = ct;
+        points = trial;
+        accepted = true;
+        break;
+      }
+    }
+    if (!accepted && !differenced) {
+      // An updated Jacobian that gives no step: differences again before giving up.
+      shooter.runWhole(layout.guide(c), knot_times, points);
+      Jall.resize(0, 0);
+      report.log.push_back("iteration " + std::to_string(report.iterations) +
+                           ": the updated Jacobian gives no step; differences again");
+      continue;
+    }
+    if (!accepted) {
+      // The last trial moved the snapshots: run the accepted control again.
+      shooter.runWhole(layout.guide(c), knot_times, points);
+      stalled = true;
+    }
+    fillOutcomes(scene, points, targets, report.goals);
+    std::snprintf(line, sizeof(line), "iteration %d: goal errors %s, effort %.4g N^2 m^2 s, step %g%s",
+                  report.iterations, errorsText(report.goals).c_str(), effort(c), accepted ? alpha : 0.0,
+                  accepted ? "" : " (no step lowers the goal error: stopped)");
+    report.log.push_back(line);
+    if (stalled) break;
+  }
+  for (size_t g : active) {
+    GoalOutcome& o = report.goals[g];
+    if (o.met) continue;
+    o.why = stalled ? "the solve stalled at " + mm(o.error) +
+                          ": no step lowers the goal error (a collision or joint limit in the way, or too little "
+                          "time to get there)"
+                    : "not met after " + std::to_string(report.iterations) + " iterations: closest " + mm(o.error);
+  }
+  report.guide = layout.guide(c);
+  report.effort = effort(c);
+  // The injected energy of the final control: one more whole run.
+  std::vector<Eigen::Vector3d> final_points;
+  shooter.runWhole(report.guide, {}, final_points, nullptr, &report.energy, &report.abs_energy);
+  report.all_met = std::all_of(report.goals.begin(), report.goals.end(), [](const GoalOutcome& g) { return g.met; });
+  report.simulations += shooter.runs();
+  report.cpu_seconds = cpuSeconds() - cpu0;
+  return report;
+}
+
+namespace {
+
+// The goal springs: F = -k (x - p) on each goal's point during its window, applied at the point
+// (force and its moment on the link).
+class GoalSprings final : public Controller {
+ public:
+  struct Spring {
+    int body = -1;
+    Eigen::Vector3d local = Eigen::Vector3d::Zero();  // the point in the body frame
+    Eigen::Vector3d position = Eigen::Vector3d::Zero();
+    bool head_frame = false;
+    double from = 0.0, to = 0.0;  // s, active window
+  };
+  GoalSprings(std::vector<Spring> springs, double k, int head) : springs_(std::move(springs)), k_(k), head_(head) {}
+  void applyForces(World& world, double t) override {
+    for (const Spring& s : springs_) {
+      if (t < s.from || t > s.to) continue;
+      RigidBody& b = world.body(s.body);
+      const Eigen::Vector3d p = b.pointToWorld(s.local);
+      const Eigen::Vector3d f = -k_ * (p - target(world, s));
+      b.force += f;
+      b.torque += (p - b.x).cross(f);
+    }
+  }
+  bool dependsOnVelocity() const override { return false; }
+  // The springs' power on the chain now, W.
+  double power(const World& world) const {
+    double P = 0.0;
+    for (const Spring& s : springs_) {
+      if (world.time() < s.from || world.time() > s.to) continue;
+      const RigidBody& b = world.body(s.body);
+      const Eigen::Vector3d p = b.pointToWorld(s.local);
+      P += (-k_ * (p - target(world, s))).dot(b.velocityAt(p));
+    }
+    return P;
+  }
+
+ private:
+  Eigen::Vector3d target(const World& world, const Spring& s) const {
+    return s.head_frame ? world.body(head_).pointToWorld(s.position) : s.position;
+  }
+  std::vector<Spring> springs_;
+  double k_;
+  int head_;
+};
+
+}  // namespace
+
+SpringOutcome springGoals(const Scene& scene_in, const AssetLoader* assets, double stiffness) {
+  Scene scene = scene_in;
+  scene.guide.reset();
+  Sim sim(scene, assets);
+  const Chain* chain = sim.chain();
+  if (!chain) throw InputError(scene.path + ": the goal springs pull a chain, and the scene has none");
+  const std::vector<GoalPoint> kinds = goalPoints(scene);
+  std::vector<size_t> order(scene.goals.size());
+  for (size_t g = 0; g < order.size(); ++g) order[g] = g;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return scene.goals[a].t < scene.goals[b].t; });
+  std::vector<GoalSprings::Spring> springs;
+  double from = 0.0;
+  for (size_t g : order) {
+    const Goal& goal = scene.goals[g];
+    if (kinds[g].kind != GoalPoint::Kind::Tip && kinds[g].kind != GoalPoint::Kind::Link) continue;
+    const int link = kinds[g].kind == GoalPoint::Kind::Tip ? int(chain->links.size()) - 1 : kinds[g].link;
+    springs.push_back({chain->links[size_t(link)], Eigen::Vector3d(0.0, 0.0, -0.5 * chain->length), goal.position,
+                       goal.frame == GoalFrame::Head, from, goal.t});
+    from = goal.t;
+  }
+  auto ctl = std::make_shared<GoalSprings>(springs, stiffness, sim.headBody());
+  sim.world().addController(ctl);
+  SpringOutcome out;
+  out.stiffness = stiffness;
+  out.goals.resize(scene.goals.size());
+  const double dt = scene.physics.dt;
+  for (size_t g : order) {
+    while (sim.ok() && sim.time() + 0.5 * dt <= scene.goals[g].t) {
+      const double P = ctl->power(sim.world());
+      out.work += P * dt;
+      out.abs_work += std::abs(P) * dt;
+      sim.step();
+    }
+    const World& w = sim.world();
+    GoalOutcome& o = out.goals[g];
+    const Goal& goal = scene.goals[g];
+    o.target = goal.frame == GoalFrame::Head ? w.body(sim.headBody()).pointToWorld(goal.position) : goal.position;
+    o.reached = kinds[g].kind == GoalPoint::Kind::Tip    ? chain->tip(w)
+                : kinds[g].kind == GoalPoint::Kind::Link ? chain->bottom(w, kinds[g].link)
+                                                         : Eigen::Vector3d::Constant(std::nan(""));
+    o.error = (o.reached - o.target).norm();
+    o.met = o.error <= goal.tolerance;
+    if (!sim.ok()) o.why = "the simulation stopped: " + sim.status();
+  }
+  out.all_met = std::all_of(out.goals.begin(), out.goals.end(), [](const GoalOutcome& g) { return g.met; });
+  return out;
+}
+
+SpringOutcome weakestGoalSpring(const Scene& scene, const AssetLoader* assets) {
+  double lo = 0.0, hi = 1e-3;
+  SpringOutcome best = springGoals(scene, assets, hi);
+  while (!best.all_met && hi < 1e6) {
+    lo = hi;
+    hi *= 4.0;
+    best = springGoals(scene, assets, hi);
+  }
+  if (!best.all_met) return best;
+  while (lo > 0.0 && hi / lo > 1.02) {
+    const double mid = std::sqrt(lo * hi);
+    SpringOutcome o = springGoals(scene, assets, mid);
+    if (o.all_met) {
+      hi = mid;
+      best = o;
+    } else {
+      lo = mid;
+    }
+  }
+  return best;
+}
+
+}  // namespace ponyhop
