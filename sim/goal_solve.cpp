@@ -345,7 +345,10 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
   char line[256];
   const auto errorsText = [&](const std::vector<GoalOutcome>& o) {
     std::string s;
-    for (size_t g = 0; g < o.size(); ++g) s += (s.empty() ? "" : " ") + mm(o[g].error);
+    for (size_t g = 0; g < o.size(); ++g) {
+      if (g > 0) s += ' ';
+      s += mm(o[g].error);
+    }
     return s;
   };
   const auto allMet = [&](const std::vector<GoalOutcome>& o) {
