@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -429,82 +430,107 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
 
 // The cost of the ponytail's collisions: the demo scene (ponytail.json: the head collider, a swing
 // cone at the root) stepped with its collision section and without it, per clip, the same steps.
+// The machine is shared: a step's time is the thread's CPU time (a preempted bench is not
+// charged), and the two are run in interleaved rounds (off, on, then on, off, ...), so that a
+// change of load or clock speed meets both alike; each round's on / off ratio is kept, and the
+// table gives the median over the rounds and their spread (smallest to largest).
 struct CollisionCostRow {
   std::string clip;
   bool on = false;
-  double build_s = 0.0;      // s, building the Sim (with collisions: the head's distance grid too)
-  double us_per_step = 0.0;  // wall time of Sim::step, median of the repeats
-  double contact_us = 0.0;   // of which the contact stage (impulses, push-out, the impact check's splits elsewhere)
+  double build_s = 0.0;  // s, building the Sim (with collisions: the head's distance grid too)
+  // CPU us per step of Sim::step, per round; of which the contact stage (its own clock, wall time:
+  // impulses and push-outs; the impact check's searches and the splits are in the step, not here).
+  std::vector<double> us_per_step, contact_us;
+  std::vector<double> ratio;  // on: per round, us_per_step / the same round's off
   int steps = 0;
   int max_contacts = 0;    // contacts and active limits after a step, at most
   double deepest = 0.0;    // m, deepest contact overlap a contact stage found (before pushing out)
   double overshoot = 0.0;  // rad, furthest a joint limit (the root cone) was passed at a contact stage
-  // Per step, of the last repeat: distance-field evaluations, projected Gauss-Seidel sweeps; and
+  // Per step, of the last round: distance-field evaluations, projected Gauss-Seidel sweeps; and
   // the solves that stopped at their sweep cap (CollisionStats).
   double queries = 0.0, sweeps = 0.0;
   long capped = 0;
   std::string status = "ok";
 };
 
-std::vector<CollisionCostRow> benchCollisionCost(const std::string& scene_path, double seconds, int repeats) {
+namespace {
+
+double threadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+// One run of a clip with the collider on or off into its row: the step's CPU time, the stage's.
+void runCollisionRound(const std::string& scene_path, double seconds, CollisionCostRow& r) {
+  clearHeadColliderCache();  // every round builds its grid: the build time is measured
+  Scene scene = loadScene(scene_path, {{"head.animation.clip", r.clip}});
+  if (!r.on) scene.collision.reset();
+  if (r.on && !scene.collision) scene.collision.emplace();
+  const auto t0 = Clock::now();
+  Sim sim(scene, &assimpAssets());
+  r.build_s = std::max(r.build_s, std::chrono::duration<double>(Clock::now() - t0).count());
+  sim.world().resetStageTimes();
+  r.steps = 0;
+  const double c0 = threadCpuSeconds();
+  while (sim.time() < seconds && sim.step()) {
+    ++r.steps;
+    if (const Collisions* c = sim.collisions()) {
+      r.max_contacts = std::max(r.max_contacts, c->stats().active);
+      r.deepest = std::max(r.deepest, c->stats().deepest);
+      r.overshoot = std::max(r.overshoot, c->stats().overshoot);
+    }
+  }
+  const double cpu = threadCpuSeconds() - c0;
+  if (!sim.ok()) r.status = sim.status();
+  if (const Collisions* c = sim.collisions()) {
+    r.queries = static_cast<double>(c->stats().queries) / std::max(1, r.steps);
+    r.sweeps = static_cast<double>(c->stats().sweeps) / std::max(1, r.steps);
+    r.capped = c->stats().capped;
+  }
+  r.us_per_step.push_back(1e6 * cpu / std::max(1, r.steps));
+  r.contact_us.push_back(1e6 * sim.world().stageTimes()[Stage::Contact] / std::max(1, r.steps));
+}
+
+// "median (smallest-largest)" of the values, each with `format`.
+std::string spreadOf(const std::vector<double>& v, const char* format) {
+  if (v.empty()) return "";
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  return fmt(median(v), format) + " (" + fmt(*lo, format) + "-" + fmt(*hi, format) + ")";
+}
+
+}  // namespace
+
+std::vector<CollisionCostRow> benchCollisionCost(const std::string& scene_path, double seconds, int rounds) {
   std::vector<CollisionCostRow> rows;
   // snap: the stress clip, 4x the toss's peak angular speed (tests/engine/collision_head_test.cpp).
   for (const char* clip : {"showcase", "whip", "toss", "snap"}) {
-    for (bool on : {false, true}) {
-      CollisionCostRow r;
-      r.clip = clip;
-      r.on = on;
-      std::vector<double> per_step, contact, build;
-      for (int rep = 0; rep < std::max(1, repeats); ++rep) {
-        clearHeadColliderCache();  // every repeat builds its grid: the build time is measured
-        Scene scene = loadScene(scene_path, {{"head.animation.clip", clip}});
-        if (!on) scene.collision.reset();
-        if (on && !scene.collision) scene.collision.emplace();
-        const auto t0 = Clock::now();
-        Sim sim(scene, &assimpAssets());
-        build.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
-        sim.world().resetStageTimes();
-        r.steps = 0;
-        const auto t1 = Clock::now();
-        while (sim.time() < seconds && sim.step()) {
-          ++r.steps;
-          if (const Collisions* c = sim.collisions()) {
-            r.max_contacts = std::max(r.max_contacts, c->stats().active);
-            r.deepest = std::max(r.deepest, c->stats().deepest);
-            r.overshoot = std::max(r.overshoot, c->stats().overshoot);
-          }
-        }
-        const double wall = std::chrono::duration<double>(Clock::now() - t1).count();
-        if (!sim.ok()) r.status = sim.status();
-        if (const Collisions* c = sim.collisions()) {
-          r.queries = static_cast<double>(c->stats().queries) / std::max(1, r.steps);
-          r.sweeps = static_cast<double>(c->stats().sweeps) / std::max(1, r.steps);
-          r.capped = c->stats().capped;
-        }
-        per_step.push_back(1e6 * wall / std::max(1, r.steps));
-        contact.push_back(1e6 * sim.world().stageTimes()[Stage::Contact] / std::max(1, r.steps));
-      }
-      const auto median = [](std::vector<double>& v) {
-        std::sort(v.begin(), v.end());
-        return v[v.size() / 2];
-      };
-      r.us_per_step = median(per_step);
-      r.contact_us = median(contact);
-      r.build_s = median(build);
-      std::fprintf(stderr,
-                   "bench: collision %-9s %-3s %9.1f us/step (contact stage %.1f), %.0f queries, %.1f sweeps per step, "
-                   "%ld capped, build %.2f s, %s\n",
-                   clip, on ? "on" : "off", r.us_per_step, r.contact_us, r.queries, r.sweeps, r.capped, r.build_s,
-                   r.status.c_str());
-      rows.push_back(std::move(r));
+    CollisionCostRow off, on;
+    off.clip = on.clip = clip;
+    on.on = true;
+    for (int round = 0; round < std::max(1, rounds); ++round) {
+      // Off first in even rounds, on first in odd ones (ABBA): a drift of the machine's speed
+      // falls on both alike.
+      runCollisionRound(scene_path, seconds, round % 2 ? on : off);
+      runCollisionRound(scene_path, seconds, round % 2 ? off : on);
+      on.ratio.push_back(on.us_per_step.back() / off.us_per_step.back());
     }
+    for (const CollisionCostRow* r : {&off, &on}) {
+      std::fprintf(stderr,
+                   "bench: collision %-9s %-3s %9.1f us/step CPU (contact stage %.1f), on / off %s, %.0f queries, "
+                   "%.1f sweeps per step, %ld capped, build %.2f s, %s\n",
+                   clip, r->on ? "on" : "off", median(r->us_per_step), median(r->contact_us),
+                   spreadOf(r->ratio, "%.2f").c_str(), r->queries, r->sweeps, r->capped, r->build_s, r->status.c_str());
+    }
+    rows.push_back(std::move(off));
+    rows.push_back(std::move(on));
   }
   return rows;
 }
 
 // The section "Collision cost" at the end of the README at `path` (its own, from the row before
 // it on: a --collision-only run replaces only this section), and collision.csv beside it.
-void appendCollisionCost(const std::string& path, const std::string& scene, double seconds,
+void appendCollisionCost(const std::string& path, const std::string& scene, double seconds, int rounds,
                          const std::vector<CollisionCostRow>& rows, const std::string& load_before,
                          const std::string& load_after) {
   constexpr const char* kTitle = "\n## Collision cost: the ponytail against its head\n";
@@ -519,36 +545,45 @@ void appendCollisionCost(const std::string& path, const std::string& scene, doub
   std::ofstream f(path);
   f << before << kTitle << "\n"
     << "`" << scene << "` stepped for " << fmt(seconds, "%g")
-    << " s of each clip with its `collision` section (on) and "
-    << "without it (off), the scene's own method; the median wall time of `Sim::step` over the repeats, the part of it "
-    << "in the contact stage, on / off, and building the scene (on: the head's distance grid as well). The cost of "
-       "collision per step is on - off; impact splits (a substep redone as two halves) are in on's step time, not in "
-       "the contact stage. Per step: the distance-field evaluations of the narrow phase (queries) and the projected "
-       "Gauss-Seidel sweeps (impulses and push-outs); capped: solves that stopped at their sweep cap before their "
-       "tolerance. Deepest contact: the deepest overlap (mm, against the grid, margin included) a contact stage found "
-       "before it pushed the links out; limit overshoot: the furthest (mrad) the root cone was passed there. Load "
-       "average before / after: "
+    << " s of each clip with its `collision` section (on) and without it (off), the scene's own method, in "
+    << std::max(1, rounds)
+    << " interleaved rounds (off then on, on then off, ...). Per step: the CPU time of `Sim::step` (the thread's: a "
+       "preempted bench is not charged), and of it the contact stage (the stage clock, wall time: impulses and "
+       "push-outs; the impact check's searches and the substeps it splits are in the step, not in the stage); the "
+       "median over the rounds and, in brackets, the smallest and largest. On / off: each round's ratio of the two "
+       "(median and spread); contact / rest: the stage against the rest of the step (medians). Build: the slowest "
+       "round's scene construction (on: the head's distance grid as well). Per step, of the last round: the "
+       "distance-field evaluations of the narrow phase (queries) and the projected Gauss-Seidel sweeps (impulses and "
+       "push-outs); capped: solves that stopped at their sweep cap before their tolerance. Deepest contact: the "
+       "deepest overlap (mm, against the grid, margin included) a contact stage found before it pushed the links "
+       "out; limit overshoot: the furthest (mrad) the root cone was passed there. Load average before / after: "
     << load_before << " / " << load_after << ".\n\n"
-    << "| clip | collision | us/step | contact stage us/step | on / off | build s | steps | queries/step | PGS "
-       "sweeps/step | capped | max contacts | deepest contact (mm) | limit overshoot (mrad) | status |\n"
-    << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-  double off_us = 0.0;
+    << "| clip | collision | CPU us/step | contact stage us/step | on / off | contact / rest | build s | steps | "
+       "queries/step | PGS sweeps/step | capped | max contacts | deepest contact (mm) | limit overshoot (mrad) | "
+       "status |\n"
+    << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const CollisionCostRow& r : rows) {
-    if (!r.on) off_us = r.us_per_step;
-    f << "| " << r.clip << " | " << (r.on ? "on" : "off") << " | " << fmt(r.us_per_step, "%.1f") << " | "
-      << fmt(r.contact_us, "%.1f") << " | " << (r.on && off_us > 0.0 ? fmt(r.us_per_step / off_us, "%.2f") : "")
-      << " | " << fmt(r.build_s, "%.2f") << " | " << r.steps << " | " << (r.on ? fmt(r.queries, "%.0f") : "") << " | "
-      << (r.on ? fmt(r.sweeps, "%.1f") : "") << " | " << (r.on ? std::to_string(r.capped) : "") << " | "
-      << r.max_contacts << " | " << fmt(1e3 * r.deepest, "%.2f") << " | " << fmt(1e3 * r.overshoot, "%.2f") << " | "
-      << r.status << " |\n";
+    const double step = median(r.us_per_step), stage = median(r.contact_us);
+    f << "| " << r.clip << " | " << (r.on ? "on" : "off") << " | " << spreadOf(r.us_per_step, "%.1f") << " | "
+      << (r.on ? spreadOf(r.contact_us, "%.1f") : "") << " | " << (r.on ? spreadOf(r.ratio, "%.2f") : "") << " | "
+      << (r.on && step > stage ? fmt(stage / (step - stage), "%.2f") : "") << " | " << fmt(r.build_s, "%.2f") << " | "
+      << r.steps << " | " << (r.on ? fmt(r.queries, "%.0f") : "") << " | " << (r.on ? fmt(r.sweeps, "%.1f") : "")
+      << " | " << (r.on ? std::to_string(r.capped) : "") << " | " << r.max_contacts << " | "
+      << fmt(1e3 * r.deepest, "%.2f") << " | " << fmt(1e3 * r.overshoot, "%.2f") << " | " << r.status << " |\n";
   }
   std::ofstream csv(std::filesystem::path(path).parent_path() / "collision.csv");
-  csv << "clip,collision,us_per_step,contact_us_per_step,build_s,steps,queries_per_step,sweeps_per_step,capped,"
-         "max_contacts,deepest_m,overshoot_rad,status\n";
+  csv << "clip,collision,cpu_us_per_step,cpu_us_per_step_min,cpu_us_per_step_max,contact_us_per_step,on_off,"
+         "on_off_min,on_off_max,build_s,steps,queries_per_step,sweeps_per_step,capped,max_contacts,deepest_m,"
+         "overshoot_rad,status\n";
   for (const CollisionCostRow& r : rows) {
-    csv << r.clip << ',' << (r.on ? "on" : "off") << ',' << r.us_per_step << ',' << r.contact_us << ',' << r.build_s
-        << ',' << r.steps << ',' << r.queries << ',' << r.sweeps << ',' << r.capped << ',' << r.max_contacts << ','
-        << r.deepest << ',' << r.overshoot << ',' << r.status << '\n';
+    const auto [lo, hi] = std::minmax_element(r.us_per_step.begin(), r.us_per_step.end());
+    const bool ratios = !r.ratio.empty();
+    csv << r.clip << ',' << (r.on ? "on" : "off") << ',' << median(r.us_per_step) << ',' << *lo << ',' << *hi << ','
+        << median(r.contact_us) << ',' << (ratios ? median(r.ratio) : 0.0) << ','
+        << (ratios ? *std::min_element(r.ratio.begin(), r.ratio.end()) : 0.0) << ','
+        << (ratios ? *std::max_element(r.ratio.begin(), r.ratio.end()) : 0.0) << ',' << r.build_s << ',' << r.steps
+        << ',' << r.queries << ',' << r.sweeps << ',' << r.capped << ',' << r.max_contacts << ',' << r.deepest << ','
+        << r.overshoot << ',' << r.status << '\n';
   }
 }
 
@@ -575,7 +610,7 @@ int runBench(BenchArgs& args) {
   if (args.collision_only) {
     // Only the collision cost: its section of the README (the rest kept) and collision.csv.
     const std::vector<CollisionCostRow> rows = benchCollisionCost(args.ponytail_scene, collision_seconds, cfg.repeats);
-    appendCollisionCost(args.out + "/README.md", args.ponytail_scene, collision_seconds, rows, load_before,
+    appendCollisionCost(args.out + "/README.md", args.ponytail_scene, collision_seconds, cfg.repeats, rows, load_before,
                         loadAverage());
     std::fprintf(stderr, "bench: collision cost -> %s/README.md\n", args.out.c_str());
     return 0;
@@ -691,7 +726,7 @@ int runBench(BenchArgs& args) {
     writeMarkdown(args.out + "/README.md", args, cfg, cases, rows, refs, checks, scaling, out_notes, load_before,
                   loadAverage(), wall);
     if (!collision_rows.empty()) {
-      appendCollisionCost(args.out + "/README.md", args.ponytail_scene, collision_seconds, collision_rows,
+      appendCollisionCost(args.out + "/README.md", args.ponytail_scene, collision_seconds, cfg.repeats, collision_rows,
                           collision_load_before, collision_load_after);
     }
     std::fprintf(stderr, "bench: %zu runs, %.0f s -> %s/README.md\n", rows.size(), wall, args.out.c_str());
@@ -761,7 +796,9 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(0.0, 3600.0));
   cmd->add_option("--long-hopper", args->long_hopper, "Long run of the hopper, s (default 10; quick 0.5)")
       ->check(CLI::Range(0.0, 3600.0));
-  cmd->add_option("--repeats", args->repeats, "Timed repeats per run, the median is kept (default 3; quick 1)")
+  cmd->add_option("--repeats", args->repeats,
+                  "Timed repeats per run, the median is kept (default 3; quick 1); the collision cost: interleaved "
+                  "on/off rounds")
       ->check(CLI::Range(1, 100));
   cmd->add_option("--links", args->links, "Chain lengths to run, e.g. 8,32 (default 8,32; quick 8)")
       ->delimiter(',')

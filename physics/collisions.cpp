@@ -52,6 +52,9 @@ int Collisions::addShape(int body, Shape shape) {
 
 void Collisions::addPair(int shape_a, int shape_b, double friction, double restitution) {
   pairs_.push_back({shape_a, shape_b, friction, restitution});
+  grid_only_ = std::all_of(pairs_.begin(), pairs_.end(), [this](const Pair& p) {
+    return shapes_[p.a].type == ShapeType::Sdf || shapes_[p.b].type == ShapeType::Sdf;
+  });
 }
 
 void Collisions::addConeLimit(int parent, const Eigen::Vector3d& parent_axis, int child,
@@ -87,6 +90,7 @@ bool Collisions::impactInside(const World& world) const { return impactIn(world.
 
 void Collisions::restoreState(const std::any& state) {
   if (const auto* m = std::any_cast<Memory>(&state)) memory_ = *m;
+  at_.too_far = -1;  // measured against the memory just replaced
 }
 
 std::vector<Collisions::Row> Collisions::detect(const std::vector<RigidBody>& bodies, double reach,
@@ -113,56 +117,104 @@ std::vector<Collisions::Row> Collisions::detect(const std::vector<RigidBody>& bo
       r.key0 = static_cast<int>(k);
       r.key1 = static_cast<int>(i);
       r.grid = shapes_[pr.a].type == ShapeType::Sdf || shapes_[pr.b].type == ShapeType::Sdf;
+      r.feature = points[i].feature;
       rows.push_back(r);
     }
   }
   for (size_t k = 0; k < limits_.size(); ++k) {
-    const Limit& l = limits_[k];
-    const RigidBody& P = bodyOf(bodies, l.parent);
-    const RigidBody& C = bodyOf(bodies, l.child);
-    const Eigen::Vector3d zc = C.q * l.child_axis;
     Row r;
-    r.a = l.child;
-    r.b = l.parent;
-    r.angular = true;
-    r.key0 = -1 - static_cast<int>(k);
-    if (!l.twist) {
-      const Eigen::Vector3d zp = P.q * l.parent_axis;
-      const Eigen::Vector3d k_axis = zp.cross(zc);
-      const double theta = std::atan2(k_axis.norm(), zp.dot(zc));
-      r.gap = l.max_angle - theta;
-      if (!(r.gap < reach) || k_axis.norm() < 1e-12) continue;
-      r.normal = -k_axis.normalized();
-    } else {
-      const Eigen::Quaterniond dev = (P.q * l.rest).conjugate() * C.q;
-      const double along = dev.vec().dot(l.child_axis);
-      double tau = 2.0 * std::atan2(along, dev.w());
-      if (tau > M_PI) tau -= 2.0 * M_PI;
-      if (tau < -M_PI) tau += 2.0 * M_PI;
-      r.gap = l.max_angle - std::abs(tau);
-      if (!(r.gap < reach)) continue;
-      r.normal = (tau > 0.0 ? -1.0 : 1.0) * zc;
-    }
-    rows.push_back(r);
+    if (limitRow(bodies, k, reach, r)) rows.push_back(r);
   }
   return rows;
 }
 
-const std::vector<Collisions::Row>& Collisions::touching(const std::vector<RigidBody>& bodies) const {
-  bool same = touching_valid_ && touching_x_.size() == bodies.size() && touching_margin_ == params_.margin;
-  for (size_t i = 0; same && i < bodies.size(); ++i)
-    same = touching_x_[i] == bodies[i].x && touching_q_[i].coeffs() == bodies[i].q.coeffs();
-  if (same) return touching_;
-  touching_ = detect(bodies, kActiveSlop, &stats_.queries);
-  touching_x_.resize(bodies.size());
-  touching_q_.resize(bodies.size());
-  for (size_t i = 0; i < bodies.size(); ++i) {
-    touching_x_[i] = bodies[i].x;
-    touching_q_[i] = bodies[i].q;
+bool Collisions::limitRow(const std::vector<RigidBody>& bodies, size_t k, double reach, Row& r) const {
+  const Limit& l = limits_[k];
+  const RigidBody& P = bodyOf(bodies, l.parent);
+  const RigidBody& C = bodyOf(bodies, l.child);
+  const Eigen::Vector3d zc = C.q * l.child_axis;
+  r.a = l.child;
+  r.b = l.parent;
+  r.angular = true;
+  r.key0 = -1 - static_cast<int>(k);
+  if (!l.twist) {
+    const Eigen::Vector3d zp = P.q * l.parent_axis;
+    const Eigen::Vector3d k_axis = zp.cross(zc);
+    const double theta = std::atan2(k_axis.norm(), zp.dot(zc));
+    r.gap = l.max_angle - theta;
+    if (!(r.gap < reach) || k_axis.norm() < 1e-12) return false;
+    r.normal = -k_axis.normalized();
+  } else {
+    const Eigen::Quaterniond dev = (P.q * l.rest).conjugate() * C.q;
+    const double along = dev.vec().dot(l.child_axis);
+    double tau = 2.0 * std::atan2(along, dev.w());
+    if (tau > M_PI) tau -= 2.0 * M_PI;
+    if (tau < -M_PI) tau += 2.0 * M_PI;
+    r.gap = l.max_angle - std::abs(tau);
+    if (!(r.gap < reach)) return false;
+    r.normal = (tau > 0.0 ? -1.0 : 1.0) * zc;
   }
-  touching_margin_ = params_.margin;
-  touching_valid_ = true;
-  return touching_;
+  return true;
+}
+
+Collisions::AtState& Collisions::at(const std::vector<RigidBody>& bodies) const {
+  bool same = at_valid_ && at_.x.size() == bodies.size() && at_.margin == params_.margin;
+  for (size_t i = 0; same && i < bodies.size(); ++i)
+    same = at_.x[i] == bodies[i].x && at_.q[i].coeffs() == bodies[i].q.coeffs();
+  if (same) return at_;
+  at_.x.resize(bodies.size());
+  at_.q.resize(bodies.size());
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    at_.x[i] = bodies[i].x;
+    at_.q[i] = bodies[i].q;
+  }
+  at_.margin = params_.margin;
+  at_.searched = at_.cored = false;
+  at_.too_far = -1;
+  at_valid_ = true;
+  return at_;
+}
+
+const std::vector<Collisions::Row>& Collisions::touching(const std::vector<RigidBody>& bodies) const {
+  AtState& s = at(bodies);
+  if (!s.searched) {
+    s.rows = detect(bodies, kActiveSlop, &stats_.queries);
+    s.searched = true;
+  }
+  return s.rows;
+}
+
+const std::vector<Eigen::Vector3d>& Collisions::coresAt(const std::vector<RigidBody>& bodies) const {
+  AtState& s = at(bodies);
+  if (!s.cored) {
+    s.cores = coresInGrids(bodies);
+    s.cored = true;
+  }
+  return s.cores;
+}
+
+std::vector<Collisions::Row> Collisions::remeasure(const std::vector<RigidBody>& bodies,
+                                                   const std::vector<Row>& found) const {
+  std::vector<Row> rows;
+  for (const Row& f : found) {
+    if (f.angular) continue;  // the limits: all of them below
+    const Pair& pr = pairs_[f.key0];
+    const RigidBody& A = bodyOf(bodies, owners_[pr.a]);
+    const RigidBody& B = bodyOf(bodies, owners_[pr.b]);
+    const ContactPoint cp =
+        measureAt(place(shapes_[pr.a], A.x, A.q), place(shapes_[pr.b], B.x, B.q), f.feature, &stats_.queries);
+    if (!(cp.gap - params_.margin < kActiveSlop)) continue;
+    Row r = f;
+    r.point = cp.point;
+    r.normal = cp.normal;
+    r.gap = cp.gap - params_.margin;
+    rows.push_back(r);
+  }
+  for (size_t k = 0; k < limits_.size(); ++k) {
+    Row r;
+    if (limitRow(bodies, k, kActiveSlop, r)) rows.push_back(r);
+  }
+  return rows;
 }
 
 bool Collisions::impactIn(const std::vector<RigidBody>& bodies) const {
@@ -172,11 +224,16 @@ bool Collisions::impactIn(const std::vector<RigidBody>& bodies) const {
   return movedTooFar(bodies);
 }
 
-bool Collisions::coreInGrid(const std::vector<RigidBody>& bodies, const Pair& pair, Eigen::Vector3d ends[2],
-                            const Shape** rounded, const Shape** grid) const {
-  int ri = pair.a, gi = pair.b;
+bool Collisions::roundedAndGrid(const Pair& pair, int& ri, int& gi) const {
+  ri = pair.a;
+  gi = pair.b;
   if (shapes_[ri].type == ShapeType::Sdf) std::swap(ri, gi);
-  if (shapes_[gi].type != ShapeType::Sdf || !shapes_[ri].rounded()) return false;
+  return shapes_[gi].type == ShapeType::Sdf && shapes_[ri].rounded();
+}
+
+bool Collisions::coreInGrid(const std::vector<RigidBody>& bodies, const Pair& pair, Eigen::Vector3d ends[2]) const {
+  int ri = 0, gi = 0;
+  if (!roundedAndGrid(pair, ri, gi)) return false;
   const Shape& r = shapes_[ri];
   const Shape& g = shapes_[gi];
   const RigidBody& R = bodyOf(bodies, owners_[ri]);
@@ -189,8 +246,6 @@ bool Collisions::coreInGrid(const std::vector<RigidBody>& bodies, const Pair& pa
     const Eigen::Vector3d local = r.offset + r.rotation * Eigen::Vector3d(0.0, 0.0, k == 0 ? half : -half);
     ends[k] = to_grid * (R.x + R.q * local - grid_origin);
   }
-  *rounded = &r;
-  *grid = &g;
   return true;
 }
 
@@ -198,8 +253,7 @@ std::vector<Eigen::Vector3d> Collisions::coresInGrids(const std::vector<RigidBod
   std::vector<Eigen::Vector3d> cores;
   for (const Pair& pr : pairs_) {
     Eigen::Vector3d ends[2];
-    const Shape *r = nullptr, *g = nullptr;
-    if (!coreInGrid(bodies, pr, ends, &r, &g)) continue;
+    if (!coreInGrid(bodies, pr, ends)) continue;
     cores.push_back(ends[0]);
     cores.push_back(ends[1]);
   }
@@ -210,17 +264,23 @@ std::vector<Eigen::Vector3d> Collisions::coresInGrids(const std::vector<RigidBod
 // point moves (in the grid's frame) by an affine mix of its ends' displacements, so by at most the
 // larger; the true distance is 1-Lipschitz, so a core whose points all move less than their
 // clearance plus half the thinnest radius never reaches the surface.
+// Asked once per state (the impact check's and the stage's question are the same one).
 bool Collisions::movedTooFar(const std::vector<RigidBody>& bodies) const {
-  size_t at = 0;
+  const std::vector<Eigen::Vector3d>& cores = coresAt(bodies);
+  AtState& s = at(bodies);
+  if (s.too_far >= 0) return s.too_far == 1;
+  size_t k = 0;
+  s.too_far = 0;
   for (const Pair& pr : pairs_) {
-    Eigen::Vector3d ends[2];
-    const Shape *r = nullptr, *g = nullptr;
-    if (!coreInGrid(bodies, pr, ends, &r, &g)) continue;
-    if (at + 2 > memory_.cores.size()) return false;  // no stage yet: nothing to compare with
-    const Eigen::Vector3d& a0 = memory_.cores[at];
-    const Eigen::Vector3d& b0 = memory_.cores[at + 1];
-    at += 2;
-    const double moved = std::max((ends[0] - a0).norm(), (ends[1] - b0).norm());
+    int ri = 0, gi = 0;
+    if (!roundedAndGrid(pr, ri, gi)) continue;
+    const Shape* r = &shapes_[ri];
+    const Shape* g = &shapes_[gi];
+    if (k + 2 > memory_.cores.size()) break;  // no stage yet: nothing to compare with
+    const Eigen::Vector3d& a0 = memory_.cores[k];
+    const Eigen::Vector3d& b0 = memory_.cores[k + 1];
+    const double moved = std::max((cores[k] - a0).norm(), (cores[k + 1] - b0).norm());
+    k += 2;
     const double ra = r->type == ShapeType::Capsule ? r->radius_a : r->radius;
     const double rb = r->type == ShapeType::Capsule ? r->radius_b : r->radius;
     const double allowed = 0.5 * std::min(ra, rb);
@@ -228,9 +288,12 @@ bool Collisions::movedTooFar(const std::vector<RigidBody>& bodies) const {
     // The clearance at the last stage, from the grid at the core's ends there (the grid does not
     // move in its own frame); the margin is skin, not clearance.
     const double clearance = gridGapBound(*g->sdf, a0, b0, ra, rb) - params_.margin;
-    if (moved > allowed + std::max(0.0, clearance)) return true;
+    if (moved > allowed + std::max(0.0, clearance)) {
+      s.too_far = 1;
+      break;
+    }
   }
-  return false;
+  return s.too_far == 1;
 }
 
 void Collisions::buildJacobians(const std::vector<RigidBody>& bodies, const std::vector<Row>& rows, bool normals_only) {
@@ -304,24 +367,25 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
   // The World splits a substep in which a link moved too far (impactIn) until its splits run out:
   // one accepted anyway is counted.
   if (movedTooFar(bodies)) ++stats_.too_fast;
-  // The rows that overlap (gap < 0) of the rows found at the active set's reach.
-  std::vector<Row> rows;
-  const auto overlapping = [&rows](const std::vector<Row>& found) {
+  // The rows found at the active set's reach, and of them those that overlap (gap < 0).
+  std::vector<Row> found = touching(bodies), rows;
+  const auto overlapping = [&rows, &found] {
     rows.clear();
     for (const Row& r : found)
       if (r.gap < 0.0) rows.push_back(r);
   };
-  const auto finish = [&](const std::vector<Row>& found) {
-    memory_.cores = coresInGrids(bodies);
+  const auto finish = [&] {
+    memory_.cores = coresAt(bodies);
+    at_.too_far = -1;  // measured against the cores just replaced
     memory_.active.clear();
     for (const Row& r : found) memory_.active.insert({r.key0, r.key1});
     stats_.active = static_cast<int>(memory_.active.size());
     return Status{};
   };
-  overlapping(touching(bodies));
+  overlapping();
   if (rows.empty()) {
     memory_.impulses.clear();
-    return finish(touching(bodies));
+    return finish();
   }
   bool impact = false;
   for (const Row& r : rows) {
@@ -387,7 +451,7 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
   // 2. Positions: push out what overlaps, keep the joints. The impulses moved no body: the first
   // pass's rows are the impulses' own.
   for (int pass = 0; pass < kPositionPasses; ++pass) {
-    if (pass > 0) overlapping(touching(bodies));
+    if (pass > 0) overlapping();
     double worst = 0.0;
     for (const Row& r : rows) worst = std::max(worst, -r.gap);
     if (worst <= overlapTolerance(rows)) break;
@@ -433,10 +497,17 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
       const ProjectionResult pr = projectPositions(bodies, joints, joint_system_, *solver_);
       if (!pr.status.ok()) return Status::error("joint projection after the push-out: " + pr.status.message());
     }
+    // The next pass's check and, after the last, the active set. Against grids the rows found
+    // are measured again where they were (a push-out moves a link by about its overlap, a few um;
+    // the deepest point moves along it by as little, and the gap there is second order in that):
+    // a second search of every link was most of a touching stage. A link it brings within reach
+    // is found by the next substep's search. Analytic shapes are searched again (exact contacts:
+    // a box's corners change as it settles).
+    found = grid_only_ ? remeasure(bodies, found) : touching(bodies);
   }
 
-  // 3. The active set: the contacts within reach of the last search (after the last push-out).
-  return finish(touching(bodies));
+  // 3. The active set: the contacts within reach after the last push-out.
+  return finish();
 }
 
 }  // namespace ponyhop

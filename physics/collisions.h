@@ -31,8 +31,10 @@
 //      treats them as persisting.
 // Contacts are found once per state: every search runs at the active set's reach (1 um) and the
 // rows are kept with the poses they were found at, so the impact check, the impulses and the
-// first push-out pass share one search, and each push-out's search is the next pass's check and,
-// after the last, the active set.
+// first push-out pass share one search (and movedTooFar() is asked once per state). After a
+// push-out against grids the rows found are measured again where they were, without a search
+// (remeasure()): the next pass's check and, after the last, the active set. Between analytic
+// shapes each push-out is followed by a search.
 // Impacts are located within the step: impactInside() (ContactSet) tells the World that a contact which was
 // not active at the start of a substep ends it deeper than impact_tolerance; the World then undoes
 // the substep and takes it as two halves (down to 1/1024 of it), so the impulse acts at a state
@@ -134,6 +136,7 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
     double mu = 0.0, e = 0.0;
     int key0 = 0, key1 = 0;  // identity for the active set (source, sub-index)
     bool grid = false;       // against a distance grid (its solve stops at the grid's accuracy)
+    double feature = 0.0;    // contacts: where on the shape (ContactPoint::feature)
   };
   // Every contact and limit at the given state whose gap is below `reach`; the distance-field
   // evaluations are added to *queries when given.
@@ -141,6 +144,10 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
   // detect() at the active set's reach, kept with the poses (and margin) it was found at and
   // reused while they are the same bit for bit.
   const std::vector<Row>& touching(const std::vector<RigidBody>& bodies) const;
+  // The rows `found` at an earlier state measured again at the present one without a search:
+  // each contact at its feature (measureAt), every limit as detect() does; those still within
+  // the active set's reach. What the push-out passes see when every pair is against a grid.
+  std::vector<Row> remeasure(const std::vector<RigidBody>& bodies, const std::vector<Row>& found) const;
 
  private:
   struct Pair {
@@ -170,11 +177,28 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
     std::vector<std::pair<std::pair<int, int>, Eigen::Vector3d>> impulses;  // (key0, key1) -> normal, tangents
     std::vector<Eigen::Vector3d> cores;  // per pair against a grid: the core's ends in the grid's frame
   };
+  // A pair of a rounded shape and a distance grid (either order): the rounded shape's and the
+  // grid's indices. False for any other pair.
+  bool roundedAndGrid(const Pair& pair, int& ri, int& gi) const;
   // A pair of a rounded shape and a distance grid (either order): its core's ends in the grid's
-  // frame and the two shapes. False for any other pair.
-  bool coreInGrid(const std::vector<RigidBody>& bodies, const Pair& pair, Eigen::Vector3d ends[2],
-                  const Shape** rounded, const Shape** grid) const;
+  // frame. False for any other pair.
+  bool coreInGrid(const std::vector<RigidBody>& bodies, const Pair& pair, Eigen::Vector3d ends[2]) const;
   std::vector<Eigen::Vector3d> coresInGrids(const std::vector<RigidBody>& bodies) const;
+  // The limit k's row at the given state when its gap is below reach.
+  bool limitRow(const std::vector<RigidBody>& bodies, size_t k, double reach, Row& row) const;
+  // The state cache: the poses (and margin) below were computed at, reset when they change.
+  struct AtState {
+    std::vector<Eigen::Vector3d> x;
+    std::vector<Eigen::Quaterniond> q;
+    double margin = 0.0;
+    bool searched = false;  // rows: touching()'s search
+    std::vector<Row> rows;
+    bool cored = false;  // cores: coresInGrids()
+    std::vector<Eigen::Vector3d> cores;
+    int too_far = -1;  // movedTooFar() against memory_.cores (-1: not yet asked)
+  };
+  AtState& at(const std::vector<RigidBody>& bodies) const;
+  const std::vector<Eigen::Vector3d>& coresAt(const std::vector<RigidBody>& bodies) const;
   Memory memory_;
   mutable CollisionStats stats_;  // touching() counts its queries
   std::unique_ptr<ConstraintSolver> solver_;
@@ -190,12 +214,9 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
   Eigen::VectorXd joint_rhs_, joint_y_;   // a column's joint solve: J_j M^-1 J_c^T, its multipliers
   std::vector<Vector6d> joint_corr_;      // and their mass-weighted correction
   Eigen::MatrixXd delassus_;
-  // touching()'s rows and the state they belong to.
-  mutable std::vector<Row> touching_;
-  mutable std::vector<Eigen::Vector3d> touching_x_;
-  mutable std::vector<Eigen::Quaterniond> touching_q_;
-  mutable double touching_margin_ = 0.0;
-  mutable bool touching_valid_ = false;
+  mutable AtState at_;
+  mutable bool at_valid_ = false;
+  bool grid_only_ = false;  // every pair is against a distance grid (the push-out remeasures)
 };
 
 }  // namespace ponyhop

@@ -280,7 +280,16 @@ ContactPoint roundedAgainst(const Core& c, const PlacedShape& b, double reach, l
   }
   if (at) *at = s;
   if (queries) ++*queries;
-  return contactAt(c, b, s);
+  ContactPoint cp = contactAt(c, b, s);
+  cp.feature = s;
+  return cp;
+}
+
+// A box's corner k as a point core.
+Core cornerOf(const PlacedShape& a, int k) {
+  const Eigen::Vector3d& h = a.shape->half_extents;
+  const Eigen::Vector3d corner((k & 1) ? h.x() : -h.x(), (k & 2) ? h.y() : -h.y(), (k & 4) ? h.z() : -h.z());
+  return Core{a.pose * corner, a.pose * corner, 0.0, 0.0};
 }
 
 }  // namespace
@@ -332,7 +341,8 @@ int collide(const PlacedShape& a, const PlacedShape& b, double reach, std::vecto
         // An end the search measured beyond reach is not measured again.
         if (std::abs(end - s) < 1e-6 || !(ends[end == 0.0 ? 0 : 1] < reach)) continue;
         if (queries) ++*queries;
-        const ContactPoint e = contactAt(core, b, end);
+        ContactPoint e = contactAt(core, b, end);
+        e.feature = end;
         if (e.gap < reach) {
           out.push_back(e);
           ++added;
@@ -343,16 +353,28 @@ int collide(const PlacedShape& a, const PlacedShape& b, double reach, std::vecto
   }
   // A box: its corners.
   int added = 0;
-  const Eigen::Vector3d& h = a.shape->half_extents;
   for (int k = 0; k < 8; ++k) {
-    const Eigen::Vector3d corner((k & 1) ? h.x() : -h.x(), (k & 2) ? h.y() : -h.y(), (k & 4) ? h.z() : -h.z());
-    const Core c{a.pose * corner, a.pose * corner, 0.0, 0.0};
-    const ContactPoint cp = roundedAgainst(c, b, reach, queries);
+    ContactPoint cp = roundedAgainst(cornerOf(a, k), b, reach, queries);
     if (!(cp.gap < reach)) continue;
+    cp.feature = k;
     out.push_back(cp);
     ++added;
   }
   return added;
+}
+
+ContactPoint measureAt(const PlacedShape& a, const PlacedShape& b, double feature, long* queries) {
+  if (!supported(a.shape->type, b.shape->type)) {
+    ContactPoint cp = measureAt(b, a, feature, queries);
+    cp.normal = -cp.normal;
+    return cp;
+  }
+  if (queries) ++*queries;
+  const bool rounded = a.shape->rounded();
+  ContactPoint cp =
+      rounded ? contactAt(coreOf(a), b, feature) : contactAt(cornerOf(a, static_cast<int>(feature)), b, 0.0);
+  cp.feature = feature;
+  return cp;
 }
 
 Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,

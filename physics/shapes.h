@@ -75,6 +75,9 @@ struct ContactPoint {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();    // world, midway between the surfaces
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit, world, from b towards a
   double gap = 0.0;                                   // signed distance between the surfaces (< 0: overlap)
+  // Where on the measured shape (a rounded shape's or a box's, whichever order the pair is
+  // measured in): a core parameter s in [0, 1], or a box's corner index. measureAt() takes it.
+  double feature = 0.0;
 };
 
 // Signed distance of the world point x to a placed shape (negative inside) and its gradient
@@ -92,6 +95,12 @@ bool supported(ShapeType a, ShapeType b);
 // `queries`: when given, counts the signed-distance evaluations of b (the narrow phase's cost).
 int collide(const PlacedShape& a, const PlacedShape& b, double reach, std::vector<ContactPoint>& out,
             long* queries = nullptr);
+
+// The contact collide(a, b) found at `feature` (ContactPoint::feature), measured again at the
+// shapes' present poses without a search: one query with its gradient. The gap there is at least
+// the pair's smallest, and equal to it to second order in how far the deepest point moved along
+// the shape (the push-out's small moves: docs/PHYSICS.md, "Collisions").
+ContactPoint measureAt(const PlacedShape& a, const PlacedShape& b, double feature, long* queries = nullptr);
 
 // A lower bound of min_s D(p(s)) - r(s) over the core from a (radius ra) to b (radius rb), both in
 // the grid's own frame: the grid's values at the two ends and its Lipschitz bound over the whole

@@ -238,6 +238,50 @@ TEST(MeshSdf, CapsuleAgainstTheGridFindsTheDeepestPointAlongTheLink) {
   }
 }
 
+// measureAt() gives back the contact collide() found at its feature (the push-out's re-measure
+// against a grid, physics/collisions.h): at the same poses the same point, normal and gap; moved
+// 1 mm away along the normal, the gap 1 mm larger. A box's corners, a tilted capsule against a
+// plane in either order (the normal turned), and a capsule against a grid.
+TEST(CollisionGeometry, MeasureAtRepeatsTheContactAtItsFeature) {
+  std::vector<Vector3d> v;
+  std::vector<uint32_t> idx;
+  icosphere(0.1, 3, v, idx);
+  auto g = std::make_shared<SignedDistanceGrid>();
+  ASSERT_TRUE(g->build(v, idx, 0.004, 0.03).ok());
+  const Shape ground = Shape::plane(Vector3d::UnitZ()), head = Shape::grid(g);
+  const Shape box = Shape::box(Vector3d(0.1, 0.1, 0.05)), cap = Shape::capsule(0.05, 0.02, 0.01);
+  const Quaterniond tilt(Eigen::AngleAxisd(0.3, Vector3d(1, 1, 0).normalized()));
+  const Quaterniond along_x = Quaterniond::FromTwoVectors(Vector3d::UnitZ(), Vector3d::UnitX());
+  struct Case {
+    const Shape *a, *b;
+    Vector3d xa;
+    Quaterniond qa;
+    Vector3d away;  // a's move that opens every contact by 1 mm
+  };
+  const Case cases[] = {
+      {&box, &ground, Vector3d(0, 0, 0.05 - 1e-4), tilt, Vector3d(0, 0, 1e-3)},
+      {&cap, &ground, Vector3d(0, 0, 0.03), tilt, Vector3d(0, 0, 1e-3)},
+      {&ground, &cap, Vector3d::Zero(), kIdentity, Vector3d(0, 0, -1e-3)},
+      {&cap, &head, Vector3d(0.01, 0, 0.115), along_x, Vector3d(0, 0, 1e-3)},
+  };
+  for (const Case& c : cases) {
+    const bool swapped = c.a == &ground;
+    const Vector3d xb = swapped ? Vector3d(0, 0, 0.03) : Vector3d::Zero();
+    const Quaterniond qb = swapped ? tilt : kIdentity;
+    std::vector<ContactPoint> out;
+    ASSERT_GE(collide(place(*c.a, c.xa, c.qa), place(*c.b, xb, qb), 1e-3, out), 1);
+    for (const ContactPoint& found : out) {
+      const ContactPoint same = measureAt(place(*c.a, c.xa, c.qa), place(*c.b, xb, qb), found.feature);
+      EXPECT_EQ(same.gap, found.gap);
+      EXPECT_EQ(same.normal, found.normal);
+      EXPECT_EQ(same.point, found.point);
+      // Along z the grid's interpolant is exact to its cell's curvature error (4 mm cells, r = 0.1).
+      const ContactPoint moved = measureAt(place(*c.a, c.xa + c.away, c.qa), place(*c.b, xb, qb), found.feature);
+      EXPECT_NEAR(moved.gap, found.gap + 1e-3 * std::abs(found.normal.z()), c.b == &head ? 1e-4 : 1e-12);
+    }
+  }
+}
+
 // The bucketed query gives the brute force's answer: the same distance within its reach (the same
 // closest-point code over a subset that holds the nearest triangle), a value at least the reach
 // beyond it, and the same sign everywhere, inside and out, near and far. On a fine sphere (small
