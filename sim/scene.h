@@ -266,6 +266,30 @@ struct ChainSection : ChainParams {
   }
 };
 
+// One of the scene's `chains`: every field of the `chain` section, plus where on its parent it
+// hangs. A listed chain attached to the head hangs at its own point in the mesh's coordinates
+// (`anchor`, as head.anchor with anchor_space "mesh"); one attached to a hopper names the hopper
+// by its index in scene order (`hopper`, then each of `hoppers`).
+struct ChainListSection : ChainSection {
+  Eigen::Vector3d anchor{0.0, 0.0906, -0.1140};  // head coordinates (mesh units): the default head's bun
+  int hopper = 0;                                // attach "hopper": which hopper
+
+  template <class V>
+  void reflect(V& v) {
+    ChainSection::reflect(v);
+    v("anchor", anchor,
+      {.min = -1e6,
+       .max = 1e6,
+       .help = "Where the chain hangs on the head, in the mesh's coordinates (attach head)",
+       .apply = Apply::Restart});
+    v("hopper", hopper,
+      {.min = 0,
+       .max = 1000,
+       .help = "The hopper it hangs from, in scene order (attach hopper)",
+       .apply = Apply::Restart});
+  }
+};
+
 struct HopperSection : HopperParams {
   Eigen::Vector3d body_color{0.86, 0.33, 0.16};  // rgb 0..1
   Eigen::Vector3d leg_color{0.62, 0.65, 0.70};
@@ -321,6 +345,7 @@ struct Scene {
   std::optional<HeadParams> head;
   std::optional<AnchorParams> anchor;
   std::optional<ChainSection> chain;
+  std::vector<ChainListSection> chains;  // more chains in the same world (each with its own attachment)
   std::optional<HopperSection> hopper;
   std::vector<HopperSection> hoppers;  // more hoppers in the same world (each with its own position)
   std::optional<CollisionSection> collision;
@@ -345,6 +370,9 @@ struct Scene {
     v("head", head, {.help = "Keyframed kinematic head"});
     v("anchor", anchor, {.help = "Prescribed anchor point of a chain scene", .apply = Apply::Restart});
     v("chain", chain, {.help = "Chain of links (the ponytail)"});
+    v("chains", chains,
+      {.help = "More chains in the same world, each a chain section with its own anchor on the head or hopper index",
+       .apply = Apply::Restart});
     v("hopper", hopper, {.help = "Raibert hopper (body, leg, ground contact, controller)"});
     v("hoppers", hoppers, {.help = "More hoppers in the same world, each a hopper section", .apply = Apply::Restart});
     v("collision", collision, {.help = "Collisions: the ponytail against the head"});
@@ -358,6 +386,21 @@ struct Scene {
 inline const HopperSection& hopperSection(const Scene& scene, size_t i) {
   if (scene.hopper) return i == 0 ? *scene.hopper : scene.hoppers[i - 1];
   return scene.hoppers[i];
+}
+
+// The scene's chains in the order Sim builds them (`chain`, then each of `chains`): how many, the
+// i-th one's section, and its entry in `chains` (null for `chain`).
+inline size_t chainCount(const Scene& scene) { return (scene.chain ? 1 : 0) + scene.chains.size(); }
+inline const ChainListSection* listedChain(const Scene& scene, size_t i) {
+  return scene.chain ? (i == 0 ? nullptr : &scene.chains[i - 1]) : &scene.chains[i];
+}
+inline const ChainSection& chainSection(const Scene& scene, size_t i) {
+  if (const ChainListSection* c = listedChain(scene, i)) return *c;
+  return *scene.chain;
+}
+// "chain" or "chains.N": the key of the i-th chain's section, for messages.
+inline std::string chainKey(const Scene& scene, size_t i) {
+  return listedChain(scene, i) ? "chains." + std::to_string(i - (scene.chain ? 1 : 0)) : "chain";
 }
 
 }  // namespace ponyhop

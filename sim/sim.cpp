@@ -15,7 +15,7 @@ Sim::Sim(const Scene& scene, const AssetLoader* assets) : scene_(scene), world_(
   if (scene_.head) buildHead(assets);
   if (scene_.terrain) terrain_ = std::make_shared<const Terrain>(scene_.terrain->boxes);
   buildHoppers();
-  if (scene_.chain) buildChain();
+  buildChains();
   if (scene_.collision) buildCollisions();
   if (!world_.ok()) throw InputError(scene_.path + ": " + world_.status());
 }
@@ -27,11 +27,14 @@ Sim::Sim(const Scene& scene, const AssetLoader* assets) : scene_(scene), world_(
 // in the same set (the same solve) as the head's contacts when there are both.
 void Sim::buildCollisions() {
   const CollisionSection& c = *scene_.collision;
-  if (c.head && chain_ && head_ && scene_.chain->attach == ChainAttach::Head) {
+  std::vector<const Chain*> on_head;  // every chain that hangs from the head collides with it
+  for (size_t i = 0; i < chains_.size(); ++i)
+    if (chainSection(scene_, i).attach == ChainAttach::Head) on_head.push_back(&chains_[i]);
+  if (c.head && head_ && !on_head.empty()) {
     std::vector<Eigen::Vector3d> vertices;
     vertices.reserve(head_->mesh.positions.size());
     for (const auto& p : head_->mesh.positions) vertices.push_back(head_->mesh_to_body * p.cast<double>());
-    if (Status s = makeHeadCollisions(world_, *chain_, head_body_, vertices, head_->mesh.indices, c, collisions_);
+    if (Status s = makeHeadCollisions(world_, on_head, head_body_, vertices, head_->mesh.indices, c, collisions_);
         !s.ok()) {
       throw InputError(scene_.path + ": collision: the head's mesh makes no collider: " + s.message());
     }
@@ -123,15 +126,21 @@ void Sim::buildHoppers() {
   }
 }
 
-void Sim::buildChain() {
-  const ChainParams& c = *scene_.chain;
+void Sim::buildChains() {
+  for (size_t i = 0; i < chainCount(scene_); ++i)
+    buildChain(chainSection(scene_, i), listedChain(scene_, i), chainKey(scene_, i));
+}
+
+// `listed`: the chain's entry in `chains` (its own head point and hopper), null for `chain`.
+void Sim::buildChain(const ChainSection& c, const ChainListSection* listed, const std::string& key) {
   int parent = -1;
   Eigen::Vector3d anchor_local = Eigen::Vector3d::Zero();
   Eigen::Vector3d v0 = Eigen::Vector3d::Zero();
   switch (c.attach) {
     case ChainAttach::Anchor: {
       const AnchorParams& a = *scene_.anchor;
-      anchor_body_ = world_.addKinematicBody(anchorMotion(a), "anchor");
+      // One anchor body, however many chains hang from it.
+      if (anchor_body_ < 0) anchor_body_ = world_.addKinematicBody(anchorMotion(a), "anchor");
       parent = anchor_body_;
       // Constant velocity: the chain starts at rest in the anchor's frame (Galilean invariance).
       if (a.motion == AnchorMotion::ConstantVelocity) v0 = a.velocity;
@@ -139,12 +148,16 @@ void Sim::buildChain() {
     }
     case ChainAttach::Head:
       parent = head_body_;
-      anchor_local = head_->anchor;
-      if (scene_.head->anchor_space == AnchorSpace::Bounds) anchor_local = standOffAnchor(c);
+      if (listed) {
+        anchor_local = head_->mesh_to_body * listed->anchor;  // its own point, mesh coordinates
+      } else {
+        anchor_local = head_->anchor;
+        if (scene_.head->anchor_space == AnchorSpace::Bounds) anchor_local = standOffAnchor(c);
+      }
       break;
     case ChainAttach::Hopper: {
-      const Hopper* h = hopper();
-      if (!h || !h->built()) throw InputError(scene_.path + ": chain.attach: \"hopper\" needs a hopper section");
+      const Hopper* h = hopper(listed ? size_t(listed->hopper) : 0);
+      if (!h || !h->built()) throw InputError(scene_.path + ": " + key + ".attach: \"hopper\" needs a hopper section");
       // Two-way coupled: the chain hangs from the hopper's body, at the back.
       parent = h->model().body;
       anchor_local = h->backPoint();
@@ -152,7 +165,12 @@ void Sim::buildChain() {
       break;
     }
   }
-  chain_ = addChain(world_, c, parent, anchor_local, v0);
+  // A listed chain's field named as the scene has it (chains.1.links, not chain.links).
+  if (Status s = validate(c, key); listed && !s.ok()) throw InputError(scene_.path + ": " + s.message());
+  chains_.push_back(addChain(world_, c, parent, anchor_local, v0));
+  // Unique body names (the --poses and export ids): a listed chain's links are "chains.N link i".
+  if (listed)
+    for (int id : chains_.back().links) world_.body(id).name = key + " " + world_.body(id).name;
 }
 
 bool Sim::step() {
@@ -168,31 +186,35 @@ bool Sim::advanceTo(double t) {
 }
 
 double Sim::chainEnergy() const {
-  if (!chain_) return 0.0;
-  return chain_->kineticEnergy(world_) + chain_->potentialEnergy(world_);
+  const Chain* c = chain();
+  if (!c) return 0.0;
+  return c->kineticEnergy(world_) + c->potentialEnergy(world_);
 }
 
 Eigen::Vector3d Sim::followPoint(const std::string& f) const {
   const Hopper* h = hopper();
   const int hopper_body = h && h->built() ? h->model().body : -1;
-  if (f == "chain" && chain_ && !chain_->empty()) return world_.body(chain_->links.front()).x;
+  const Chain* c = chain();
+  if (f == "chain" && c && !c->empty()) return world_.body(c->links.front()).x;
   if (f == "hopper" && hopper_body >= 0) return world_.body(hopper_body).x;
   if (head_body_ >= 0 && (f.empty() || f == "head")) return world_.body(head_body_).x;
   if (hopper_body >= 0) return world_.body(hopper_body).x;
-  if (chain_) return chain_->anchor(world_);
+  if (c) return c->anchor(world_);
   return Eigen::Vector3d::Zero();
 }
 
 Eigen::Vector3d Sim::trackedPoint() const {
-  if (chain_ && !chain_->empty()) return chain_->tip(world_);
+  const Chain* c = chain();
+  if (c && !c->empty()) return c->tip(world_);
   if (const Hopper* h = hopper(); h && h->built()) return world_.body(h->model().body).x;
   return Eigen::Vector3d::Zero();
 }
 
 Eigen::Vector3d Sim::trackedVelocity() const {
-  if (chain_ && !chain_->empty()) {
-    const RigidBody& b = world_.body(chain_->links.back());
-    return b.velocityAt(chain_->tip(world_));
+  const Chain* c = chain();
+  if (c && !c->empty()) {
+    const RigidBody& b = world_.body(c->links.back());
+    return b.velocityAt(c->tip(world_));
   }
   if (const Hopper* h = hopper(); h && h->built()) return world_.body(h->model().body).v;
   return Eigen::Vector3d::Zero();
