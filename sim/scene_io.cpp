@@ -521,6 +521,40 @@ void validateScene(const Scene& scene_in, const std::string& source) {
       errors.push_back(key + ".attach: \"hopper\" needs a hopper section in the scene");
     }
   }
+  for (size_t j = 0; j < scene.joints.size(); ++j) {
+    const JointSection& joint = scene.joints[j];
+    const std::string key = "joints." + std::to_string(j);
+    bool fixed = true;  // both ends on bodies that do not move
+    for (const auto& [end, side] : {std::pair<const JointEnd*, const char*>{&joint.a, ".a"}, {&joint.b, ".b"}}) {
+      const std::string k = key + side;
+      switch (end->body) {
+        case JointBody::World:
+          break;
+        case JointBody::Head:
+          if (!scene.head) errors.push_back(k + ".body: \"head\" needs a head section in the scene");
+          break;
+        case JointBody::Chain:
+          fixed = false;
+          if (size_t(end->chain) >= chainCount(scene)) {
+            errors.push_back(k + ".chain: " + std::to_string(end->chain) + " is not a chain of this scene (it has " +
+                             std::to_string(chainCount(scene)) + ", counted from 0: chain, then chains)");
+          } else if (end->link >= chainSection(scene, size_t(end->chain)).links) {
+            errors.push_back(k + ".link: " + std::to_string(end->link) + " is not a link of " +
+                             chainKey(scene, size_t(end->chain)) + " (it has " +
+                             std::to_string(chainSection(scene, size_t(end->chain)).links) + "; -1: the last)");
+          }
+          break;
+        case JointBody::Hopper:
+          fixed = false;
+          if (size_t(end->hopper) >= hopper_count) {
+            errors.push_back(k + ".hopper: " + std::to_string(end->hopper) + " is not a hopper of this scene (it has " +
+                             std::to_string(hopper_count) + ")");
+          }
+          break;
+      }
+    }
+    if (fixed) errors.push_back(key + ": both ends are on bodies that do not move (the world or the head)");
+  }
   if (scene.collision && !scene.collision->head) {
     const auto& c = *scene.collision;
     if (c.self || c.joint_cone > 0.0 || c.joint_twist > 0.0) {

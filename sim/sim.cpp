@@ -5,6 +5,7 @@
 #include "physics/models/anchor_motion.h"
 #include "physics/models/hopper_collisions.h"
 #include "physics/models/keyframes.h"
+#include "physics/spherical_joint.h"
 #include "sim/head_fit.h"
 #include "sim/scene_io.h"
 
@@ -16,6 +17,7 @@ Sim::Sim(const Scene& scene, const AssetLoader* assets) : scene_(scene), world_(
   if (scene_.terrain) terrain_ = std::make_shared<const Terrain>(scene_.terrain->boxes);
   buildHoppers();
   buildChains();
+  if (!scene_.joints.empty()) buildJoints();
   if (scene_.collision) buildCollisions();
   if (!world_.ok()) throw InputError(scene_.path + ": " + world_.status());
 }
@@ -171,6 +173,68 @@ void Sim::buildChain(const ChainSection& c, const ChainListSection* listed, cons
   // Unique body names (the --poses and export ids): a listed chain's links are "chains.N link i".
   if (listed)
     for (int id : chains_.back().links) world_.body(id).name = key + " " + world_.body(id).name;
+}
+
+// The scene's joints (closed loops): each end's body and point, then the bodies moved onto the
+// joints (assembly: the position projection of physics/stabilization.h, damped Newton steps of at
+// most 1 cm with the least-norm correction, until every joint meets to 1e-12 m) and given the least-kinetic-energy
+// velocities that satisfy them. A loop whose points cannot meet is refused with each unclosed joint
+// and its gap; a joint that repeats what others hold (redundant rows: a singular system) likewise.
+void Sim::buildJoints() {
+  const auto end = [this](const JointEnd& e, Eigen::Vector3d& local) {
+    switch (e.body) {
+      case JointBody::World:
+        local = e.point;
+        return kWorldBody;
+      case JointBody::Head:
+        local = head_->mesh_to_body * e.point;
+        return head_body_;
+      case JointBody::Chain: {
+        const Chain& c = chains_[size_t(e.chain)];
+        local = Eigen::Vector3d(0.0, 0.0, -0.5 * c.length);  // the link's lower end
+        return e.link < 0 ? c.links.back() : c.links[size_t(e.link)];
+      }
+      case JointBody::Hopper: {
+        const HopperModel& m = hoppers_[size_t(e.hopper)]->model();
+        local = e.point;
+        return e.part == HopperPart::Body ? m.body : e.part == HopperPart::Upper ? m.upper : m.foot;
+      }
+    }
+    return kWorldBody;
+  };
+  std::vector<double> gap0;  // m, each joint's gap before assembly
+  for (const JointSection& j : scene_.joints) {
+    Eigen::Vector3d pa, pb;
+    const int a = end(j.a, pa), b = end(j.b, pb);
+    gap0.push_back((bodyOf(world_.bodies(), a).pointToWorld(pa) - bodyOf(world_.bodies(), b).pointToWorld(pb)).norm());
+    scene_joints_.push_back(world_.addJoint(std::make_unique<SphericalJoint>(a, pa, b, pb)));
+  }
+  const auto name = [this](size_t i) {
+    const std::string& n = scene_.joints[i].name;
+    return "joints." + std::to_string(i) + (n.empty() ? "" : " (\"" + n + "\")");
+  };
+  const ProjectionResult r = world_.assembleJoints();
+  std::string unclosed;
+  for (size_t i = 0; i < scene_joints_.size(); ++i) {
+    const Constraint& c = *world_.joints()[size_t(scene_joints_[i])];
+    const double e = c.error(c.rowsAt(bodyOf(world_.bodies(), c.bodyA()), bodyOf(world_.bodies(), c.bodyB())));
+    if (!(e <= 1e-9)) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "; its points are %.6g m apart at t = 0 (%.3g m after assembly)", gap0[i], e);
+      unclosed += "\n  " + name(i) + ": the loop cannot close" + buf;
+    }
+  }
+  if (!unclosed.empty()) {
+    throw InputError(scene_.path +
+                     ": joints: a loop that cannot close at t = 0 (the bodies between the points "
+                     "cannot reach):" +
+                     unclosed);
+  }
+  if (!r.status.ok()) {
+    throw InputError(scene_.path + ": joints: redundant rows: a joint holds what the others already hold (" +
+                     r.status.message() + "); remove it");
+  }
+  world_.projectVelocities();
 }
 
 bool Sim::step() {

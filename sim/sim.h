@@ -93,6 +93,7 @@ class Sim {
   void buildChains();
   void buildChain(const ChainSection& c, const ChainListSection* listed, const std::string& key);
   void buildHoppers();
+  void buildJoints();
   void buildCollisions();
   Eigen::Vector3d standOffAnchor(const ChainParams& c) const;
 
@@ -102,6 +103,7 @@ class Sim {
   int anchor_body_ = -1;
   std::optional<HeadAsset> head_;
   std::vector<Chain> chains_;
+  std::vector<int> scene_joints_;  // the world's joint index of each of the scene's `joints`
   std::vector<std::shared_ptr<Hopper>> hoppers_;
   std::shared_ptr<Collisions> collisions_;
   std::shared_ptr<const Terrain> terrain_;  // the scene's terrain section (null: the plane z = 0 alone)
