@@ -46,15 +46,20 @@ std::vector<BakeMesh> bodyMeshes(const Sim& sim, std::vector<int>& mesh_of_body)
     transformMesh(m.mesh, sim.head()->mesh_to_body);
     add(sim.headBody(), std::move(m));
   }
-  if (const Chain* c = sim.chain()) {
+  for (size_t k = 0; k < sim.chains().size(); ++k) {
+    // The first chain's meshes are "hair i"; the k-th chain's (k >= 1) "hair k.i".
+    const Chain* c = &sim.chains()[k];
+    const std::string prefix = k == 0 ? "hair " : "hair " + std::to_string(k) + ".";
     const std::vector<CapsuleSegment> segs = c->segments(w);
     for (size_t i = 0; i < c->links.size(); ++i) {
       const RigidBody& b = w.body(c->links[i]);
-      add(c->links[i], BakeMesh{"hair " + std::to_string(i),
+      add(c->links[i], BakeMesh{prefix + std::to_string(i),
                                 makeCapsuleMesh(toBody(b, segs[i].top), float(segs[i].radius_top),
                                                 toBody(b, segs[i].bottom), float(segs[i].radius_bottom)),
-                                scene.chain->color.cast<float>()});
+                                chainSection(scene, k).color.cast<float>()});
     }
+  }
+  if (const Chain* c = sim.chain()) {
     for (int i = 0; i < w.bodyCount(); ++i) {
       if (w.body(i).name == "anchor") {
         add(i, BakeMesh{"anchor", makeUvSphere(float(0.8 * c->radii.front() + 0.004), 16, 9), {0.25f, 0.27f, 0.30f}});

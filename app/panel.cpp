@@ -885,6 +885,18 @@ void Panel::drawSections() {
     NestedSection v(*this, "chain", "hair", "Hair", false);  // how it is drawn: strands, highlight, tie
     s.reflect(v);
   }
+  for (size_t i = 0; i < s.chains.size(); ++i) {
+    // Each listed chain: every field (an edit rebuilds the scene: the list applies as a whole).
+    const std::string key = "chains." + std::to_string(i);
+    const std::string title = "Chain " + key + ": every field";
+    if (sectionHeader(title.c_str(), false)) {
+      ImGui::PushID(key.c_str());
+      FieldWidgets w(*this, key + ".");
+      s.chains[i].reflect(w);
+      ImGui::PopID();
+      ImGui::Spacing();
+    }
+  }
   section("head", "Head", false);
   section("anchor", "Anchor", false);
   {
@@ -962,7 +974,8 @@ bool Panel::pick(float mx, float my, const PanelLayout& layout) {
   int body = -1;
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   std::vector<bool> in_chain(size_t(world.bodyCount()), false);
-  if (const Chain* c = sim_.runtime().chain()) {
+  for (const Chain& chain : sim_.runtime().chains()) {
+    const Chain* c = &chain;
     for (size_t i = 0; i < c->links.size(); ++i) {
       in_chain[size_t(c->links[i])] = true;
       double s = 0.0;

@@ -82,7 +82,7 @@ unsigned partBit(const std::string& name) {
 }
 
 unsigned sceneParts(const Scene& s) {
-  return (s.head ? SceneDraw::kHead : 0u) | (s.chain ? SceneDraw::kChain : 0u) |
+  return (s.head ? SceneDraw::kHead : 0u) | (chainCount(s) ? SceneDraw::kChain : 0u) |
          (s.hopper || !s.hoppers.empty() ? SceneDraw::kHopper : 0u);
 }
 

@@ -96,8 +96,11 @@ void SceneDraw::draw(const Sim& sim, Renderer& renderer, const Scene& drawing, u
     const Eigen::Vector3d tint = sim.head()->mesh.colors.empty() ? scene.head->color : Eigen::Vector3d(1.0, 1.0, 1.0);
     renderer.drawMesh(head_, pose * sim.head()->mesh_to_body, material(tint, 0.18f, 24.0f));
   }
-  if (const Chain* chain = sim.chain(); chain && !(hide & kChain))
-    drawChain(sim, *chain, drawing.chain ? *drawing.chain : *scene.chain, renderer);
+  // Each chain with its look from `drawing` when that scene has the same chains (the panel's
+  // applied scene), else from the sim's own.
+  const bool same_chains = chainCount(drawing) == chainCount(scene);
+  for (size_t i = 0; i < sim.chains().size() && !(hide & kChain); ++i)
+    drawChain(sim, sim.chains()[i], chainSection(same_chains ? drawing : scene, i), renderer);
   if (drawing.render.colliders) drawColliders(sim, renderer);
   if (drawing.render.active_joints) drawActiveJoints(sim, renderer);
 }
@@ -113,18 +116,7 @@ HairMesh SceneDraw::chainHair(const Sim& sim, const Chain& chain, const ChainSec
     radii.push_back(i + 1 < chain.radii.size() ? 0.5 * (chain.radii[i] + chain.radii[i + 1]) : 0.7 * chain.radii[i]);
   }
   // The strands' frame starts from the parent body's x axis: it turns with the head.
-  int parent = -1;
-  switch (look.attach) {
-    case ChainAttach::Anchor:
-      parent = sim.anchorBody();
-      break;
-    case ChainAttach::Head:
-      parent = sim.headBody();
-      break;
-    case ChainAttach::Hopper:
-      parent = sim.hoppers().empty() ? -1 : sim.hoppers()[0]->model().body;
-      break;
-  }
+  const int parent = chain.parent;
   const Eigen::Vector3d reference =
       parent >= 0 ? Eigen::Vector3d(world.body(parent).q * Eigen::Vector3d::UnitX()) : Eigen::Vector3d::UnitX();
   // 4 samples per link: smooth at the tail's size on screen, and half the strand triangles of 8.

@@ -12,6 +12,7 @@
 //    satisfy the joints, the one closest to the given one in the kinetic-energy metric.
 #pragma once
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -29,9 +30,13 @@ struct [[nodiscard]] ProjectionResult {
 };
 
 // Positions and orientations of the dynamic bodies onto C = 0. `system` is scratch.
+// Finite `max_step` (m or rad): assembly of a pose far from C = 0 (a loop closed at t = 0): first
+// damped least-squares steps (Levenberg-Marquardt, by conjugate gradients: no factorization, bounded
+// at a singular pose) of at most max_step each, up to max_iterations, until within 1e-6; then at
+// most 20 Newton steps to `tolerance`. Infinite (the default): Newton steps alone.
 ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constraints& constraints,
                                   ConstraintSystem& system, ConstraintSolver& solver, double tolerance = 1e-12,
-                                  int max_iterations = 10);
+                                  int max_iterations = 10, double max_step = INFINITY);
 
 // Velocities of the dynamic bodies onto J v = -J_k v_k (kinematic bodies' velocities as they
 // are). Returns ok or what failed. `impulses` (optional): the multiplier y of every row (N s),

@@ -574,6 +574,10 @@ ProjectionResult World::projectPositionsOntoJoints() {
   return ponyhop::projectPositions(bodies_, joints_, system_, *solver_);
 }
 
+ProjectionResult World::assembleJoints() {
+  return ponyhop::projectPositions(bodies_, joints_, system_, *solver_, 1e-12, 1000, 0.01);
+}
+
 Status World::projectVelocitiesOntoJoints(Eigen::VectorXd* impulses) {
   return ponyhop::projectVelocities(bodies_, joints_, system_, *solver_, impulses);
 }

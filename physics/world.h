@@ -80,6 +80,9 @@ class World {
   // at the bodies' current state, for contact sets (impacts). They do not stop the world:
   // ok or what failed. `impulses`: the velocity projection's multiplier of every row (N s).
   ProjectionResult projectPositionsOntoJoints();
+  // Assembly at build time (a scene's loops): the bodies walked onto C = 0 by damped steps of at
+  // most 1 cm (projectPositions with a max_step), up to 1000 of them, then Newton to 1e-12.
+  ProjectionResult assembleJoints();
   Status projectVelocitiesOntoJoints(Eigen::VectorXd* impulses = nullptr);
 
   // RATTLE's warm start: the position multipliers of the last step taken and the joints'

@@ -271,6 +271,81 @@ struct ChainSection : ChainParams {
   }
 };
 
+// One of the scene's `chains`: every field of the `chain` section, plus where on its parent it
+// hangs. A listed chain attached to the head hangs at its own point in the mesh's coordinates
+// (`anchor`, as head.anchor with anchor_space "mesh"); one attached to a hopper names the hopper
+// by its index in scene order (`hopper`, then each of `hoppers`).
+struct ChainListSection : ChainSection {
+  Eigen::Vector3d anchor{0.0, 0.0906, -0.1140};  // head coordinates (mesh units): the default head's bun
+  int hopper = 0;                                // attach "hopper": which hopper
+
+  template <class V>
+  void reflect(V& v) {
+    ChainSection::reflect(v);
+    v("anchor", anchor,
+      {.min = -1e6,
+       .max = 1e6,
+       .help = "Where the chain hangs on the head, in the mesh's coordinates (attach head)",
+       .apply = Apply::Restart});
+    v("hopper", hopper,
+      {.min = 0,
+       .max = 1000,
+       .help = "The hopper it hangs from, in scene order (attach hopper)",
+       .apply = Apply::Restart});
+  }
+};
+
+// What one end of a scene joint (`joints`) is fixed to.
+enum class JointBody { World, Head, Chain, Hopper };
+template <>
+struct EnumNames<JointBody> {
+  static constexpr std::array<std::string_view, 4> names{"world", "head", "chain", "hopper"};
+};
+enum class HopperPart { Body, Upper, Foot };
+template <>
+struct EnumNames<HopperPart> {
+  static constexpr std::array<std::string_view, 3> names{"body", "upper", "foot"};
+};
+
+// One end of a scene joint: a point on a body.
+struct JointEnd {
+  JointBody body = JointBody::World;
+  int chain = 0;   // body "chain": which chain, in scene order (`chain`, then each of `chains`)
+  int link = -1;   // body "chain": which link, 0 at the root (-1: the last); the point is its lower end
+  int hopper = 0;  // body "hopper": which hopper, in scene order (`hopper`, then each of `hoppers`)
+  HopperPart part = HopperPart::Body;
+  Eigen::Vector3d point{0.0, 0.0, 0.0};  // world: m, world; head: mesh coordinates; hopper: m, the part's frame
+
+  template <class V>
+  void reflect(V& v) {
+    v("body", body, {.help = "What this end is fixed to: the world, the head, a chain's link end, a hopper part"});
+    v("chain", chain, {.min = 0, .max = 1000, .help = "Which chain, in scene order (chain, then chains)"});
+    v("link", link,
+      {.min = -1, .max = 4096, .help = "Which link of the chain, 0 at the root (-1: the last): its lower end"});
+    v("hopper", hopper, {.min = 0, .max = 1000, .help = "Which hopper, in scene order (hopper, then hoppers)"});
+    v("part", part, {.help = "Which part of the hopper"});
+    v("point", point,
+      {.min = -1e6,
+       .max = 1e6,
+       .help = "The point: world (m) on the world, mesh coordinates on the head, the part's frame (m) on a hopper"});
+  }
+};
+
+// A spherical joint the scene adds between two points on any two bodies (docs/PHYSICS.md, "Closed
+// loops"): a chain's tip tied back to the head closes a loop. Its two points must meet at t = 0
+// (the bodies between them are moved onto it); a loop that cannot close is refused.
+struct JointSection {
+  std::string name;  // named in messages
+  JointEnd a, b;
+
+  template <class V>
+  void reflect(V& v) {
+    v("name", name, {.help = "Name of the joint (messages)"});
+    v("a", a, {.help = "First end"});
+    v("b", b, {.help = "Second end"});
+  }
+};
+
 struct HopperSection : HopperParams {
   Eigen::Vector3d body_color{0.86, 0.33, 0.16};  // rgb 0..1
   Eigen::Vector3d leg_color{0.62, 0.65, 0.70};
@@ -326,8 +401,10 @@ struct Scene {
   std::optional<HeadParams> head;
   std::optional<AnchorParams> anchor;
   std::optional<ChainSection> chain;
+  std::vector<ChainListSection> chains;  // more chains in the same world (each with its own attachment)
   std::optional<HopperSection> hopper;
   std::vector<HopperSection> hoppers;  // more hoppers in the same world (each with its own position)
+  std::vector<JointSection> joints;    // spherical joints between points on two bodies (closed loops)
   std::optional<CollisionSection> collision;
   std::optional<TerrainSection> terrain;
   std::vector<std::string> notes;  // what the reader chose for the user (not a field), shown on stderr
@@ -355,8 +432,15 @@ struct Scene {
     v("head", head, {.help = "Keyframed kinematic head"});
     v("anchor", anchor, {.help = "Prescribed anchor point of a chain scene", .apply = Apply::Restart});
     v("chain", chain, {.help = "Chain of links (the ponytail)"});
+    v("chains", chains,
+      {.help = "More chains in the same world, each a chain section with its own anchor on the head or hopper index",
+       .apply = Apply::Restart});
     v("hopper", hopper, {.help = "Raibert hopper (body, leg, ground contact, controller)"});
     v("hoppers", hoppers, {.help = "More hoppers in the same world, each a hopper section", .apply = Apply::Restart});
+    v("joints", joints,
+      {.help = "Spherical joints between points on two bodies (a chain's link end, the head, a hopper part, the "
+               "world): closed loops",
+       .apply = Apply::Restart});
     v("collision", collision, {.help = "Collisions: the ponytail against the head"});
     v("terrain", terrain,
       {.help = "Boxes on the ground (steps, slopes) for the hoppers' toes and, with collision.ground, their bodies",
@@ -370,6 +454,21 @@ struct Scene {
 inline const HopperSection& hopperSection(const Scene& scene, size_t i) {
   if (scene.hopper) return i == 0 ? *scene.hopper : scene.hoppers[i - 1];
   return scene.hoppers[i];
+}
+
+// The scene's chains in the order Sim builds them (`chain`, then each of `chains`): how many, the
+// i-th one's section, and its entry in `chains` (null for `chain`).
+inline size_t chainCount(const Scene& scene) { return (scene.chain ? 1 : 0) + scene.chains.size(); }
+inline const ChainListSection* listedChain(const Scene& scene, size_t i) {
+  return scene.chain ? (i == 0 ? nullptr : &scene.chains[i - 1]) : &scene.chains[i];
+}
+inline const ChainSection& chainSection(const Scene& scene, size_t i) {
+  if (const ChainListSection* c = listedChain(scene, i)) return *c;
+  return *scene.chain;
+}
+// "chain" or "chains.N": the key of the i-th chain's section, for messages.
+inline std::string chainKey(const Scene& scene, size_t i) {
+  return listedChain(scene, i) ? "chains." + std::to_string(i - (scene.chain ? 1 : 0)) : "chain";
 }
 
 }  // namespace ponyhop

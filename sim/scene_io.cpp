@@ -342,8 +342,9 @@ const char* kOptionalSections[] = {"head", "anchor", "chain", "hopper"};
 // Dense is O(n^3) per step: a long chain on it would run for days without a word. The default
 // (tree) is O(n); a dense solver the user chose is kept, with its cost said up front.
 void noteDenseCost(Scene& scene) {
-  if (!scene.chain || scene.physics.solver != SolverKind::Dense) return;
-  const int n = scene.chain->links;
+  if (!chainCount(scene) || scene.physics.solver != SolverKind::Dense) return;
+  int n = 0;  // every chain's links are in the one dense system
+  for (size_t i = 0; i < chainCount(scene); ++i) n += chainSection(scene, i).links;
   if (n > kDenseSolverMaxLinks) {
     // Measured (docs/SOLVERS.md): about 48 ms per step at 128 links, growing as n^3.
     const double ms = 48.0 * std::pow(n / 128.0, 3.0);
@@ -500,18 +501,60 @@ void validateScene(const Scene& scene_in, const std::string& source) {
       }
     }
   }
-  if (scene.chain) {
-    const auto& c = *scene.chain;
-    if (c.direction.norm() < 1e-9) errors.push_back("chain.direction: must not be the zero vector");
+  const size_t hopper_count = (scene.hopper ? 1 : 0) + scene.hoppers.size();
+  for (size_t i = 0; i < chainCount(scene); ++i) {
+    const auto& c = chainSection(scene, i);
+    const std::string key = chainKey(scene, i);
+    if (c.direction.norm() < 1e-9) errors.push_back(key + ".direction: must not be the zero vector");
     if (c.attach == ChainAttach::Head && !scene.head) {
-      errors.push_back("chain.attach: \"head\" needs a head section in the scene");
+      errors.push_back(key + ".attach: \"head\" needs a head section in the scene");
     }
     if (c.attach == ChainAttach::Anchor && !scene.anchor) {
-      errors.push_back("chain.attach: \"anchor\" needs an anchor section in the scene");
+      errors.push_back(key + ".attach: \"anchor\" needs an anchor section in the scene");
     }
-    if (c.attach == ChainAttach::Hopper && !scene.hopper) {
-      errors.push_back("chain.attach: \"hopper\" needs a hopper section in the scene");
+    if (const ChainListSection* listed = listedChain(scene, i)) {
+      if (c.attach == ChainAttach::Hopper && size_t(listed->hopper) >= hopper_count) {
+        errors.push_back(key + ".hopper: " + std::to_string(listed->hopper) +
+                         " is not a hopper of this scene (it has " + std::to_string(hopper_count) +
+                         ", counted from 0: hopper, then hoppers)");
+      }
+    } else if (c.attach == ChainAttach::Hopper && !scene.hopper) {
+      errors.push_back(key + ".attach: \"hopper\" needs a hopper section in the scene");
     }
+  }
+  for (size_t j = 0; j < scene.joints.size(); ++j) {
+    const JointSection& joint = scene.joints[j];
+    const std::string key = "joints." + std::to_string(j);
+    bool fixed = true;  // both ends on bodies that do not move
+    for (const auto& [end, side] : {std::pair<const JointEnd*, const char*>{&joint.a, ".a"}, {&joint.b, ".b"}}) {
+      const std::string k = key + side;
+      switch (end->body) {
+        case JointBody::World:
+          break;
+        case JointBody::Head:
+          if (!scene.head) errors.push_back(k + ".body: \"head\" needs a head section in the scene");
+          break;
+        case JointBody::Chain:
+          fixed = false;
+          if (size_t(end->chain) >= chainCount(scene)) {
+            errors.push_back(k + ".chain: " + std::to_string(end->chain) + " is not a chain of this scene (it has " +
+                             std::to_string(chainCount(scene)) + ", counted from 0: chain, then chains)");
+          } else if (end->link >= chainSection(scene, size_t(end->chain)).links) {
+            errors.push_back(k + ".link: " + std::to_string(end->link) + " is not a link of " +
+                             chainKey(scene, size_t(end->chain)) + " (it has " +
+                             std::to_string(chainSection(scene, size_t(end->chain)).links) + "; -1: the last)");
+          }
+          break;
+        case JointBody::Hopper:
+          fixed = false;
+          if (size_t(end->hopper) >= hopper_count) {
+            errors.push_back(k + ".hopper: " + std::to_string(end->hopper) + " is not a hopper of this scene (it has " +
+                             std::to_string(hopper_count) + ")");
+          }
+          break;
+      }
+    }
+    if (fixed) errors.push_back(key + ": both ends are on bodies that do not move (the world or the head)");
   }
   if (scene.collision && !scene.collision->head) {
     const auto& c = *scene.collision;
@@ -529,11 +572,13 @@ void validateScene(const Scene& scene_in, const std::string& source) {
   }
   if (scene.collision && (scene.collision->head || scene.collision->ground)) {
     // collision.head is on by default: a scene that asks only for ground contacts needs no head.
-    const bool head_chain = scene.chain && scene.chain->attach == ChainAttach::Head && scene.head;
+    bool head_chain = false;
+    for (size_t i = 0; i < chainCount(scene); ++i)
+      head_chain = head_chain || (chainSection(scene, i).attach == ChainAttach::Head && scene.head);
     if (scene.collision->head && !head_chain && !scene.collision->ground) {
       errors.push_back(
-          "collision.head: the ponytail collides with the head only when chain.attach is \"head\" and "
-          "the scene has a head (set collision.head false, or leave the collision section out)");
+          "collision.head: the ponytail collides with the head only when chain.attach is \"head\" (or a chains "
+          "entry's attach) and the scene has a head (set collision.head false, or leave the collision section out)");
     }
     if (scene.physics.solver == SolverKind::Featherstone) {
       errors.push_back(
@@ -545,13 +590,13 @@ void validateScene(const Scene& scene_in, const std::string& source) {
     // camera.follow names a body the scene has ("" = the scene's main body).
     const std::string& f = scene.camera.follow;
     const bool has_hopper = scene.hopper || !scene.hoppers.empty();
-    const bool exists =
-        f.empty() || (f == "head" && scene.head) || (f == "hopper" && has_hopper) || (f == "chain" && scene.chain);
+    const bool exists = f.empty() || (f == "head" && scene.head) || (f == "hopper" && has_hopper) ||
+                        (f == "chain" && chainCount(scene));
     if (!exists) {
       std::string have;
       for (const auto& [name, present] : {std::pair<const char*, bool>{"head", bool(scene.head)},
                                           {"hopper", has_hopper},
-                                          {"chain", bool(scene.chain)}}) {
+                                          {"chain", chainCount(scene) > 0}}) {
         if (present) have += std::string(have.empty() ? "" : ", ") + '"' + name + '"';
       }
       errors.push_back("camera.follow: \"" + shortText(f) + "\" is not a body of this scene (allowed: \"\"" +

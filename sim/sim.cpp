@@ -5,6 +5,7 @@
 #include "physics/models/anchor_motion.h"
 #include "physics/models/hopper_collisions.h"
 #include "physics/models/keyframes.h"
+#include "physics/spherical_joint.h"
 #include "sim/head_fit.h"
 #include "sim/scene_io.h"
 
@@ -15,7 +16,8 @@ Sim::Sim(const Scene& scene, const AssetLoader* assets) : scene_(scene), world_(
   if (scene_.head) buildHead(assets);
   if (scene_.terrain) terrain_ = std::make_shared<const Terrain>(scene_.terrain->boxes);
   buildHoppers();
-  if (scene_.chain) buildChain();
+  buildChains();
+  if (!scene_.joints.empty()) buildJoints();
   if (scene_.collision) buildCollisions();
   if (!world_.ok()) throw InputError(scene_.path + ": " + world_.status());
 }
@@ -27,11 +29,14 @@ Sim::Sim(const Scene& scene, const AssetLoader* assets) : scene_(scene), world_(
 // in the same set (the same solve) as the head's contacts when there are both.
 void Sim::buildCollisions() {
   const CollisionSection& c = *scene_.collision;
-  if (c.head && chain_ && head_ && scene_.chain->attach == ChainAttach::Head) {
+  std::vector<const Chain*> on_head;  // every chain that hangs from the head collides with it
+  for (size_t i = 0; i < chains_.size(); ++i)
+    if (chainSection(scene_, i).attach == ChainAttach::Head) on_head.push_back(&chains_[i]);
+  if (c.head && head_ && !on_head.empty()) {
     std::vector<Eigen::Vector3d> vertices;
     vertices.reserve(head_->mesh.positions.size());
     for (const auto& p : head_->mesh.positions) vertices.push_back(head_->mesh_to_body * p.cast<double>());
-    if (Status s = makeHeadCollisions(world_, *chain_, head_body_, vertices, head_->mesh.indices, c, collisions_);
+    if (Status s = makeHeadCollisions(world_, on_head, head_body_, vertices, head_->mesh.indices, c, collisions_);
         !s.ok()) {
       throw InputError(scene_.path + ": collision: the head's mesh makes no collider: " + s.message());
     }
@@ -123,15 +128,21 @@ void Sim::buildHoppers() {
   }
 }
 
-void Sim::buildChain() {
-  const ChainParams& c = *scene_.chain;
+void Sim::buildChains() {
+  for (size_t i = 0; i < chainCount(scene_); ++i)
+    buildChain(chainSection(scene_, i), listedChain(scene_, i), chainKey(scene_, i));
+}
+
+// `listed`: the chain's entry in `chains` (its own head point and hopper), null for `chain`.
+void Sim::buildChain(const ChainSection& c, const ChainListSection* listed, const std::string& key) {
   int parent = -1;
   Eigen::Vector3d anchor_local = Eigen::Vector3d::Zero();
   Eigen::Vector3d v0 = Eigen::Vector3d::Zero();
   switch (c.attach) {
     case ChainAttach::Anchor: {
       const AnchorParams& a = *scene_.anchor;
-      anchor_body_ = world_.addKinematicBody(anchorMotion(a), "anchor");
+      // One anchor body, however many chains hang from it.
+      if (anchor_body_ < 0) anchor_body_ = world_.addKinematicBody(anchorMotion(a), "anchor");
       parent = anchor_body_;
       // Constant velocity: the chain starts at rest in the anchor's frame (Galilean invariance).
       if (a.motion == AnchorMotion::ConstantVelocity) v0 = a.velocity;
@@ -139,12 +150,16 @@ void Sim::buildChain() {
     }
     case ChainAttach::Head:
       parent = head_body_;
-      anchor_local = head_->anchor;
-      if (scene_.head->anchor_space == AnchorSpace::Bounds) anchor_local = standOffAnchor(c);
+      if (listed) {
+        anchor_local = head_->mesh_to_body * listed->anchor;  // its own point, mesh coordinates
+      } else {
+        anchor_local = head_->anchor;
+        if (scene_.head->anchor_space == AnchorSpace::Bounds) anchor_local = standOffAnchor(c);
+      }
       break;
     case ChainAttach::Hopper: {
-      const Hopper* h = hopper();
-      if (!h || !h->built()) throw InputError(scene_.path + ": chain.attach: \"hopper\" needs a hopper section");
+      const Hopper* h = hopper(listed ? size_t(listed->hopper) : 0);
+      if (!h || !h->built()) throw InputError(scene_.path + ": " + key + ".attach: \"hopper\" needs a hopper section");
       // Two-way coupled: the chain hangs from the hopper's body, at the back.
       parent = h->model().body;
       anchor_local = h->backPoint();
@@ -152,15 +167,86 @@ void Sim::buildChain() {
       break;
     }
   }
-  chain_ = addChain(world_, c, parent, anchor_local, v0);
-  if (scene_.guide && scene_.guide->enabled && !chain_->empty()) {
-    // Joint j turns link j against link j - 1 (the root joint against the chain's parent).
-    std::vector<int> parents{chain_->parent};
-    parents.insert(parents.end(), chain_->links.begin(), chain_->links.end() - 1);
-    guide_ = std::make_shared<GuideTorques>(chain_->links, parents);
+  // A listed chain's field named as the scene has it (chains.1.links, not chain.links).
+  if (Status s = validate(c, key); listed && !s.ok()) throw InputError(scene_.path + ": " + s.message());
+  chains_.push_back(addChain(world_, c, parent, anchor_local, v0));
+  const Chain& built = chains_.back();
+  if (!listed && scene_.guide && scene_.guide->enabled && !built.empty()) {
+    // The guide torques drive the scene's `chain` (docs/GOALS.md). Joint j turns link j against
+    // link j - 1 (the root joint against the chain's parent).
+    std::vector<int> parents{built.parent};
+    parents.insert(parents.end(), built.links.begin(), built.links.end() - 1);
+    guide_ = std::make_shared<GuideTorques>(built.links, parents);
     guide_->set(*scene_.guide);
     world_.addController(guide_);
   }
+  // Unique body names (the --poses and export ids): a listed chain's links are "chains.N link i".
+  if (listed)
+    for (int id : chains_.back().links) world_.body(id).name = key + " " + world_.body(id).name;
+}
+
+// The scene's joints (closed loops): each end's body and point, then the bodies moved onto the
+// joints (assembly: the position projection of physics/stabilization.h, damped Newton steps of at
+// most 1 cm with the least-norm correction, until every joint meets to 1e-12 m) and given the least-kinetic-energy
+// velocities that satisfy them. A loop whose points cannot meet is refused with each unclosed joint
+// and its gap; a joint that repeats what others hold (redundant rows: a singular system) likewise.
+void Sim::buildJoints() {
+  const auto end = [this](const JointEnd& e, Eigen::Vector3d& local) {
+    switch (e.body) {
+      case JointBody::World:
+        local = e.point;
+        return kWorldBody;
+      case JointBody::Head:
+        local = head_->mesh_to_body * e.point;
+        return head_body_;
+      case JointBody::Chain: {
+        const Chain& c = chains_[size_t(e.chain)];
+        local = Eigen::Vector3d(0.0, 0.0, -0.5 * c.length);  // the link's lower end
+        return e.link < 0 ? c.links.back() : c.links[size_t(e.link)];
+      }
+      case JointBody::Hopper: {
+        const HopperModel& m = hoppers_[size_t(e.hopper)]->model();
+        local = e.point;
+        return e.part == HopperPart::Body ? m.body : e.part == HopperPart::Upper ? m.upper : m.foot;
+      }
+    }
+    return kWorldBody;
+  };
+  std::vector<double> gap0;  // m, each joint's gap before assembly
+  for (const JointSection& j : scene_.joints) {
+    Eigen::Vector3d pa, pb;
+    const int a = end(j.a, pa), b = end(j.b, pb);
+    gap0.push_back((bodyOf(world_.bodies(), a).pointToWorld(pa) - bodyOf(world_.bodies(), b).pointToWorld(pb)).norm());
+    scene_joints_.push_back(world_.addJoint(std::make_unique<SphericalJoint>(a, pa, b, pb)));
+  }
+  const auto name = [this](size_t i) {
+    const std::string& n = scene_.joints[i].name;
+    return "joints." + std::to_string(i) + (n.empty() ? "" : " (\"" + n + "\")");
+  };
+  const ProjectionResult r = world_.assembleJoints();
+  std::string unclosed;
+  for (size_t i = 0; i < scene_joints_.size(); ++i) {
+    const Constraint& c = *world_.joints()[size_t(scene_joints_[i])];
+    const double e = c.error(c.rowsAt(bodyOf(world_.bodies(), c.bodyA()), bodyOf(world_.bodies(), c.bodyB())));
+    if (!(e <= 1e-6)) {  // the damped steps did not bring the points together: they cannot meet
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "; its points are %.6g m apart at t = 0 (%.3g m after assembly)", gap0[i], e);
+      unclosed += "\n  " + name(i) + ": the loop cannot close" + buf;
+    }
+  }
+  if (!unclosed.empty()) {
+    throw InputError(scene_.path +
+                     ": joints: a loop that cannot close at t = 0 (the bodies between the points "
+                     "cannot reach):" +
+                     unclosed);
+  }
+  if (!r.status.ok() || r.error > 1e-9) {
+    // The points met, but Newton cannot finish at the closed pose: its system is singular there.
+    throw InputError(scene_.path + ": joints: redundant rows: a joint holds what the others already hold (" +
+                     (r.status.ok() ? std::string("the projection stalls at a singular system") : r.status.message()) +
+                     "); remove it");
+  }
+  world_.projectVelocities();
 }
 
 bool Sim::step() {
@@ -176,31 +262,35 @@ bool Sim::advanceTo(double t) {
 }
 
 double Sim::chainEnergy() const {
-  if (!chain_) return 0.0;
-  return chain_->kineticEnergy(world_) + chain_->potentialEnergy(world_);
+  const Chain* c = chain();
+  if (!c) return 0.0;
+  return c->kineticEnergy(world_) + c->potentialEnergy(world_);
 }
 
 Eigen::Vector3d Sim::followPoint(const std::string& f) const {
   const Hopper* h = hopper();
   const int hopper_body = h && h->built() ? h->model().body : -1;
-  if (f == "chain" && chain_ && !chain_->empty()) return world_.body(chain_->links.front()).x;
+  const Chain* c = chain();
+  if (f == "chain" && c && !c->empty()) return world_.body(c->links.front()).x;
   if (f == "hopper" && hopper_body >= 0) return world_.body(hopper_body).x;
   if (head_body_ >= 0 && (f.empty() || f == "head")) return world_.body(head_body_).x;
   if (hopper_body >= 0) return world_.body(hopper_body).x;
-  if (chain_) return chain_->anchor(world_);
+  if (c) return c->anchor(world_);
   return Eigen::Vector3d::Zero();
 }
 
 Eigen::Vector3d Sim::trackedPoint() const {
-  if (chain_ && !chain_->empty()) return chain_->tip(world_);
+  const Chain* c = chain();
+  if (c && !c->empty()) return c->tip(world_);
   if (const Hopper* h = hopper(); h && h->built()) return world_.body(h->model().body).x;
   return Eigen::Vector3d::Zero();
 }
 
 Eigen::Vector3d Sim::trackedVelocity() const {
-  if (chain_ && !chain_->empty()) {
-    const RigidBody& b = world_.body(chain_->links.back());
-    return b.velocityAt(chain_->tip(world_));
+  const Chain* c = chain();
+  if (c && !c->empty()) {
+    const RigidBody& b = world_.body(c->links.back());
+    return b.velocityAt(c->tip(world_));
   }
   if (const Hopper* h = hopper(); h && h->built()) return world_.body(h->model().body).v;
   return Eigen::Vector3d::Zero();

@@ -48,7 +48,10 @@ class Sim {
   const Scene& scene() const { return scene_; }
   World& world() { return world_; }
   const World& world() const { return world_; }
-  const Chain* chain() const { return chain_ ? &*chain_ : nullptr; }
+  // The first chain (`chain`, else the first of `chains`), null without any; and every chain in
+  // scene order (`chain`, then each of `chains`: chainSection(scene(), i) is the i-th one's section).
+  const Chain* chain() const { return chains_.empty() ? nullptr : &chains_.front(); }
+  const std::vector<Chain>& chains() const { return chains_; }
   // The chain's guide torques (scene section `guide`, enabled), else null. The goal solve
   // (sim/goal_solve.h) sets its knots between runs.
   GuideTorques* guide() { return guide_.get(); }
@@ -64,7 +67,7 @@ class Sim {
   // The scene's collisions (collision section), null when it names none.
   const Collisions* collisions() const { return collisions_.get(); }
 
-  // Energy of the chain (kinetic + gravity, against the chain's hanging-at-rest reference) and
+  // Energy of the first chain (kinetic + gravity, against the chain's hanging-at-rest reference) and
   // the largest joint separation (m).
   double chainEnergy() const;
   double maxJointError() const { return world_.maxJointError(); }
@@ -91,8 +94,10 @@ class Sim {
 
  private:
   void buildHead(const AssetLoader* assets);
-  void buildChain();
+  void buildChains();
+  void buildChain(const ChainSection& c, const ChainListSection* listed, const std::string& key);
   void buildHoppers();
+  void buildJoints();
   void buildCollisions();
   Eigen::Vector3d standOffAnchor(const ChainParams& c) const;
 
@@ -101,7 +106,8 @@ class Sim {
   int head_body_ = -1;
   int anchor_body_ = -1;
   std::optional<HeadAsset> head_;
-  std::optional<Chain> chain_;
+  std::vector<Chain> chains_;
+  std::vector<int> scene_joints_;  // the world's joint index of each of the scene's `joints`
   std::shared_ptr<GuideTorques> guide_;
   std::vector<std::shared_ptr<Hopper>> hoppers_;
   std::shared_ptr<Collisions> collisions_;

@@ -52,14 +52,16 @@ struct HeadCollisionParams {
   }
 };
 
-// Builds the collider from the triangles (body frame of `head_body`) and the link capsules.
-// The root link is held by the cone, not by contact (its top sits on the head at the anchor).
+// Builds the collider from the triangles (body frame of `head_body`) and the link capsules of
+// every chain hanging from the head (each on its own: its links against the head, its own cones).
+// A root link is held by the cone, not by contact (its top sits on the head at the anchor).
 // Optional: a swing cone and a twist limit at every joint between links, and capsule pairs
-// between links two or more apart.
+// between links two or more apart (`self`: with several chains, also every pair of links of two
+// different chains).
 // The collider into `collisions`, or what failed when the mesh cannot make one.
-Status makeHeadCollisions(World& world, const Chain& chain, int head_body, const std::vector<Eigen::Vector3d>& vertices,
-                          const std::vector<uint32_t>& indices, const HeadCollisionParams& params,
-                          std::shared_ptr<Collisions>& collisions);
+Status makeHeadCollisions(World& world, const std::vector<const Chain*>& chains, int head_body,
+                          const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices,
+                          const HeadCollisionParams& params, std::shared_ptr<Collisions>& collisions);
 
 // makeHeadCollisions keeps the last grid it built and hands it out again for the same triangles,
 // cell, padding and region (a scene rebuilt for a panel edit of friction or damping does not build

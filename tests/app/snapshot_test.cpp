@@ -162,10 +162,9 @@ TEST_P(Fingerprint, MatchesRecorded) {
 }
 
 const Print kPrints[] = {
-    {"assets/scenes/chain.json", 600},
-    {"assets/scenes/ponytail.json", 600},
-    {"assets/scenes/hopper.json", 2000},
-    {"assets/scenes/ponytail_hopper.json", 2000},
+    {"assets/scenes/chain.json", 600},    {"assets/scenes/ponytail.json", 600},
+    {"assets/scenes/hopper.json", 2000},  {"assets/scenes/ponytail_hopper.json", 2000},
+    {"assets/scenes/pigtails.json", 240},
 };
 
 INSTANTIATE_TEST_SUITE_P(Scenes, Fingerprint, ::testing::ValuesIn(kPrints),

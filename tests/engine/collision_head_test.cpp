@@ -276,6 +276,76 @@ TEST(HeadCollisionsScene, LinksTwoApartDoNotOverlap) { EXPECT_LT(selfOverlap(tru
 // The control: without collision.self the same clip does fold a link through another.
 TEST(HeadCollisionsScene, WithoutSelfCollisionTheTossFoldsALinkThroughAnother) { EXPECT_GT(selfOverlap(false), 2e-3); }
 
+// Two chains on a still head: the ponytail, and a second chain from the crown laid out toward the
+// face, which falls onto the forehead. Each chain's link capsules below its root (the deepest
+// point inside the mesh's triangles, per chain) over 0.5 s, with the scene's collider or without.
+struct TwoChains {
+  std::vector<double> deepest;  // m, per chain
+  std::vector<int> capsules;    // the collider's capsules on each chain's links
+  std::vector<bool> touching;   // a link of the chain within 0.1 mm of the head at the end
+};
+TwoChains twoChainsOnTheHead(bool collide) {
+  Scene scene = loadScene("assets/scenes/ponytail.json");
+  scene.head->animation.clip = "";  // no keys: the head holds still
+  if (!collide) scene.collision.reset();
+  if (scene.collision) scene.collision->cell = 0.005;  // a coarser grid: a fifth of the build's time
+  ChainListSection crown;
+  static_cast<ChainSection&>(crown) = *scene.chain;
+  crown.links = 5;
+  crown.anchor = Vector3d(0.0, 0.115, -0.01);  // mesh coordinates: just above the crown
+  crown.direction = Vector3d(0.0, -1.0, 0.0);  // toward the face, level
+  scene.chains.push_back(crown);
+  Sim sim(scene, &assimpAssets());
+  TwoChains out{std::vector<double>(2, 0.0), std::vector<int>(2, 0), std::vector<bool>(2, false)};
+  EXPECT_EQ(sim.chains().size(), 2u);
+  if (sim.chains().size() != 2) return out;
+  std::vector<Vector3d> v;
+  for (const auto& p : sim.head()->mesh.positions) v.push_back(sim.head()->mesh_to_body * p.cast<double>());
+  const TriangleDistance exact(v, sim.head()->mesh.indices, 0.01, 0.02);
+  for (int f = 1; f <= 30 && sim.ok(); ++f) {
+    sim.advanceTo(f / 60.0);
+    const RigidBody& head = sim.world().body(sim.headBody());
+    for (size_t k = 0; k < 2; ++k) {
+      const std::vector<CapsuleSegment> segs = sim.chains()[k].segments(sim.world());
+      for (size_t i = 1; i < segs.size(); ++i)
+        for (int j = 0; j <= 10; ++j) {
+          const double s = j / 10.0;
+          const Vector3d p = head.q.conjugate() * (segs[i].top + s * (segs[i].bottom - segs[i].top) - head.x);
+          const double r = segs[i].radius_top + s * (segs[i].radius_bottom - segs[i].radius_top);
+          out.deepest[k] = std::max(out.deepest[k], r - exact.signedDistance(p));
+        }
+    }
+  }
+  EXPECT_TRUE(sim.ok()) << sim.status();
+  if (const Collisions* col = sim.collisions()) {
+    for (size_t k = 0; k < 2; ++k) {
+      const std::vector<int>& links = sim.chains()[k].links;
+      const auto mine = [&links](int body) { return std::find(links.begin(), links.end(), body) != links.end(); };
+      for (size_t i = 0; i < col->shapes().size(); ++i) out.capsules[k] += mine(col->shapeBody(int(i)));
+      for (const Collisions::Row& r : col->detect(sim.world().bodies(), 1e-4))
+        if (!r.angular && r.b == sim.headBody() && mine(r.a)) out.touching[k] = true;
+    }
+  }
+  return out;
+}
+
+// Issue 34: a two-chain scene's chains collide with the head independently: each has its own
+// capsules (every link but the root, held by its own cone), the crown chain lands on the forehead
+// and is held off it (as the ponytail is), and without the collider it goes into the head.
+TEST(HeadCollisionsScene, TwoChainsCollideWithTheHeadIndependently) {
+  const TwoChains with = twoChainsOnTheHead(true);
+  std::printf("two chains: deepest %.3f mm (ponytail), %.3f mm (crown chain)\n", 1e3 * with.deepest[0],
+              1e3 * with.deepest[1]);
+  EXPECT_EQ(with.capsules[0], 9);
+  EXPECT_EQ(with.capsules[1], 4);
+  EXPECT_TRUE(with.touching[1]) << "the crown chain lies on the forehead";
+  EXPECT_LT(with.deepest[0], 1e-3);
+  EXPECT_LT(with.deepest[1], 1e-3);
+  const TwoChains without = twoChainsOnTheHead(false);
+  std::printf("without the collider: crown chain %.1f mm deep\n", 1e3 * without.deepest[1]);
+  EXPECT_GT(without.deepest[1], 5e-3) << "the control: the crown chain does fall into the head";
+}
+
 INSTANTIATE_TEST_SUITE_P(Meshes, HeadPenetration, ::testing::Values("default", "sphere", "box"));
 
 }  // namespace

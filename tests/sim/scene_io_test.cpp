@@ -57,6 +57,27 @@ TEST(SceneIo, HoppersListIsReadAndEachEntryChecked) {
   EXPECT_NE(range.find("hoppers.0.friction"), std::string::npos) << range;
 }
 
+TEST(SceneIo, ChainsListIsReadAndEachEntryChecked) {
+  const Scene s = parseScene(json::parse(R"({"anchor": {}, "chain": {},
+      "chains": [{"links": 3, "anchor": [0.05, 0.1, 0]}, {"links": 4, "color": [1, 0, 0]}]})"),
+                             "test.json", {{"chains.1.links", "5"}});
+  ASSERT_EQ(chainCount(s), 3u);
+  EXPECT_EQ(chainSection(s, 1).links, 3);
+  EXPECT_EQ(chainSection(s, 2).links, 5) << "--set reaches a listed chain";
+  EXPECT_DOUBLE_EQ(s.chains[0].anchor.x(), 0.05);
+  EXPECT_EQ(chainKey(s, 2), "chains.1");
+  const std::string range = errorOf(json::parse(R"({"anchor": {}, "chains": [{}, {"taper": 2}]})"));
+  EXPECT_NE(range.find("chains.1.taper"), std::string::npos) << range;
+  const std::string head = errorOf(json::parse(R"({"anchor": {}, "chains": [{"attach": "head"}]})"));
+  EXPECT_NE(head.find("chains.0.attach: \"head\" needs a head section"), std::string::npos) << head;
+  const std::string hopper =
+      errorOf(json::parse(R"({"hopper": {}, "chains": [{"attach": "hopper"}, {"attach": "hopper", "hopper": 1}]})"));
+  EXPECT_NE(hopper.find("chains.1.hopper: 1 is not a hopper of this scene (it has 1"), std::string::npos) << hopper;
+  EXPECT_EQ(hopper.find("chains.0"), std::string::npos) << hopper;
+  const std::string zero = errorOf(json::parse(R"({"anchor": {}, "chains": [{"direction": [0, 0, 0]}]})"));
+  EXPECT_NE(zero.find("chains.0.direction: must not be the zero vector"), std::string::npos) << zero;
+}
+
 TEST(SceneIo, UnknownKeyNamesKeyAndAllowed) {
   const std::string e = errorOf(json::parse(R"({"physics": {"dtt": 0.01}})"));
   EXPECT_NE(e.find("test.json"), std::string::npos) << e;
