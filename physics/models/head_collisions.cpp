@@ -1,9 +1,13 @@
 #include "physics/models/head_collisions.h"
 
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
 #include <mutex>
 #include <numbers>
 
 #include "physics/mesh_sdf.h"
+#include "physics/shapes.h"
 
 namespace ponyhop {
 
@@ -62,6 +66,96 @@ Status cachedGrid(const std::vector<Eigen::Vector3d>& vertices, const std::vecto
   return {};
 }
 
+// The chain is laid out straight from its anchor along chain.direction (addChain); where that
+// line runs into the head, the links would start inside it and the first contact stage would push
+// them out in one step (frame 0 shows hair in the skull, the next frame pops). Before t = 0, each
+// link from the second on, root to tip, is turned about its top (the previous link's bottom,
+// already clear) to the direction nearest its laid-out one that keeps the whole capsule at least
+// the margin off the head. A link pointing straight into the surface gains no clearance from a
+// small turn (the surface's normal lies along the link), so this is a search, not a step along a
+// gradient: 512 directions spread evenly over the sphere (a Fibonacci lattice, about 9 degrees
+// apart) taken nearest first, then bisection on the arc from the laid-out direction to the first
+// clear one, to a thousandth of that arc. The root link has no capsule in the collider (its top
+// sits on the head at the anchor; its cone holds it) but its bottom is the second link's top: the
+// root is turned likewise until the sphere there (the second link's top radius) is clear. Links
+// below a turned one follow its new bottom, keeping their direction; a link clear in no direction
+// keeps its own. Returns the number of links turned; nothing is touched when no link starts
+// within the margin.
+int clearInitialPose(World& world, const Chain& chain, const Shape& head, int head_body, double margin) {
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
+  const double clear = margin + 1e-5;  // m: clear of the margin by 10 um, no contact starting at zero
+  int turned = 0;
+  const size_t n = chain.links.size();
+  const double half = 0.5 * chain.length;
+  for (size_t i = 0; n > 1 && i < n; ++i) {
+    RigidBody& link = world.body(chain.links[i]);
+    const Eigen::Vector3d top = i == 0 ? chain.anchor(world) : chain.bottom(world, static_cast<int>(i) - 1);
+    // As the collider has it (makeHeadCollisions); for the root, the sphere at its bottom.
+    const Shape shape = i == 0 ? Shape::sphere(chain.radii[1], Eigen::Vector3d(0.0, 0.0, -half))
+                               : Shape::capsule(half, chain.radii[i], i + 1 < n ? chain.radii[i + 1] : chain.radii[i]);
+    const Eigen::Vector3d u0 = -(link.q * z);  // along the link, top to bottom
+    const Eigen::Quaterniond q0 = link.q;
+    const RigidBody& h = world.body(head_body);
+    const PlacedShape placed_head = place(head, h.x, h.q);
+    // The link's pose along u (its top kept, turned from its laid-out pose by the shortest arc).
+    const auto pose = [&](const Eigen::Vector3d& u) {
+      link.q = (Eigen::Quaterniond::FromTwoVectors(u0, u) * q0).normalized();
+      link.x = top + half * u;
+    };
+    const Eigen::Vector3d x0 = link.x;
+    // Unless a link above was turned, a link that is clear keeps its pose bit for bit.
+    const auto keep = [&] {
+      if (turned > 0) {
+        pose(u0);
+      } else {
+        link.q = q0;
+        link.x = x0;
+      }
+    };
+    const auto isClear = [&](const Eigen::Vector3d& u) {
+      pose(u);
+      std::vector<ContactPoint> contacts;
+      return collide(place(shape, link.x, link.q), placed_head, clear, contacts) == 0;
+    };
+    if (isClear(u0)) {
+      keep();
+      continue;
+    }
+    // The lattice's directions, nearest the laid-out one first.
+    constexpr int kDirections = 512;
+    std::vector<std::pair<double, Eigen::Vector3d>> candidates;
+    for (int k = 0; k < kDirections; ++k) {
+      const double cz = 1.0 - (2.0 * k + 1.0) / kDirections;
+      const double phi = k * std::numbers::pi * (3.0 - std::sqrt(5.0));
+      const double rho = std::sqrt(1.0 - cz * cz);
+      const Eigen::Vector3d u(rho * std::cos(phi), rho * std::sin(phi), cz);
+      candidates.emplace_back(-u.dot(u0), u);
+    }
+    std::sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    const Eigen::Vector3d* found = nullptr;
+    for (const auto& c : candidates)
+      if (isClear(c.second)) {
+        found = &c.second;
+        break;
+      }
+    if (!found) {
+      keep();
+      continue;
+    }
+    // Bisection on the arc u0 -> found: lo inside, hi clear.
+    const Eigen::Quaterniond arc = Eigen::Quaterniond::FromTwoVectors(u0, *found);
+    const Eigen::Quaterniond identity = Eigen::Quaterniond::Identity();
+    double lo = 0.0, hi = 1.0;
+    while (hi - lo > 1e-3) {
+      const double mid = 0.5 * (lo + hi);
+      (isClear(identity.slerp(mid, arc) * u0) ? hi : lo) = mid;
+    }
+    pose(identity.slerp(hi, arc) * u0);
+    ++turned;
+  }
+  return turned;
+}
+
 }  // namespace
 
 void clearHeadColliderCache() {
@@ -118,6 +212,18 @@ Status makeHeadCollisions(World& world, const std::vector<const Chain*>& chains,
         for (int i : capsules[a])
           for (int j : capsules[b]) col->addPair(i, j);
   }
+  // The root cones' rest directions: the laid-out ones (chain.direction), before the poses are
+  // cleared; then each chain's starting pose is cleared of the head.
+  const RigidBody& hb0 = world.body(head_body);
+  std::vector<Eigen::Vector3d> root_axes;
+  bool moved = false;
+  for (const Chain* chain : chains) {
+    root_axes.push_back(chain->links.empty() ? Eigen::Vector3d::UnitZ()
+                                             : Eigen::Vector3d(hb0.q.conjugate() * (world.body(chain->links[0]).q *
+                                                                                    Eigen::Vector3d::UnitZ())));
+    moved |= clearInitialPose(world, *chain, col->shapes()[size_t(head)], head_body, params.margin) > 0;
+  }
+  if (moved) world.projectVelocities();  // the moved links' velocities made consistent with the joints again
   const double deg = std::numbers::pi / 180.0;
   for (const Chain* chain : chains) {
     const int n = static_cast<int>(chain->links.size());
@@ -129,12 +235,9 @@ Status makeHeadCollisions(World& world, const std::vector<const Chain*>& chains,
         col->addTwistLimit(chain->links[i - 1], chain->links[i], z, params.joint_twist * deg, world.bodies());
     }
   }
-  for (const Chain* chain : chains) {
-    if (chain->links.empty() || params.root_cone <= 0.0) continue;
-    // The rest direction of link 0's axis in the head's frame.
-    const RigidBody& h = world.body(head_body);
-    const Eigen::Vector3d axis = h.q.conjugate() * (world.body(chain->links[0]).q * Eigen::Vector3d::UnitZ());
-    col->addConeLimit(head_body, axis, chain->links[0], Eigen::Vector3d::UnitZ(),
+  for (size_t c = 0; c < chains.size(); ++c) {
+    if (chains[c]->links.empty() || params.root_cone <= 0.0) continue;
+    col->addConeLimit(head_body, root_axes[c], chains[c]->links[0], Eigen::Vector3d::UnitZ(),
                       params.root_cone * std::numbers::pi / 180.0);
   }
   collisions = col;

@@ -110,12 +110,6 @@ TEST_P(Heads, LandWellWithThePonytailOnTheBackOfTheHead) {
       }
     }
   }
-  const std::string name = c.name;
-  if (touching > 0 && (name == "suzanne" || name == "wuson")) {
-    // Known, not yet fixed: on these two heads the stood-off anchor still leaves a link or two in
-    // the mesh at t = 0 (the collision stage pushes them out on the first step).
-    GTEST_SKIP() << "not yet: " << touching << " links touch " << name << " at t = 0";
-  }
   EXPECT_EQ(touching, 0) << "links touching the head at t = 0";
 }
 
