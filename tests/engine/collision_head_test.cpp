@@ -345,6 +345,8 @@ TEST(HeadCollisionsScene, TwoChainsCollideWithTheHeadIndependently) {
   const TwoChains without = twoChainsOnTheHead(false);
   std::printf("without the collider: crown chain %.1f mm deep\n", 1e3 * without.deepest[1]);
   EXPECT_GT(without.deepest[1], 5e-3) << "the control: the crown chain does fall into the head";
+}
+
 // The deepest point of any link capsule but the first inside the head's triangles (m, negative:
 // the smallest clearance), in the head's body frame.
 double deepestLink(const Sim& sim, const TriangleDistance& exact) {
