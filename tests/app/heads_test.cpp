@@ -29,6 +29,10 @@ struct HeadCase {
   const char* name;
   const char* path;  // under kModels
 };
+// What gtest prints for a case, in its output and in the ctest names gtest_discover_tests makes
+// ("... # GetParam() = mrfixit"): the name, not the struct's bytes (two pointers that change with
+// every build).
+void PrintTo(const HeadCase& c, std::ostream* os) { *os << c.name; }
 
 const HeadCase kHeads[] = {
     {"mrfixit", "IQM/mrfixit.iqm"},          // a whole body, z up, two textures
