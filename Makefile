@@ -49,12 +49,16 @@ test: build
 
 # The same tests under AddressSanitizer + UndefinedBehaviorSanitizer, in their own build by clang
 # (which compiles instrumented code in about half GCC's time), with the libFuzzer targets of `make fuzz`
-# in the same tree: CI runs it after `make test`. Naming the compiler on the command line makes
-# CMake start the cache afresh when an older tree of this name was configured with GCC.
+# in the same tree: CI runs it after `make test`. A tree of this name configured by GCC before
+# (sessions before 17) is removed first: naming clang on the command line makes CMake drop the old
+# cache, but the re-run then stops at PONYHOP_FUZZ's compiler check.
+CLANG_TREE = @if [ -f $(1)/CMakeCache.txt ] && ! grep -q '^CMAKE_CXX_COMPILER:[A-Z]*=.*clang' $(1)/CMakeCache.txt; then \
+  echo "$(1): configured by another compiler, removed (clang builds it)"; rm -rf $(1); fi
 SANITIZE_CONFIGURE = cmake -S . -B $(ASAN_BUILD) $(call GENERATOR,$(ASAN_BUILD)) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DPONYHOP_FUZZ=ON >/dev/null
 test-asan: setup
 	@bash scripts/setup.sh --clang
+	$(call CLANG_TREE,$(ASAN_BUILD))
 	@$(SANITIZE_CONFIGURE)
 	@cmake --build $(ASAN_BUILD) -j$(JOBS)
 	@# Leak checking is off: llvmpipe/LLVM keep process-lifetime caches that LSan reports as leaks.
@@ -68,6 +72,7 @@ test-asan: setup
 TSAN_TESTS := engine_tests app_tests
 test-tsan: setup
 	@bash scripts/setup.sh --clang
+	$(call CLANG_TREE,$(TSAN_BUILD))
 	@cmake -S . -B $(TSAN_BUILD) $(call GENERATOR,$(TSAN_BUILD)) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 	  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DPONYHOP_TSAN=ON -DPONYHOP_WINDOW=OFF >/dev/null
 	@cmake --build $(TSAN_BUILD) -j$(JOBS) --target ponyhop $(TSAN_TESTS)
@@ -88,6 +93,7 @@ release: build
 FUZZ_TARGETS := scene clip png mesh
 fuzz:
 	@bash scripts/setup.sh --clang
+	$(call CLANG_TREE,$(ASAN_BUILD))
 	@$(SANITIZE_CONFIGURE)
 	@cmake --build $(ASAN_BUILD) -j$(JOBS) --target $(addprefix fuzz_,$(FUZZ_TARGETS))
 	@for t in $(FUZZ_TARGETS); do \
