@@ -300,15 +300,26 @@ void applyOverride(json& j, const Override& o) {
   for (size_t i = 0; i < parts.size(); ++i) {
     const std::string& p = parts[i];
     const bool last = i + 1 == parts.size();
+    std::string list;  // the key of the value `p` indexes (goals for goals.0.t)
+    for (size_t k = 0; k < i; ++k) list += (k ? "." : "") + parts[k];
     if (node->is_array()) {
       char* end = nullptr;
       const long idx = std::strtol(p.c_str(), &end, 10);
       if (*end != '\0' || idx < 0 || static_cast<size_t>(idx) >= node->size()) {
-        throw InputError("--set " + o.key + ": '" + p + "' is not an index of that list (0.." +
-                         std::to_string(static_cast<long>(node->size()) - 1) + ")");
+        throw InputError("--set " + o.key + ": '" + p + "' is not an index of that list (" +
+                         (node->empty() ? "it is empty" : "0.." + std::to_string(node->size() - 1)) +
+                         "); a list is given whole: --set " + list + "='[...]', or its elements in the scene file");
       }
       node = &(*node)[static_cast<size_t>(idx)];
     } else {
+      if (node->is_null() && i > 0 && !p.empty() && std::all_of(p.begin(), p.end(), ::isdigit)) {
+        // An index into a list the file does not have (goals.0.t on a scene without goals): not a
+        // section to create, and not "must be an array" further on.
+        throw InputError("--set " + o.key + ": '" + p +
+                         "' is not an index of that list (the scene has none); a list is "
+                         "given whole: --set " +
+                         list + "='[...]', or its elements in the scene file");
+      }
       if (node->is_null()) *node = json::object();
       if (!node->is_object()) {
         throw InputError("--set " + o.key + ": '" + p + "' is inside a value that is not a section");

@@ -115,6 +115,23 @@ TEST(SceneIo, OverridesApplyAndAreValidated) {
   EXPECT_THROW(parseOverride("novalue"), InputError);
 }
 
+// An element of a list the file does not have, or past its end: the list named, and how to give it
+// (not "goals: must be an array, got {"0": ...}", as an index used to make an object).
+TEST(SceneIo, OverrideIntoAMissingListElementSaysHowToGiveTheList) {
+  const json j = json::parse(R"({"anchor": {}, "chain": {"links": 8}, "hoppers": []})");
+  for (const char* key : {"goals.0.t=1", "chains.0.links=3", "hoppers.0.speed=1", "hoppers.2.speed=1"}) {
+    const std::string e = errorOf(j, {parseOverride(key)});
+    const std::string list = std::string(key).substr(0, std::string(key).find('.'));
+    EXPECT_NE(e.find("is not an index of that list"), std::string::npos) << key << ": " << e;
+    EXPECT_NE(e.find("--set " + list + "='[...]'"), std::string::npos) << key << ": " << e;
+    EXPECT_EQ(e.find("must be an array"), std::string::npos) << key << ": " << e;
+  }
+  // A list given whole works.
+  const Scene s = parseScene(j, "t.json", {parseOverride(R"(goals=[{"t": 1.5}])")});
+  ASSERT_EQ(s.goals.size(), 1u);
+  EXPECT_DOUBLE_EQ(s.goals[0].t, 1.5);
+}
+
 TEST(SceneIo, OverrideCannotConjureAMissingSection) {
   const std::string e = errorOf(json::parse(R"({"anchor": {}, "chain": {}})"), {parseOverride("head.scale=2")});
   EXPECT_NE(e.find("no 'head' section"), std::string::npos) << e;
