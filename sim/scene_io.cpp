@@ -312,7 +312,8 @@ void applyOverride(json& j, const Override& o) {
       }
       node = &(*node)[static_cast<size_t>(idx)];
     } else {
-      if (node->is_null() && i > 0 && !p.empty() && std::all_of(p.begin(), p.end(), ::isdigit)) {
+      if (node->is_null() && i > 0 && !p.empty() &&
+          std::all_of(p.begin(), p.end(), [](char c) { return c >= '0' && c <= '9'; })) {
         // An index into a list the file does not have (goals.0.t on a scene without goals): not a
         // section to create, and not "must be an array" further on.
         throw InputError("--set " + o.key + ": '" + p +
