@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "physics/shapes.h"
 
@@ -170,6 +171,23 @@ Status SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, c
         if (k + 1 < dims_.z()) steepest = std::max(steepest, std::abs(values_[index(i, j, k + 1)] - v));
       }
   lipschitz_ = steepest / cell_;
+  return {};
+}
+
+Status SignedDistanceGrid::assign(const Eigen::Vector3d& origin, const Eigen::Vector3i& dims, double cell,
+                                  double lipschitz, std::vector<float> values) {
+  if (!origin.allFinite() || !(cell > 0.0) || !std::isfinite(cell) || !std::isfinite(lipschitz) || lipschitz < 0.0)
+    return Status::error("distance grid: origin, cell or Lipschitz bound out of range");
+  if ((dims.array() < 2).any()) return Status::error("distance grid: fewer than two nodes a side");
+  const double nodes = static_cast<double>(dims.x()) * dims.y() * dims.z();
+  if (nodes != static_cast<double>(values.size())) return Status::error("distance grid: the values do not fill it");
+  for (float v : values)
+    if (!std::isfinite(v)) return Status::error("distance grid: a value is not a number");
+  origin_ = origin;
+  dims_ = dims;
+  cell_ = cell;
+  lipschitz_ = lipschitz;
+  values_ = std::move(values);
   return {};
 }
 

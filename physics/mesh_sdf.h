@@ -57,6 +57,13 @@ class SignedDistanceGrid {
   // distance is off). The capsule search's bound (physics/shapes.h).
   double lipschitz() const { return lipschitz_; }
 
+  // The node values (x fastest, then y, then z), and a grid made from them: what a store outside
+  // the process (sim/grid_cache.h) keeps and gives back. assign refuses values that do not fill
+  // the dims, a non-positive cell and non-finite numbers.
+  const std::vector<float>& values() const { return values_; }
+  Status assign(const Eigen::Vector3d& origin, const Eigen::Vector3i& dims, double cell, double lipschitz,
+                std::vector<float> values);
+
  private:
   size_t index(int i, int j, int k) const { return (static_cast<size_t>(k) * dims_.y() + j) * dims_.x() + i; }
   double trilinear(const Eigen::Vector3d& p, Eigen::Vector3d* grad) const;

@@ -6,6 +6,7 @@
 #include "physics/models/hopper_collisions.h"
 #include "physics/models/keyframes.h"
 #include "physics/spherical_joint.h"
+#include "sim/grid_cache.h"
 #include "sim/head_fit.h"
 #include "sim/scene_io.h"
 
@@ -13,6 +14,7 @@ namespace ponyhop {
 
 Sim::Sim(const Scene& scene, const AssetLoader* assets) : scene_(scene), world_(scene.physics) {
   if (!world_.ok()) throw InputError(scene_.path + ": physics: " + world_.status());
+  useGridCacheFromEnvironment();
   if (scene_.head) buildHead(assets);
   if (scene_.terrain) terrain_ = std::make_shared<const Terrain>(scene_.terrain->boxes);
   buildHoppers();

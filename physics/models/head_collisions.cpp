@@ -5,7 +5,9 @@
 #include <cmath>
 #include <mutex>
 #include <numbers>
+#include <utility>
 
+#include "physics/grid_builder_hash.h"  // generated at build time (physics/CMakeLists.txt)
 #include "physics/mesh_sdf.h"
 #include "physics/shapes.h"
 
@@ -13,18 +15,20 @@ namespace ponyhop {
 
 namespace {
 
-// The last grid built, and what it was built from.
+// The last grid built, and what it was built from; the store outside the process.
 struct GridCache {
   std::mutex mutex;
   uint64_t key = 0;
   std::shared_ptr<const SignedDistanceGrid> grid;
+  std::shared_ptr<const GridStore> store;
 };
 GridCache& gridCache() {
   static GridCache cache;
   return cache;
 }
 
-// FNV-1a over the bytes of the inputs.
+// FNV-1a over the bytes of the inputs, starting from the builder's code: the hash of its source
+// files (PONYHOP_GRID_BUILDER_HASH) and the compiler that built it.
 uint64_t gridKey(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices, double cell,
                  double pad, const Eigen::AlignedBox3d& region) {
   uint64_t h = 1469598103934665603ull;
@@ -32,6 +36,8 @@ uint64_t gridKey(const std::vector<Eigen::Vector3d>& vertices, const std::vector
     const auto* c = static_cast<const unsigned char*>(p);
     for (size_t i = 0; i < n; ++i) h = (h ^ c[i]) * 1099511628211ull;
   };
+  const char builder[] = PONYHOP_GRID_BUILDER_HASH __VERSION__;
+  bytes(builder, sizeof(builder));
   bytes(vertices.data(), vertices.size() * sizeof(Eigen::Vector3d));
   bytes(indices.data(), indices.size() * sizeof(uint32_t));
   const double extra[] = {cell,
@@ -50,15 +56,20 @@ Status cachedGrid(const std::vector<Eigen::Vector3d>& vertices, const std::vecto
                   double pad, const Eigen::AlignedBox3d& region, std::shared_ptr<const SignedDistanceGrid>& out) {
   const uint64_t key = gridKey(vertices, indices, cell, pad, region);
   GridCache& cache = gridCache();
+  std::shared_ptr<const GridStore> store;
   {
     std::lock_guard<std::mutex> lock(cache.mutex);
     if (cache.grid && cache.key == key) {
       out = cache.grid;
       return {};
     }
+    store = cache.store;
   }
   auto grid = std::make_shared<SignedDistanceGrid>();
-  if (Status s = grid->build(vertices, indices, cell, pad, 8'000'000, &region); !s.ok()) return s;
+  if (!store || !store->load(key, *grid)) {
+    if (Status s = grid->build(vertices, indices, cell, pad, 8'000'000, &region); !s.ok()) return s;
+    if (store) store->save(key, *grid);
+  }
   std::lock_guard<std::mutex> lock(cache.mutex);
   cache.key = key;
   cache.grid = grid;
@@ -163,6 +174,12 @@ void clearHeadColliderCache() {
   std::lock_guard<std::mutex> lock(cache.mutex);
   cache.grid.reset();
   cache.key = 0;
+}
+
+void setGridStore(std::shared_ptr<const GridStore> store) {
+  GridCache& cache = gridCache();
+  std::lock_guard<std::mutex> lock(cache.mutex);
+  cache.store = std::move(store);
 }
 
 Status makeHeadCollisions(World& world, const std::vector<const Chain*>& chains, int head_body,

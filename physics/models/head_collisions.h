@@ -65,7 +65,22 @@ Status makeHeadCollisions(World& world, const std::vector<const Chain*>& chains,
 
 // makeHeadCollisions keeps the last grid it built and hands it out again for the same triangles,
 // cell, padding and region (a scene rebuilt for a panel edit of friction or damping does not build
-// its 0.7 s grid again). Thread-safe; this empties it (the bench measures the build).
+// its 0.6 s grid again). Thread-safe; this empties it (the bench measures the build).
 void clearHeadColliderCache();
+
+// A place outside the process where built grids are kept between runs (sim/grid_cache.h keeps them
+// as files, when PONYHOP_GRID_CACHE names a folder): each process that builds a head collider
+// (every render-farm chunk, every test) then pays the grid's build once per head, not once per
+// process. The key covers the triangles, the cell, the padding, the region and the builder's own
+// code (a hash of its source files and the compiler, made at build time), so a stored grid is one
+// this build would make, bit for bit. load fills `grid` and returns true when it has the key's grid.
+class SignedDistanceGrid;
+struct GridStore {
+  virtual ~GridStore() = default;
+  virtual bool load(uint64_t key, SignedDistanceGrid& grid) const = 0;
+  virtual void save(uint64_t key, const SignedDistanceGrid& grid) const = 0;
+};
+// The store makeHeadCollisions looks in after its own last grid (none: nullptr, the default).
+void setGridStore(std::shared_ptr<const GridStore> store);
 
 }  // namespace ponyhop
