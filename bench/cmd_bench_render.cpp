@@ -35,6 +35,7 @@ namespace {
 // The scenes `make demo` renders (the Makefile's DEMO_SCENES), and the ponytail on the hopper.
 struct BenchRenderArgs {
   std::vector<std::string> scenes{"assets/scenes/ponytail.json",       "assets/scenes/ponytail_toss.json",
+                                  "assets/scenes/pigtails.json",       "assets/scenes/hair_loop.json",
                                   "assets/scenes/hopper.json",         "assets/scenes/hopper_fall.json",
                                   "assets/scenes/hopper_terrain.json", "assets/scenes/ponytail_hopper.json"};
   std::vector<std::string> sizes{"1280x720", "1920x1080"};
