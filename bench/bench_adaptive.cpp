@@ -28,12 +28,6 @@ struct AdaptiveRun {
   std::string stopped;  // the world's message when it stopped
 };
 
-double threadCpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
 // A chain of N links, 1 m long in all (hair to the waist), 0.2 kg; fixed: released from
 // horizontal; shake: hanging from the shaking anchor. RK4 with the default automatic substeps
 // (max_step_rotation): a reduced model concentrates the motion in its few active joints, which

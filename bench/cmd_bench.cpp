@@ -439,7 +439,7 @@ struct CollisionCostRow {
   std::string clip;
   bool on = false;
   double build_s = 0.0;  // s, building the Sim (with collisions: the head's distance grid too)
-  // CPU us per step of Sim::step, per round; of which the contact stage (its own clock, wall time:
+  // CPU us per step of Sim::step, per round; of which the contact stage (the stage clock on thread CPU:
   // impulses and push-outs; the impact check's searches and the splits are in the step, not here).
   std::vector<double> us_per_step, contact_us;
   std::vector<double> ratio;  // on: per round, us_per_step / the same round's off
@@ -456,12 +456,6 @@ struct CollisionCostRow {
 
 namespace {
 
-double threadCpuSeconds() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
-
 // One run of a clip with the collider on or off into its row: the step's CPU time, the stage's.
 void runCollisionRound(const std::string& scene_path, double seconds, CollisionCostRow& r) {
   // Every round builds its grid, from the triangles: the build time is measured (neither the last
@@ -475,6 +469,10 @@ void runCollisionRound(const std::string& scene_path, double seconds, CollisionC
   const auto t0 = Clock::now();
   Sim sim(scene, &assimpAssets());
   r.build_s = std::max(r.build_s, std::chrono::duration<double>(Clock::now() - t0).count());
+  // The contact stage on the step's clock, so that contact / rest compares two thread CPU times;
+  // no other stage reads a clock (off reads none), so both sides time the same step.
+  sim.world().setStageClock(StageClock::Source::ThreadCpu, StageClock::bit(Stage::Contact));
+  if (!r.on) sim.world().setStageTiming(false);
   sim.world().resetStageTimes();
   r.steps = 0;
   const double c0 = threadCpuSeconds();
@@ -553,8 +551,9 @@ void appendCollisionCost(const std::string& path, const std::string& scene, doub
     << " s of each clip with its `collision` section (on) and without it (off), the scene's own method, in "
     << std::max(1, rounds)
     << " interleaved rounds (off then on, on then off, ...). Per step: the CPU time of `Sim::step` (the thread's: a "
-       "preempted bench is not charged), and of it the contact stage (the stage clock, wall time: impulses and "
-       "push-outs; the impact check's searches and the substeps it splits are in the step, not in the stage); the "
+       "preempted bench is not charged), and of it the contact stage (on the same clock, the only stage timed: "
+       "impulses and push-outs; the impact check's searches and the substeps it splits are in the step, not in the "
+       "stage); the "
        "median over the rounds and, in brackets, the smallest and largest. On / off: each round's ratio of the two "
        "(median and spread); contact / rest: the stage against the rest of the step (medians). Build: the slowest "
        "round's scene construction (on: the head's distance grid as well). Per step, of the last round: the "

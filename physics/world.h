@@ -140,12 +140,15 @@ class World {
   const Eigen::VectorXd& lambda();
   const Eigen::VectorXd& lambda() const { return solver_->lambda(); }
 
-  // Wall time per stage of step() since construction or the last reset (physics/stage_times.h).
+  // Time per stage of step() since construction or the last reset (physics/stage_times.h): wall
+  // time, or the thread's CPU time after setStageClock(StageClock::Source::ThreadCpu).
   const StageTimes& stageTimes() const { return clock_.times(); }
   void resetStageTimes() { clock_.reset(); }
   // Off: the stages are not timed (no clock reads; stageTimes() keeps its seconds and still
   // counts calls). On by default. Call between steps.
   void setStageTiming(bool on) { clock_.setEnabled(on); }
+  // The stage clock's source and the stages it times (StageClock::bit(stage) or'ed).
+  void setStageClock(StageClock::Source s, unsigned stages = StageClock::kAllStages) { clock_.setSource(s, stages); }
 
   double kineticEnergy() const;    // J, dynamic bodies
   double potentialEnergy() const;  // J, gravity + springs - reference

@@ -5,8 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include "common/physics_util.h"
@@ -260,6 +262,28 @@ TEST(PhysicsChain, StageTimingCanBeSwitchedOff) {
   untimed.world.setStageTiming(true);
   for (int i = 0; i < 50; ++i) untimed.world.step();
   EXPECT_GT(untimed.world.stageTimes()[Stage::JointForces], 0.0);
+}
+
+// On the thread CPU source a stage is charged the CPU it used, not the time it waited: a stage that
+// sleeps 20 ms costs next to nothing (on wall time it would cost the 20 ms). A stage outside the
+// mask is counted and not timed.
+TEST(PhysicsChain, StageClockOnThreadCpuChargesNoSleep) {
+  StageClock clock;
+  clock.setSource(StageClock::Source::ThreadCpu, StageClock::bit(Stage::Contact));
+  {
+    const auto timed = clock.time(Stage::Contact);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  {
+    const auto untimed = clock.time(Stage::Integrate);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  const StageTimes& t = clock.times();
+  EXPECT_EQ(t.calls[static_cast<int>(Stage::Contact)], 1);
+  EXPECT_EQ(t.calls[static_cast<int>(Stage::Integrate)], 1);
+  EXPECT_GE(t[Stage::Contact], 0.0);
+  EXPECT_LT(t[Stage::Contact], 0.005);
+  EXPECT_EQ(t[Stage::Integrate], 0.0);
 }
 
 // The stability monitor reads the bodies in place (symplectic Euler) or a gathered copy (the other
