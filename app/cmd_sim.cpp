@@ -112,6 +112,21 @@ void writeRow(std::FILE* f, double t, const SimRow& r) {
   std::fputc('\n', f);
 }
 
+// Tolerance mode: the error estimated against what was asked, and the substeps that missed
+// their share even at the deepest split.
+void reportTolerance(const Sim& sim, const Scene& scene) {
+  const double tolerance = scene.physics.tolerance;
+  if (!(tolerance > 0.0)) return;
+  std::fprintf(stderr, "sim: physics.tolerance %g m per simulated second: estimated error %.3g m after %.3f s\n",
+               tolerance, sim.world().errorEstimateSum(), sim.time());
+  if (const int misses = sim.world().toleranceMisses(); misses > 0) {
+    std::fprintf(stderr,
+                 "sim: warning: %d substeps kept an error estimate above their share of physics.tolerance = %g "
+                 "m even at the deepest split (1/1024 of dt): the tolerance was not met there\n",
+                 misses, tolerance);
+  }
+}
+
 int runSummary(const Scene& scene, double duration, const SimArgs& args) {
   Sim sim(scene, &assimpAssets());
 
@@ -175,12 +190,7 @@ int runSummary(const Scene& scene, double duration, const SimArgs& args) {
   if (ec) throw InputError("--csv " + args.csv + ": " + ec.message());
   std::fprintf(stderr, "sim: %ld rows (%.3f s simulated, dt %.6g s) -> %s\n", rows, duration, scene.physics.dt,
                args.csv.c_str());
-  if (const int misses = sim.world().toleranceMisses(); misses > 0) {
-    std::fprintf(stderr,
-                 "sim: warning: %d substeps kept an error estimate above physics.tolerance = %g m even at the "
-                 "deepest split (1/1024 of dt): the tolerance was not met there\n",
-                 misses, scene.physics.tolerance);
-  }
+  reportTolerance(sim, scene);
   return 0;
 }
 
@@ -262,6 +272,7 @@ int runPoses(const Scene& scene, double duration, const SimArgs& args) {
   std::filesystem::rename(tmp, args.poses, ec);
   if (ec) throw InputError("--poses " + args.poses + ": " + ec.message());
   std::fprintf(stderr, "sim: %ld times x %zu bodies -> %s\n", rows, ids.size(), args.poses.c_str());
+  reportTolerance(sim, scene);
   return 0;
 }
 

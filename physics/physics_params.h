@@ -50,8 +50,9 @@ struct PhysicsParams {
   // docs/STABILITY.md). 0 = off (exactly `substeps` per dt).
   double max_step_rotation = 2.0;  // deg per substep (2: energy within 1 % through the whip)
   // Accuracy instead of a step size: > 0 chooses the substeps of every dt by step doubling so
-  // that the estimated position error of each substep stays below it (World::lastSubsteps(),
-  // lastErrorEstimate()). 0 = off (then max_step_rotation applies).
+  // that the estimated position errors of the substeps of one simulated second add up to at
+  // most this (each substep of h may add tolerance h / 1 s; World::lastSubsteps(),
+  // lastErrorEstimate(), errorEstimateSum()). 0 = off (then max_step_rotation applies).
   double tolerance = 0.0;  // m
   // Adaptive dynamics (docs/SOLVERS.md; solver featherstone): each step only the joints that
   // matter move, the rest are held rigid. adaptive_joints: at most this many joints move (0 = no
@@ -76,7 +77,7 @@ struct PhysicsParams {
     v("max_step_rotation", max_step_rotation,
       {.unit = "deg", .min = 0, .max = 180, .help = "Largest turn of a body per substep; sets the substeps (0 = off)"});
     v("tolerance", tolerance,
-      {.unit = "m", .min = 0, .max = 1, .help = "Position error per substep; picks the substeps (0 = off)"});
+      {.unit = "m", .min = 0, .max = 1, .help = "Position error per simulated second; picks the substeps (0 = off)"});
     v("adaptive_joints", adaptive_joints,
       {.min = 0,
        .max = 1000000,

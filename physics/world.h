@@ -56,9 +56,12 @@ class World {
   // estimated position error of one of them (m; tolerance mode only, else 0).
   int lastSubsteps() const { return last_substeps_; }
   double lastErrorEstimate() const { return last_error_; }
-  // Tolerance mode: substeps accepted since the start whose estimate was still above the
-  // tolerance at the deepest split (the promise not kept; 0 when it always was).
+  // Tolerance mode: substeps accepted since the start whose estimate was still above their
+  // budget (tolerance h / 1 s) at the deepest split (the promise not kept; 0 when it always was).
   int toleranceMisses() const { return tolerance_misses_; }
+  // Tolerance mode: the sum of the accepted substeps' error estimates since the start (m), the
+  // global position error to first order (no growth or cancellation between substeps).
+  double errorEstimateSum() const { return error_sum_; }
   // The order of the method in use (1 symplectic/implicit Euler, 2 RATTLE, 4 RK4).
   int methodOrder() const;
   // RATTLE's corrector for velocity-dependent forces (physics/rattle.h; on by default, and only
@@ -204,7 +207,7 @@ class World {
   // The same into `s`, reusing its storage (substep(): a steady step allocates nothing).
   void snapshotInto(Snapshot& s) const;
   void restore(const Snapshot& s);
-  double positionDistance(const State& a, const State& b) const;
+  double errorDistance(const State& a, const State& b) const;  // advanceToTolerance()'s norm (m)
   void accelerationsAt(double t, const State& state, Accelerations& out);
   State gatherState() const;
   void scatterState(const State& state);
@@ -254,7 +257,9 @@ class World {
   StageClock clock_;  // per-stage timing (stageTimes())
   int last_substeps_ = 0;
   double last_error_ = 0.0;
-  int tolerance_misses_ = 0;  // substeps accepted above the tolerance at the deepest split
+  int tolerance_misses_ = 0;       // substeps accepted above their budget at the deepest split
+  double last_error_ratio_ = 0.0;  // step(): the largest estimate / budget of the dt (tolerance mode)
+  double error_sum_ = 0.0;         // errorEstimateSum()
 };
 
 }  // namespace ponyhop

@@ -246,46 +246,50 @@ TEST(PhysicsIntegrator, ImplicitEulerIsStableOnStiffSpringsAndExplicitIsStopped)
   }
 }
 
-// Tolerance control: tighter tolerances take more substeps and land closer to a fine reference;
-// the per-substep estimate meets the tolerance.
-TEST(PhysicsIntegrator, ToleranceChoosesSubstepsToMeetIt) {
-  // The tip's largest distance from the reference at the 24 frame times (the final point alone
-  // can be luckily close for a loose tolerance).
-  ChainWorld ref = chain(params(Integrator::Rattle, 1.0 / 61440.0, 0.0), 8);
+// Tolerance control means what it says: over one second of the canonical chain (chain.json: 8
+// links released horizontally, RK4 + projection, dt = 1/240) the free end's RMS distance from a
+// converged reference is at most the tolerance asked for, and tighter tolerances take more
+// substeps. (As a per-substep bound it delivered 2.2e-5 m for 1e-5 asked: the local errors of
+// the ~500 substeps of a second add up.)
+TEST(PhysicsIntegrator, ToleranceBoundsTheErrorOfTheRun) {
+  constexpr double kDt = 1.0 / 240.0;
+  constexpr int kSteps = 240;
+  // RK4 at dt / 16: ~1e-10 m from RK4 at dt / 32.
+  PhysicsParams ref_params = params(Integrator::RK4, kDt, 0.0);
+  ref_params.substeps = 16;
+  ChainWorld ref = chain(ref_params, 8);
   std::vector<Eigen::Vector3d> tip_ref;
-  for (int i = 0; i < 24 * 1024; ++i) {
+  for (int i = 0; i < kSteps; ++i) {
     ref.world.step();
-    if ((i + 1) % 1024 == 0) tip_ref.push_back(ref.chain.tip(ref.world));
+    tip_ref.push_back(ref.chain.tip(ref.world));
   }
   const auto error = [&](double tolerance, int* substeps, double* estimate) {
-    PhysicsParams pp = params(Integrator::Rattle, 1.0 / 60.0, 0.0);
+    PhysicsParams pp = params(Integrator::RK4, kDt, 0.0);
     pp.tolerance = tolerance;
     ChainWorld cw = chain(pp, 8);
     *substeps = 0;
-    *estimate = 0.0;
-    double worst = 0.0;
-    for (int i = 0; i < 24 && cw.world.ok(); ++i) {
+    double sum = 0.0;
+    for (int i = 0; i < kSteps && cw.world.ok(); ++i) {
       cw.world.step();
       *substeps += cw.world.lastSubsteps();
-      *estimate = std::max(*estimate, cw.world.lastErrorEstimate());
-      worst = std::max(worst, (cw.chain.tip(cw.world) - tip_ref[i]).norm());
+      sum += (cw.chain.tip(cw.world) - tip_ref[i]).squaredNorm();
     }
+    *estimate = cw.world.errorEstimateSum();
     EXPECT_TRUE(cw.world.ok()) << cw.world.status();
-    return worst;
+    EXPECT_EQ(cw.world.toleranceMisses(), 0);
+    return std::sqrt(sum / kSteps);
   };
   int n_loose = 0, n_tight = 0;
   double est_loose = 0.0, est_tight = 0.0;
   const double err_loose = error(1e-3, &n_loose, &est_loose);
-  const double err_tight = error(1e-6, &n_tight, &est_tight);
-  std::printf("tolerance 1e-3: %d substeps in 0.4 s, estimate %.2e, largest tip error %.2e\n", n_loose, est_loose,
-              err_loose);
-  std::printf("tolerance 1e-6: %d substeps in 0.4 s, estimate %.2e, largest tip error %.2e\n", n_tight, est_tight,
-              err_tight);
-  EXPECT_LE(est_loose, 1e-3);
-  EXPECT_LE(est_tight, 1e-6);
-  EXPECT_GT(n_tight, 4 * n_loose);
-  EXPECT_LT(err_tight, 0.1 * err_loose);
-  EXPECT_LT(err_tight, 1e-3);
+  const double err_tight = error(1e-5, &n_tight, &est_tight);
+  std::printf("tolerance 1e-3: %d substeps in 1 s, estimate %.2e, tip RMS error %.2e\n", n_loose, est_loose, err_loose);
+  std::printf("tolerance 1e-5: %d substeps in 1 s, estimate %.2e, tip RMS error %.2e\n", n_tight, est_tight, err_tight);
+  EXPECT_LE(err_loose, 1e-3);
+  EXPECT_LE(err_tight, 1e-5);
+  EXPECT_LE(est_loose, 1e-3);  // the sum of the estimates: the budget of the second
+  EXPECT_LE(est_tight, 1e-5);
+  EXPECT_GT(n_tight, 2 * n_loose);
 }
 
 // Tolerance mode keeps its promise or says so: a tolerance no split can meet (1e-14 m at dt =
