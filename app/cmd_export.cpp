@@ -42,7 +42,8 @@ std::vector<BakeMesh> bodyMeshes(const Sim& sim, std::vector<int>& mesh_of_body)
   const Scene& scene = sim.scene();
   if (sim.headBody() >= 0 && sim.head()) {
     BakeMesh m{"head", sim.head()->mesh, scene.head->color.cast<float>()};
-    m.mesh.dropMaterials();
+    m.mesh.dropMaterials();  // the hair region (head.scalp_hair) stays, with the first chain's colour
+    if (chainCount(scene) > 0) m.hair_color = chainSection(scene, 0).color.cast<float>();
     transformMesh(m.mesh, sim.head()->mesh_to_body);
     add(sim.headBody(), std::move(m));
   }

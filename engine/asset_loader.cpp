@@ -17,6 +17,7 @@ HeadAsset AssimpAssets::loadHead(const HeadParams& head, const std::string& mesh
   // The file's own colours (textures, vertex colours, several materials) or head.color.
   for (const std::string& w : a.mesh.warnings) std::fprintf(stderr, "ponyhop: warning: head.mesh: %s\n", w.c_str());
   if (head.materials == HeadMaterials::Color) a.mesh.dropMaterials();
+  if (!head.scalp_hair) a.mesh.hair.clear();
   // Placement from the head itself (sim/head_fit.h).
   const HeadFit fit = fitHead(head, mesh_path, a.mesh);
   a.mesh_to_body = headMeshToBody(head, fit);

@@ -31,6 +31,17 @@ aiMesh* toAiMesh(const BakeMesh& b, unsigned material) {
     m->mVertices[i] = aiVector3D(d.positions[i].x(), d.positions[i].y(), d.positions[i].z());
     m->mNormals[i] = aiVector3D(d.normals[i].x(), d.normals[i].y(), d.normals[i].z());
   }
+  if (!d.hair.empty()) {
+    // The hair region: rgb what another viewer shows (the hair's colour over the base colour),
+    // alpha 1 - hair weight (ignored by glTF under alphaMode OPAQUE), read back by loadMesh.
+    m->mColors[0] = new aiColor4D[m->mNumVertices];
+    const Eigen::Vector3f ratio = b.hair_color.cwiseQuotient(b.color.cwiseMax(1e-3f));
+    for (unsigned i = 0; i < m->mNumVertices; ++i) {
+      const float w = i < d.hair.size() ? d.hair[i] : 0.0f;
+      const Eigen::Vector3f c = Eigen::Vector3f::Ones() + w * (ratio - Eigen::Vector3f::Ones());
+      m->mColors[0][i] = aiColor4D(c.x(), c.y(), c.z(), 1.0f - w);
+    }
+  }
   m->mNumFaces = unsigned(d.indices.size() / 3);
   m->mFaces = new aiFace[m->mNumFaces];
   for (unsigned f = 0; f < m->mNumFaces; ++f) {
@@ -42,7 +53,7 @@ aiMesh* toAiMesh(const BakeMesh& b, unsigned material) {
 
 aiMaterial* toAiMaterial(const BakeMesh& b) {
   auto* mat = new aiMaterial();
-  const aiString name(b.name);
+  const aiString name(b.mesh.hair.empty() ? b.name : std::string(kHairRegionMaterial));
   mat->AddProperty(&name, AI_MATKEY_NAME);
   const aiColor4D base(b.color.x(), b.color.y(), b.color.z(), 1.0f);
   mat->AddProperty(&base, 1, AI_MATKEY_BASE_COLOR);

@@ -16,6 +16,9 @@ struct BakeMesh {
   std::string name;
   MeshData mesh;
   Eigen::Vector3f color{0.8f, 0.8f, 0.8f};  // rgb 0..1, glTF baseColorFactor
+  // rgb 0..1 of the mesh's hair region (MeshData::hair), written as ponyhop's heads carry it
+  // (vertex colours of a material named kHairRegionMaterial: assets/head/README.md).
+  Eigen::Vector3f hair_color{0.36f, 0.22f, 0.12f};
 };
 
 struct BakeNode {

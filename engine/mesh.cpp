@@ -121,8 +121,13 @@ bool importMesh(const std::string& path, MeshData& out, std::string* err) {
     // Material: base colour (glTF) or diffuse colour, and a base-colour (or diffuse) texture.
     Eigen::Vector4f factor(1, 1, 1, 1);
     int texture = -1;
+    bool hair_region = false;
     if (am->mMaterialIndex < scene->mNumMaterials) {
       const aiMaterial* mat = scene->mMaterials[am->mMaterialIndex];
+      // The hair region of ponyhop's own head (assets/head/README.md): the vertex colours' alpha
+      // is 1 - hair weight, their rgb only what other viewers show.
+      hair_region = am->mColors[0] && std::strcmp(mat->GetName().C_Str(), kHairRegionMaterial) == 0;
+      if (hair_region && m.hair.empty()) m.hair.assign(m.positions.size(), 0.0f);
       aiColor4D c;
       if (mat->Get(AI_MATKEY_BASE_COLOR, c) == AI_SUCCESS || mat->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS) {
         factor = Eigen::Vector4f(c.r, c.g, c.b, c.a);
@@ -159,10 +164,13 @@ bool importMesh(const std::string& path, MeshData& out, std::string* err) {
       }
       m.normals.push_back(n);
       Eigen::Vector4f color = factor;
-      if (am->mColors[0]) {
+      if (hair_region) {
+        m.hair.push_back(std::clamp(1.0f - am->mColors[0][v].a, 0.0f, 1.0f));
+      } else if (am->mColors[0]) {
         const aiColor4D& vc = am->mColors[0][v];
         color = color.cwiseProduct(Eigen::Vector4f(vc.r, vc.g, vc.b, vc.a));
       }
+      if (!hair_region && !m.hair.empty()) m.hair.push_back(0.0f);
       m.colors.push_back(color);
       const aiVector3D uv = am->mTextureCoords[0] ? am->mTextureCoords[0][v] : aiVector3D(0, 0, 0);
       m.uvs.emplace_back(uv.x, 1.0f - uv.y);  // assimp: v up from the bottom; images: top row first
@@ -214,6 +222,7 @@ bool getArray(const std::string& s, size_t& at, std::vector<T>& v) {
 // The materials after the geometry: colours, uvs, parts, texture sizes and texels, warnings.
 void putMaterials(std::string& s, const MeshData& m) {
   putArray(s, m.colors);
+  putArray(s, m.hair);
   putArray(s, m.uvs);
   putArray(s, m.parts);
   std::vector<int32_t> dims;
@@ -236,11 +245,12 @@ bool getMaterials(const std::string& s, size_t& at, MeshData& m) {
   std::vector<int32_t> dims;
   std::vector<uint8_t> texels;
   std::vector<char> text;
-  if (!getArray(s, at, m.colors) || !getArray(s, at, m.uvs) || !getArray(s, at, m.parts) || !getArray(s, at, dims) ||
-      !getArray(s, at, texels) || !getArray(s, at, text) || dims.size() % 2 != 0) {
+  if (!getArray(s, at, m.colors) || !getArray(s, at, m.hair) || !getArray(s, at, m.uvs) || !getArray(s, at, m.parts) ||
+      !getArray(s, at, dims) || !getArray(s, at, texels) || !getArray(s, at, text) || dims.size() % 2 != 0) {
     return false;
   }
   if ((!m.colors.empty() && m.colors.size() != m.positions.size()) ||
+      (!m.hair.empty() && m.hair.size() != m.positions.size()) ||
       (!m.uvs.empty() && m.uvs.size() != m.positions.size())) {
     return false;
   }

@@ -18,6 +18,8 @@ namespace ponyhop {
 // STL (whose normals are per facet by format) gets smooth normals too. Returns false with "FILE: assimp's message" (or
 // "FILE: no triangles").
 bool loadMesh(const std::string& path, MeshData& out, std::string* err);
+// The material whose vertex colours carry a hair region (MeshData::hair): ponyhop's own heads.
+inline constexpr const char* kHairRegionMaterial = "ponyhop_head";
 
 // Body-from-mesh transform of HeadParams with the whole mesh as the head and the mesh origin as
 // the pivot (sim/head_fit.h places any head from the mesh itself):

@@ -26,13 +26,15 @@ void uploadPlain(const MeshData& m, GpuMesh& g) {
   glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<const void*>(3 * sizeof(float)));
 }
 
-// A mesh with colours: position, normal, colour, uv (12 floats a vertex), and its textures.
+// A mesh with colours or a hair region: position, normal, colour, uv (12 floats a vertex), and its
+// textures. With a hair region the colour's alpha (which nothing else reads) is the hair weight.
 void uploadWithMaterials(const MeshData& m, GpuMesh& g) {
   std::vector<float> v;
   v.reserve(m.positions.size() * 12);
   for (size_t i = 0; i < m.positions.size(); ++i) {
     const Eigen::Vector3f n = i < m.normals.size() ? m.normals[i] : Eigen::Vector3f(0, 0, 1);
-    const Eigen::Vector4f c = i < m.colors.size() ? m.colors[i] : Eigen::Vector4f(1, 1, 1, 1);
+    Eigen::Vector4f c = i < m.colors.size() ? m.colors[i] : Eigen::Vector4f(1, 1, 1, 1);
+    if (i < m.hair.size()) c.w() = m.hair[i];
     const Eigen::Vector2f t = i < m.uvs.size() ? m.uvs[i] : Eigen::Vector2f(0, 0);
     v.insert(v.end(), {m.positions[i].x(), m.positions[i].y(), m.positions[i].z(), n.x(), n.y(), n.z(), c.x(), c.y(),
                        c.z(), c.w(), t.x(), t.y()});
@@ -50,6 +52,7 @@ void uploadWithMaterials(const MeshData& m, GpuMesh& g) {
                           reinterpret_cast<const void*>(size_t(offsets[a]) * sizeof(float)));
   }
   g.materials = true;
+  g.hair = !m.hair.empty();
   g.parts = m.parts.empty() ? std::vector<MeshPart>{MeshPart{0, uint32_t(m.indices.size()), -1}} : m.parts;
   for (const MeshTexture& img : m.textures) {
     GLuint tex = 0;
@@ -68,20 +71,44 @@ void uploadWithMaterials(const MeshData& m, GpuMesh& g) {
   glBindTexture(GL_TEXTURE_2D, 0);
 }
 
+// The triangles of a mesh with a hair region and no colours of its own, all skin first, then those
+// with both (the hairline), then all hair (GpuMesh::skin_count, parts, hair_only). The order of a
+// closed mesh's triangles changes no pixel: the depth test decides.
+std::vector<uint32_t> sortByHair(const MeshData& m, GpuMesh& g) {
+  std::vector<uint32_t> groups[3];  // skin, both, hair
+  for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
+    int skin = 0, hair = 0;
+    for (size_t k = 0; k < 3; ++k) {
+      const float w = m.hair[m.indices[t + k]];
+      skin += w <= 0.0f;
+      hair += w >= 1.0f;
+    }
+    std::vector<uint32_t>& to = groups[skin == 3 ? 0 : (hair == 3 ? 2 : 1)];
+    to.insert(to.end(), m.indices.begin() + long(t), m.indices.begin() + long(t + 3));
+  }
+  g.skin_count = GLsizei(groups[0].size());
+  g.parts = {MeshPart{uint32_t(groups[0].size()), uint32_t(groups[1].size()), -1}};
+  g.hair_only = MeshPart{uint32_t(groups[0].size() + groups[1].size()), uint32_t(groups[2].size()), -1};
+  std::vector<uint32_t> sorted = std::move(groups[0]);
+  sorted.insert(sorted.end(), groups[1].begin(), groups[1].end());
+  sorted.insert(sorted.end(), groups[2].begin(), groups[2].end());
+  return sorted;
+}
+
 }  // namespace
 
 MeshHandle Renderer::upload(const MeshData& m) {
   Impl& I = *impl_;
   GpuMesh g;
   g.closed = closedOrientation(m);
-  if (!m.colors.empty())
+  if (!m.colors.empty() || !m.hair.empty())
     uploadWithMaterials(m, g);
   else
     uploadPlain(m, g);
+  const std::vector<uint32_t> indices = g.hair && m.colors.empty() ? sortByHair(m, g) : m.indices;
   glGenBuffers(1, &g.ebo);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(m.indices.size() * sizeof(uint32_t)), m.indices.data(),
-               GL_STATIC_DRAW);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(indices.size() * sizeof(uint32_t)), indices.data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
   g.index_count = GLsizei(m.indices.size());
   for (const auto& p : m.positions) g.bbox.extend(p.cast<double>());

@@ -99,16 +99,23 @@ static void cullFor(const GpuMesh& g, const Eigen::Matrix4f& model) {
   glCullFace((g.closed > 0) != mirrored ? GL_BACK : GL_FRONT);
 }
 
-// Meshes with their file's materials (main pass): one draw per part, its texture on unit 2.
-void Renderer::Impl::drawMaterialMeshes(GLuint p) {
+// Meshes with their file's materials (main pass): one draw per part, its texture on unit 2. Those
+// with a hair region by their own programs, with their ScalpHair: `hair_only` draws the triangles
+// that are all hair (GpuMesh::hair_only), else the parts.
+void Renderer::Impl::drawMaterialMeshes(GLuint p, bool hair, bool hair_only) {
   bool used = false;
   for (const MeshDraw& d : mesh_draws) {
     const GpuMesh& g = meshes[size_t(d.mesh)];
-    if (!g.materials) continue;
+    if (!g.materials || g.hair != hair || (hair_only && g.hair_only.count == 0)) continue;
     if (!used) {
       glUseProgram(p);
       glUniform1i(loc(p, "u_baseTex"), 2);
       used = true;
+    }
+    if (hair) {
+      setVec3(p, "u_hairColor", srgbToLinear(d.hair.color));
+      glUniform2f(loc(p, "u_hairShading"), d.hair.shading.highlight, d.hair.shading.shift);
+      setVec3(p, "u_hairAxis", d.hair.axis.cast<float>());
     }
     glUniformMatrix4fv(loc(p, "u_model"), 1, GL_FALSE, d.model.data());
     glUniformMatrix3fv(loc(p, "u_normalMat"), 1, GL_FALSE, d.normal.data());
@@ -117,7 +124,7 @@ void Renderer::Impl::drawMaterialMeshes(GLuint p) {
     glUniform2f(loc(p, "u_shinRim"), d.material.shininess, d.material.rim);
     glBindVertexArray(g.vao);
     cullFor(g, d.model);
-    for (const MeshPart& part : g.parts) {
+    for (const MeshPart& part : hair_only ? std::vector<MeshPart>{g.hair_only} : g.parts) {
       const bool tex = part.texture >= 0 && size_t(part.texture) < g.textures.size();
       glUniform1i(loc(p, "u_hasTex"), tex ? 1 : 0);
       glActiveTexture(GL_TEXTURE2);
@@ -140,7 +147,8 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
                 l_cs = loc(mesh_prog, "u_colorSpec"), l_sr = loc(mesh_prog, "u_shinRim");
     for (const MeshDraw& d : mesh_draws) {
       const GpuMesh& g = meshes[size_t(d.mesh)];
-      if (g.materials && !depth_only) continue;  // below, with their own program
+      // Below, with their own program; the skin of a hair region's mesh (GpuMesh::skin_count) here.
+      if (g.materials && !depth_only && g.skin_count == 0) continue;
       glUniformMatrix4fv(l_model, 1, GL_FALSE, d.model.data());
       glUniformMatrix3fv(l_normal, 1, GL_FALSE, d.normal.data());
       const Eigen::Vector3f c = srgbToLinear(d.material.color);
@@ -148,12 +156,17 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
       glUniform2f(l_sr, d.material.shininess, d.material.rim);
       glBindVertexArray(g.vao);
       cullFor(g, d.model);
-      glDrawElements(GL_TRIANGLES, g.index_count, GL_UNSIGNED_INT, nullptr);
+      glDrawElements(GL_TRIANGLES, g.materials && !depth_only ? g.skin_count : g.index_count, GL_UNSIGNED_INT, nullptr);
     }
     glDisable(GL_CULL_FACE);
     glCullFace(GL_BACK);
   }
-  if (!depth_only) drawMaterialMeshes(mesh_prog == prog_mesh_split ? prog_mesh_mat_split : prog_mesh_mat);
+  if (!depth_only) {
+    const bool split = mesh_prog == prog_mesh_split;
+    drawMaterialMeshes(split ? prog_mesh_mat_split : prog_mesh_mat, false, false);
+    drawMaterialMeshes(split ? prog_mesh_hair_split : prog_mesh_hair, true, false);
+    drawMaterialMeshes(split ? prog_hair_only_split : prog_hair_only, true, true);
+  }
   if (!hulls.empty()) {
     glUseProgram(hull_prog);
     if (depth_only) setMat4(hull_prog, "u_viewProj", view_proj);
@@ -462,13 +475,15 @@ void Renderer::Impl::objectsPass(const FramePlan& f, RenderStats& st) {
   glDepthFunc(GL_LESS);
   const GLuint mesh_prog = f.deferred ? prog_mesh_split : prog_mesh;
   const GLuint mesh_mat_prog = f.deferred ? prog_mesh_mat_split : prog_mesh_mat;
+  const GLuint mesh_hair_prog = f.deferred ? prog_mesh_hair_split : prog_mesh_hair;
+  const GLuint hair_only_prog = f.deferred ? prog_hair_only_split : prog_hair_only;
   const GLuint hull_prog = f.deferred ? prog_hull_split : prog_hull;
   const GLuint hair_prog = f.deferred ? prog_hair_split : prog_hair;
   glBindFramebuffer(GL_FRAMEBUFFER, f.deferred ? surf_fbo : msaa_fbo);
   glClearColor(0, 0, 0, params.transparent ? 0 : 1);
   glClear(!f.deferred && f.clear_color ? GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT : GL_DEPTH_BUFFER_BIT);
   bindShadowTextures(true);
-  for (GLuint p : {mesh_prog, mesh_mat_prog, hull_prog, hair_prog}) {
+  for (GLuint p : {mesh_prog, mesh_mat_prog, mesh_hair_prog, hair_only_prog, hull_prog, hair_prog}) {
     setFrameUniforms(p, f);
     glUniform4f(loc(p, "u_clipPlane"), 0.0f, 0.0f, f.clip_side, -f.clip_side * float(params.ground_height));
   }

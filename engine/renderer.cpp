@@ -116,6 +116,10 @@ bool Renderer::Impl::buildPrograms(std::string* err) {
       {&prog_hair_depth, "hair depth", kHairVS, kDepthFS},
       {&prog_mesh_split, "mesh (deferred)", kMeshVS, kLitFS, kSplitLightDefine},
       {&prog_mesh_mat_split, "mesh with materials (deferred)", kMeshMatVS, kMeshMatFS, kSplitLightDefine},
+      {&prog_mesh_hair, "mesh with a hair region", kMeshMatVS, kMeshMatFS, kScalpHairDefine},
+      {&prog_mesh_hair_split, "mesh with a hair region (deferred)", kMeshMatVS, kMeshMatFS, kScalpHairSplitDefine},
+      {&prog_hair_only, "mesh, all hair", kMeshMatVS, kMeshMatFS, kHairOnlyDefine},
+      {&prog_hair_only_split, "mesh, all hair (deferred)", kMeshMatVS, kMeshMatFS, kHairOnlySplitDefine},
       {&prog_hull_split, "hull (deferred)", kCapsuleVS, kLitFS, kSplitLightDefine},
       {&prog_hair_split, "hair (deferred)", kHairVS, kHairFS, kSplitLightDefine},
       {&prog_deferred, "deferred shading", kFullscreenVS, kDeferredFS},
@@ -260,7 +264,7 @@ void Renderer::setShadowBounds(const Eigen::AlignedBox3d& b) {
   impl_->shadow_bounds = b;
 }
 
-void Renderer::drawMesh(MeshHandle h, const Eigen::Affine3d& model, const Material& m) {
+void Renderer::drawMesh(MeshHandle h, const Eigen::Affine3d& model, const Material& m, const ScalpHair& hair) {
   Impl& I = *impl_;
   if (h.id < 0 || h.id >= int(I.meshes.size()) || I.meshes[size_t(h.id)].vao == 0) return;
   MeshDraw d;
@@ -268,6 +272,7 @@ void Renderer::drawMesh(MeshHandle h, const Eigen::Affine3d& model, const Materi
   d.model = model.matrix().cast<float>();
   d.normal = model.linear().inverse().transpose().cast<float>();
   d.material = m;
+  d.hair = hair;
   I.mesh_draws.push_back(d);
   I.part_bounds.push_back(transformedBounds(model, I.meshes[size_t(h.id)].bbox));
   I.draw_bounds.extend(I.part_bounds.back());

@@ -37,6 +37,15 @@ struct Material {
   float rim = 0.3f;         // 0..1, strength of the sky-coloured edge light
 };
 
+// A head's hair region (MeshData::hair) drawn as hair: the colour (display, as Material's) and the
+// strands' shading of its ponytail, combed along the meridians about `axis` (world, unit: from the
+// head's centre towards the ponytail's anchor).
+struct ScalpHair {
+  Eigen::Vector3f color{0.36f, 0.22f, 0.12f};
+  HairShading shading;
+  Eigen::Vector3d axis{0.0, 0.0, 1.0};
+};
+
 struct MeshHandle {
   int id = -1;
   bool valid() const { return id >= 0; }
@@ -95,7 +104,8 @@ class Renderer {
   // Optional: fit the shadow frustum to these bounds instead of the draw list's (a fixed box
   // keeps shadow texels still while things move; the draw list's bounds are the tightest).
   void setShadowBounds(const Eigen::AlignedBox3d& bounds);
-  void drawMesh(MeshHandle mesh, const Eigen::Affine3d& model, const Material& m);
+  // `hair`: how a mesh with a hair region draws it (a mesh without one ignores it).
+  void drawMesh(MeshHandle mesh, const Eigen::Affine3d& model, const Material& m, const ScalpHair& hair = {});
   void drawSphere(const Eigen::Vector3d& center, double radius, const Material& m);
   void drawBox(const Eigen::Affine3d& pose, const Eigen::Vector3d& half_extents, const Material& m);
   void drawCapsule(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, double radius, const Material& m);

@@ -31,6 +31,14 @@ struct GpuMesh {
   Eigen::AlignedBox3d bbox;
   // With the file's materials (MeshData::colors): drawn by prog_mesh_mat, part by part.
   bool materials = false;
+  // With a hair region (MeshData::hair, in the colour's alpha): drawn by prog_mesh_hair instead.
+  // Without the file's own colours its triangles are sorted by what their corners are: the first
+  // skin_count indices all skin (drawn by prog_mesh, as a mesh without hair), then `parts` (the
+  // hairline: both, prog_mesh_hair), then hair_only (all hair, prog_hair_only), so each pixel pays
+  // only for the shading it shows.
+  bool hair = false;
+  GLsizei skin_count = 0;
+  MeshPart hair_only;
   // closedOrientation(): +1/-1 closed (back faces culled in both passes), 0 open (both sides drawn).
   int closed = 0;
   std::vector<MeshPart> parts;
@@ -42,6 +50,7 @@ struct MeshDraw {
   Eigen::Matrix4f model;
   Eigen::Matrix3f normal;
   Material material;
+  ScalpHair hair;
 };
 
 // Per-instance data of the hull (sphere/capsule) draw: matches the attributes of kCapsuleVS.
@@ -107,7 +116,9 @@ struct Renderer::Impl {
   GLuint prog_mesh_depth = 0, prog_hull_depth = 0, prog_post = 0, prog_bg = 0;
   GLuint prog_hair = 0, prog_hair_depth = 0;
   GLuint prog_mesh_mat = 0;
-  std::vector<GLuint> programs;  // every program above, for the destructor
+  GLuint prog_mesh_hair = 0, prog_mesh_hair_split = 0;  // prog_mesh_mat with the hair region (SCALP_HAIR)
+  GLuint prog_hair_only = 0, prog_hair_only_split = 0;  // the same, triangles all hair (HAIR_ONLY)
+  std::vector<GLuint> programs;                         // every program above, for the destructor
   // Deferred shading (single-sample targets with shadows): the lit programs writing the visible
   // surface and the two parts of its radiance (SPLIT_LIGHT), and the pass that shadows and
   // finishes each visible pixel once.
@@ -242,7 +253,7 @@ struct Renderer::Impl {
   void drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj, bool depth_only);
   // prog: the program for the main pass's camera-facing ribbons (0: prog_hair).
   void drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only, const Eigen::Vector3d& light_dir, GLuint prog = 0);
-  void drawMaterialMeshes(GLuint prog);
+  void drawMaterialMeshes(GLuint prog, bool hair, bool hair_only);
 };
 
 }  // namespace ponyhop

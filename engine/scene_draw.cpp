@@ -94,7 +94,15 @@ void SceneDraw::draw(const Sim& sim, Renderer& renderer, const Scene& drawing, u
     pose.rotate(b.q);
     // A head drawn with its file's colours (sim/mesh_data.h) is not tinted by head.color.
     const Eigen::Vector3d tint = sim.head()->mesh.colors.empty() ? scene.head->color : Eigen::Vector3d(1.0, 1.0, 1.0);
-    renderer.drawMesh(head_, pose * sim.head()->mesh_to_body, material(tint, 0.18f, 24.0f));
+    // Its hair region (head.scalp_hair) with the first chain's look (a chain's defaults without one),
+    // combed from the head's centre towards the ponytail's anchor.
+    const ChainSection look = chainCount(drawing) > 0 ? chainSection(drawing, 0) : ChainSection{};
+    ScalpHair hair;
+    hair.color = look.color.cast<float>();
+    hair.shading = HairShading{float(look.hair.highlight), float(look.hair.highlight_shift)};
+    const Eigen::Vector3d axis = pose.linear() * (sim.head()->anchor - sim.head()->centre);
+    hair.axis = axis.norm() > 0.0 ? axis.normalized() : Eigen::Vector3d::UnitZ();
+    renderer.drawMesh(head_, pose * sim.head()->mesh_to_body, material(tint, 0.18f, 24.0f), hair);
   }
   // Each chain with its look from `drawing` when that scene has the same chains (the panel's
   // applied scene), else from the sim's own.

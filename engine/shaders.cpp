@@ -188,6 +188,36 @@ void shadeTerms(vec3 P, vec3 N, vec3 albedo, float specular, float shininess, fl
   vec3 amb = albedo * mix(u_groundAmbient, u_skyAmbient, 0.5 + 0.5 * N.z);
   rest = fill + amb + rim * fr * u_skyAmbient * 2.0;
 }
+
+// Kajiya-Kay hair with two shifted lobes (Scheuermann's practical take on Marschner's R and TRT),
+// the two parts of the radiance as shadeTerms() gives them, for hair along the unit tangent T with
+// the (clump's or scalp's) normal N, linear colour `color`, ambient occlusion `occlusion` and
+// `shading` = (highlight strength, shift): diffuse follows sin(T, L), softened by how much the
+// surface faces the light (wrapped N.L, so the far side is darker); the primary highlight is white
+// with its tangent shifted one way, the secondary is tinted by the hair colour, broader, shifted
+// the other way. Used by the strands (kHairFS) and a head's hair region (kMeshMatFS, SCALP_HAIR).
+float strandSpec(vec3 T, vec3 H, float e) {
+  float th = dot(T, H);
+  return pow(sqrt(max(1.0 - th * th, 0.0)), e);
+}
+void strandTerms(vec3 P, vec3 T, vec3 N, vec3 color, float occlusion, vec2 shading, out vec3 key, out vec3 rest) {
+  vec3 V = normalize(u_eye - P);
+  vec3 L = -u_lightDir;
+  float tl = dot(T, L);
+  float kk = sqrt(max(1.0 - tl * tl, 0.0));
+  float wrap = clamp((dot(N, L) + 0.6) / 1.6, 0.0, 1.0);
+  vec3 H = normalize(L + V);
+  float shift = shading.y;
+  vec3 T1 = normalize(T + shift * N);
+  vec3 T2 = normalize(T - 1.5 * shift * N);
+  float spec = shading.x * (strandSpec(T1, H, 90.0) * 1.4);
+  vec3 spec2 = shading.x * 0.8 * color * 4.0 * strandSpec(T2, H, 24.0);
+  key = u_lightColor * (wrap * occlusion) * (color * kk * 0.85 + vec3(spec) + spec2);
+  float fdl = clamp((dot(N, -u_fillDir) + 0.5) / 1.5, 0.0, 1.0);
+  vec3 fill = u_fillColor * color * fdl * occlusion;
+  vec3 amb = color * mix(u_groundAmbient, u_skyAmbient, 0.5 + 0.5 * N.z) * occlusion;
+  rest = fill + amb;
+}
 )GLSL";
 
 // The end of the lit fragment shaders (kLitFS, kMeshMatFS, kHairFS), given the point and the normal
@@ -337,7 +367,8 @@ void main() {
 }
 )GLSL";
 
-// kLitFS with the albedo from the mesh's materials (u_baseTex: sRGB texture, read linear).
+// kLitFS with the albedo from the mesh's materials (u_baseTex: sRGB texture, read linear); with
+// SCALP_HAIR (kScalpHairDefine) also the head's hair region, with HAIR_ONLY only that.
 const char* const kMeshMatFS = PONYHOP_EMIT R"GLSL(
 in vec3 v_pos;
 in vec3 v_normal;
@@ -347,13 +378,39 @@ flat in vec4 v_colorSpec;
 flat in vec2 v_shinRim;
 uniform sampler2D u_baseTex;
 uniform int u_hasTex;
+#ifdef SCALP_HAIR
+uniform vec3 u_hairColor;    // linear
+uniform vec2 u_hairShading;  // highlight strength, shift
+uniform vec3 u_hairAxis;     // world, unit: from the head's centre towards the ponytail's anchor
+#endif
 void main() {
   vec3 N = normalize(v_normal);
   if (!gl_FrontFacing) N = -N;
+  vec3 key, rest;
+#ifndef HAIR_ONLY
   vec3 albedo = v_colorSpec.rgb * v_color.rgb;
   if (u_hasTex != 0) albedo *= texture(u_baseTex, v_uv).rgb;
-  vec3 key, rest;
   shadeTerms(v_pos, N, albedo, v_colorSpec.a, v_shinRim.x, v_shinRim.y, key, rest);
+#endif
+#ifdef SCALP_HAIR
+  // A head's hair region (MeshData::hair, in the colour's alpha: 0 skin .. 1 hair) shaded as the
+  // strands are, combed up into the ponytail the way the grooves run: along the meridians about
+  // the axis from the head's centre to the anchor, i.e. that axis projected onto the surface's
+  // plane (on a sphere, exactly the direction towards the pole). The hair's own shadowing between
+  // strands darkens it as the strands' occlusion does the inside of the tail. HAIR_ONLY: triangles
+  // all hair, without the skin's terms (llvmpipe would run them, and the branch, for nothing).
+  vec3 T = u_hairAxis - dot(u_hairAxis, N) * N;
+  T = dot(T, T) > 1e-12 ? normalize(T) : normalize(cross(N, abs(N.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
+  vec3 hairKey, hairRest;
+  strandTerms(v_pos, T, N, u_hairColor, 0.6, u_hairShading, hairKey, hairRest);
+#ifdef HAIR_ONLY
+  key = hairKey;
+  rest = hairRest;
+#else
+  key = mix(key, hairKey, v_color.a);
+  rest = mix(rest, hairRest, v_color.a);
+#endif
+#endif
   emit(v_pos, N, key, rest);
 }
 )GLSL";
@@ -402,10 +459,7 @@ void main() {
 }
 )GLSL";
 
-// Kajiya-Kay hair with two shifted lobes (Scheuermann's practical take on Marschner's R and TRT):
-// diffuse follows sin(T, L), softened by how much the clump faces the light (wrapped N.L, so the
-// far side of the tail is darker); the primary highlight is white with its tangent shifted one way,
-// the secondary is tinted by the hair colour, broader, shifted the other way.
+// Hair strands, shaded by strandTerms().
 const char* const kHairFS = PONYHOP_EMIT R"GLSL(
 in vec3 v_pos;
 in vec3 v_tangent;
@@ -413,29 +467,11 @@ in vec3 v_normal;
 in vec3 v_color;
 in float v_occlusion;
 uniform vec2 u_hairShading;  // highlight strength, shift
-float strandSpec(vec3 T, vec3 H, float e) {
-  float th = dot(T, H);
-  return pow(sqrt(max(1.0 - th * th, 0.0)), e);
-}
 void main() {
-  vec3 T = normalize(v_tangent);
   vec3 N = normalize(v_normal);
-  vec3 V = normalize(u_eye - v_pos);
-  vec3 L = -u_lightDir;
-  float tl = dot(T, L);
-  float kk = sqrt(max(1.0 - tl * tl, 0.0));
-  float wrap = clamp((dot(N, L) + 0.6) / 1.6, 0.0, 1.0);
-  vec3 H = normalize(L + V);
-  float shift = u_hairShading.y;
-  vec3 T1 = normalize(T + shift * N);
-  vec3 T2 = normalize(T - 1.5 * shift * N);
-  float spec = u_hairShading.x * (strandSpec(T1, H, 90.0) * 1.4);
-  vec3 spec2 = u_hairShading.x * 0.8 * v_color * 4.0 * strandSpec(T2, H, 24.0);
-  vec3 key = u_lightColor * (wrap * v_occlusion) * (v_color * kk * 0.85 + vec3(spec) + spec2);
-  float fdl = clamp((dot(N, -u_fillDir) + 0.5) / 1.5, 0.0, 1.0);
-  vec3 fill = u_fillColor * v_color * fdl * v_occlusion;
-  vec3 amb = v_color * mix(u_groundAmbient, u_skyAmbient, 0.5 + 0.5 * N.z) * v_occlusion;
-  emit(v_pos, N, key, fill + amb);  // the clump normal as it is, whichever side is seen
+  vec3 key, rest;
+  strandTerms(v_pos, normalize(v_tangent), N, v_color, v_occlusion, u_hairShading, key, rest);
+  emit(v_pos, N, key, rest);  // the clump normal as it is, whichever side is seen
 }
 )GLSL";
 

@@ -30,6 +30,14 @@ extern const char* const kDeferredFS;  // the shadow and the colour once per vis
 // Compiled into kLitFS / kMeshMatFS / kHairFS by `defines`: they write the visible surface and the
 // two parts of its radiance into three targets for kDeferredFS instead of a colour.
 inline constexpr const char* kSplitLightDefine = "#define SPLIT_LIGHT 1\n";
+// Compiled into kMeshMatFS: the colour's alpha is the hair weight of a head's hair region
+// (MeshData::hair), drawn as hair (u_hairColor, u_hairShading, u_hairAxis); HAIR_ONLY: triangles
+// whose three corners are all hair, shaded without the skin's terms.
+inline constexpr const char* kScalpHairDefine = "#define SCALP_HAIR 1\n";
+inline constexpr const char* kScalpHairSplitDefine = "#define SCALP_HAIR 1\n#define SPLIT_LIGHT 1\n";
+inline constexpr const char* kHairOnlyDefine = "#define SCALP_HAIR 1\n#define HAIR_ONLY 1\n";
+inline constexpr const char* kHairOnlySplitDefine =
+    "#define SCALP_HAIR 1\n#define HAIR_ONLY 1\n#define SPLIT_LIGHT 1\n";
 // Compiled into kGroundFS: the ground nearer than the fade (no fade), and also where it is lit.
 inline constexpr const char* kGroundNearDefine = "#define GROUND_NEAR 1\n";
 inline constexpr const char* kGroundNearLitDefine = "#define GROUND_NEAR 1\n#define GROUND_LIT 1\n";

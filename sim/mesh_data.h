@@ -35,6 +35,10 @@ struct MeshData {
   std::vector<Eigen::Vector2f> uvs;     // per vertex (v = 0 at the image's top row), or empty
   std::vector<MeshPart> parts;          // index ranges by texture, or empty
   std::vector<MeshTexture> textures;
+  // Per vertex, 0 skin .. 1 hair: the hair region a head file marks (the default head's cap,
+  // parting and bun: COLOR_0's alpha in a material named "ponyhop_head", assets/head/README.md),
+  // drawn as hair; or empty. Kept by dropMaterials() (it is no colour of the file's).
+  std::vector<float> hair;
   std::vector<std::string> warnings;  // e.g. a texture that cannot be read
   // The up axis the file itself states, as assimp returns it: 'y' when the importer turned the
   // file's z up into y up (a rotation on its root node: MD2, IQM, 3DS, MDL...) or the file says y

@@ -185,6 +185,7 @@ struct HeadParams {
   Eigen::Vector3d anchor{0.0, 0.0906, -0.1140};
   HeadMaterials materials = HeadMaterials::Auto;
   Eigen::Vector3d color{0.93, 0.78, 0.67};  // rgb 0..1, skin
+  bool scalp_hair = true;                   // the hair region the mesh marks (the default head's) drawn as hair
   AnimationParams animation;
 
   template <class V>
@@ -224,6 +225,10 @@ struct HeadParams {
       {.help = "auto: the file's textures, vertex colours, colours when it has more than one plain colour; color: "
                "head.color"});
     v("color", color, {.unit = "rgb", .min = 0, .max = 1, .help = "Skin colour"});
+    v("scalp_hair", scalp_hair,
+      {.help = "Draw the hair region the mesh marks (the default head's cap, parting and bun) as hair: the first "
+               "chain's colour and strand shading (false: skin)",
+       .apply = Apply::Restart});
     v("animation", animation, {.help = "Keyframed motion of the head", .apply = Apply::Restart});
   }
 };

@@ -142,16 +142,30 @@ Vec3 bun_base() {
 const Vec3 kBunRadii(0.025, 0.019, 0.025);  // local frame, y along the bun axis
 constexpr double kBunLift = 0.013;          // bun centre above the hair surface
 
+// Bun: a squashed ball on the back-top of the skull; hair tie: a torus around its base.
+double sd_bun(const Vec3& p) {
+  static const Eigen::Matrix3d frame = frame_about(kBunAxis);
+  return sd_ellipsoid(frame.transpose() * (p - (bun_base() + kBunLift * kBunAxis)), kBunRadii);
+}
+double sd_tie(const Vec3& p) {
+  static const Eigen::Matrix3d frame = frame_about(kBunAxis);
+  return sd_torus_y(frame.transpose() * (p - (bun_base() + 0.0035 * kBunAxis)), 0.0175, 0.0045);
+}
+
 double sd_head(const Vec3& p) {
   double d = smin(sd_body(p), sd_hair(p), 0.004);
-  static const Eigen::Matrix3d frame = frame_about(kBunAxis);
-  const Vec3 base = bun_base();
-  // Bun: a squashed ball on the back-top of the skull; hair tie: a torus around its base.
-  const Vec3 qb = frame.transpose() * (p - (base + kBunLift * kBunAxis));
-  d = smin(d, sd_ellipsoid(qb, kBunRadii), 0.008);
-  const Vec3 qt = frame.transpose() * (p - (base + 0.0035 * kBunAxis));
-  d = smin(d, sd_torus_y(qt, 0.0175, 0.0045), 0.0025);
-  return d;
+  d = smin(d, sd_bun(p), 0.008);
+  return smin(d, sd_tie(p), 0.0025);
+}
+
+// How much of the surface point p is hair (0 skin .. 1 hair): which of the skin (sd_body) and the
+// hair (cap, bun, tie) lies nearer to p. On the cap the skin is ~4.5 mm below, on the face the cap
+// is far above; the weight ramps over the last millimetre either way, so the hairline is soft at
+// the 3 mm grid instead of following the triangles' edges.
+double hair_weight(const Vec3& p) {
+  const double hair = std::min({sd_hair(p), sd_bun(p), sd_tie(p)});
+  const double t = std::clamp(0.5 + (sd_body(p) - hair) / 0.002, 0.0, 1.0);
+  return t * t * (3.0 - 2.0 * t);
 }
 
 Vec3 gradient(const Vec3& p) {
@@ -360,19 +374,37 @@ NodClip make_nod() {
 }
 
 // head.gltf (static) or head_animated.gltf (same head.bin, plus the clip in an embedded buffer).
+// The hair region rides in COLOR_0 (linear RGBA, one per vertex) of the material "ponyhop_head":
+// rgb is what another viewer shows (the skin's white, the hair's brown over the skin's base colour),
+// alpha is 1 - hair weight. glTF ignores alpha under the default alphaMode OPAQUE, so the channel is
+// free; ponyhop reads it as the hair region only from a material of that name.
+std::vector<float> hair_colors(const TriMesh& m) {
+  const Vec3 skin(0.92, 0.74, 0.62), hair(0.107, 0.040, 0.0137);  // linear: vinyl, sRGB (0.36, 0.22, 0.12)
+  std::vector<float> c;
+  for (const Vec3& p : m.positions) {
+    const double w = hair_weight(p);
+    const Vec3 rgb = Vec3::Ones() + w * (hair.cwiseQuotient(skin) - Vec3::Ones());
+    for (double x : {rgb.x(), rgb.y(), rgb.z(), 1.0 - w}) c.push_back(static_cast<float>(x));
+  }
+  return c;
+}
+
 void write_gltf(const std::filesystem::path& path, const std::string& bin_name, std::size_t bin_size,
                 std::size_t nverts, std::size_t nindices, const std::vector<float>& pmin,
                 const std::vector<float>& pmax, const NodClip* clip) {
   const std::size_t vbytes = nverts * 12;
+  const std::size_t ibytes = nindices * 4;
   std::ostringstream j;
   j << "{\n"
     << "  \"asset\": {\"version\": \"2.0\", \"generator\": \"ponyhop assets/head/make_head\"},\n"
     << "  \"scene\": 0,\n"
     << "  \"scenes\": [{\"name\": \"head\", \"nodes\": [0]}],\n"
     << "  \"nodes\": [{\"name\": \"head\", \"mesh\": 0}],\n"
-    << "  \"meshes\": [{\"name\": \"head\", \"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 1}, "
+    << "  \"meshes\": [{\"name\": \"head\", \"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 1, "
+       "\"COLOR_0\": "
+       "3}, "
        "\"indices\": 2, \"material\": 0, \"mode\": 4}]}],\n"
-    << "  \"materials\": [{\"name\": \"vinyl\", \"pbrMetallicRoughness\": {\"baseColorFactor\": [0.92, 0.74, "
+    << "  \"materials\": [{\"name\": \"ponyhop_head\", \"pbrMetallicRoughness\": {\"baseColorFactor\": [0.92, 0.74, "
        "0.62, 1.0], \"metallicFactor\": 0.0, \"roughnessFactor\": 0.55}}],\n";
   std::string anim_bin;
   if (clip) {
@@ -392,7 +424,9 @@ void write_gltf(const std::filesystem::path& path, const std::string& bin_name, 
     << "    {\"buffer\": 0, \"byteOffset\": " << vbytes << ", \"byteLength\": " << vbytes
     << ", \"byteStride\": 12, \"target\": 34962},\n"
     << "    {\"buffer\": 0, \"byteOffset\": " << 2 * vbytes << ", \"byteLength\": " << nindices * 4
-    << ", \"target\": 34963}";
+    << ", \"target\": 34963},\n"
+    << "    {\"buffer\": 0, \"byteOffset\": " << 2 * vbytes + ibytes << ", \"byteLength\": " << nverts * 16
+    << ", \"byteStride\": 16, \"target\": 34962}";
   if (clip) {
     const std::size_t tb = clip->times.size() * 4, rb = clip->rotations.size() * 4, sb = clip->translations.size() * 4;
     j << ",\n    {\"buffer\": 1, \"byteOffset\": 0, \"byteLength\": " << tb << "},\n"
@@ -404,20 +438,21 @@ void write_gltf(const std::filesystem::path& path, const std::string& bin_name, 
     << "    {\"bufferView\": 0, \"componentType\": 5126, \"count\": " << nverts
     << ", \"type\": \"VEC3\", \"min\": " << json_floats(pmin) << ", \"max\": " << json_floats(pmax) << "},\n"
     << "    {\"bufferView\": 1, \"componentType\": 5126, \"count\": " << nverts << ", \"type\": \"VEC3\"},\n"
-    << "    {\"bufferView\": 2, \"componentType\": 5125, \"count\": " << nindices << ", \"type\": \"SCALAR\"}";
+    << "    {\"bufferView\": 2, \"componentType\": 5125, \"count\": " << nindices << ", \"type\": \"SCALAR\"},\n"
+    << "    {\"bufferView\": 3, \"componentType\": 5126, \"count\": " << nverts << ", \"type\": \"VEC4\"}";
   if (clip) {
     const std::size_t keys = clip->times.size();
-    j << ",\n    {\"bufferView\": 3, \"componentType\": 5126, \"count\": " << keys
+    j << ",\n    {\"bufferView\": 4, \"componentType\": 5126, \"count\": " << keys
       << ", \"type\": \"SCALAR\", \"min\": [" << fmt("%.9g", clip->times.front()) << "], \"max\": ["
       << fmt("%.9g", clip->times.back()) << "]},\n"
-      << "    {\"bufferView\": 4, \"componentType\": 5126, \"count\": " << keys << ", \"type\": \"VEC4\"},\n"
-      << "    {\"bufferView\": 5, \"componentType\": 5126, \"count\": " << keys << ", \"type\": \"VEC3\"}";
+      << "    {\"bufferView\": 5, \"componentType\": 5126, \"count\": " << keys << ", \"type\": \"VEC4\"},\n"
+      << "    {\"bufferView\": 6, \"componentType\": 5126, \"count\": " << keys << ", \"type\": \"VEC3\"}";
   }
   j << "\n  ]";
   if (clip) {
     j << ",\n  \"animations\": [{\"name\": \"nod\",\n"
-      << "    \"samplers\": [{\"input\": 3, \"output\": 4, \"interpolation\": \"LINEAR\"}, "
-         "{\"input\": 3, \"output\": 5, \"interpolation\": \"LINEAR\"}],\n"
+      << "    \"samplers\": [{\"input\": 4, \"output\": 5, \"interpolation\": \"LINEAR\"}, "
+         "{\"input\": 4, \"output\": 6, \"interpolation\": \"LINEAR\"}],\n"
       << "    \"channels\": [{\"sampler\": 0, \"target\": {\"node\": 0, \"path\": \"rotation\"}}, "
          "{\"sampler\": 1, \"target\": {\"node\": 0, \"path\": \"translation\"}}]}]";
   }
@@ -474,6 +509,7 @@ int run(const std::filesystem::path& out_dir, double cell) {
   std::vector<std::uint32_t> idx;
   for (const auto& t : mesh.triangles) idx.insert(idx.end(), t.begin(), t.end());
   bin.append(reinterpret_cast<const char*>(idx.data()), idx.size() * sizeof(std::uint32_t));
+  append_floats(bin, hair_colors(mesh));  // after the indices: the geometry's bytes stay where they were
 
   const Vec3 anchor = anchor_point();
   write_obj(out_dir / "head.obj", mesh, anchor);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -18,6 +19,8 @@
 
 #include "common/out_util.h"
 #include "common/sanitizers.h"
+#include "engine/asset_loader.h"
+#include "engine/gltf_export.h"
 #include "engine/isolated.h"
 
 using namespace ponyhop;
@@ -330,6 +333,24 @@ TEST(Mesh, DefaultHeadAssetLoadsWhenPresent) {
   transformMesh(placed, meshToBody(hp, m.bbox));
   EXPECT_GT(placed.bbox.sizes().z(), 0.15);
   EXPECT_LT(placed.bbox.sizes().z(), 0.4);
+  // Its hair region (assets/head/README.md): the skin stays one plain colour (head.color), the cap
+  // and the bun are hair, the face is not, and the hairline is a soft ramp, not a triangle's edge.
+  EXPECT_TRUE(m.colors.empty());
+  ASSERT_EQ(m.hair.size(), m.positions.size());
+  size_t top = 0, nose = 0, bun = 0, hair = 0, between = 0;
+  for (size_t i = 0; i < m.positions.size(); ++i) {
+    if (m.positions[i].y() > m.positions[top].y()) top = i;
+    if (m.positions[i].z() > m.positions[nose].z()) nose = i;
+    if (m.positions[i].z() < m.positions[bun].z()) bun = i;
+    hair += m.hair[i] > 0.5f;
+    between += m.hair[i] > 0.02f && m.hair[i] < 0.98f;
+  }
+  EXPECT_EQ(m.hair[top], 1.0f);
+  EXPECT_EQ(m.hair[bun], 1.0f);
+  EXPECT_EQ(m.hair[nose], 0.0f);
+  EXPECT_GT(hair, m.positions.size() / 3);
+  EXPECT_LT(hair, m.positions.size() * 2 / 3);
+  EXPECT_GT(between, 50u);
 }
 
 // The renderer culls the back faces of closed meshes only: an open or inside-out mesh must not be
@@ -385,4 +406,34 @@ TEST(Mesh, ProceduralSphereIsClosedAndOutward) {
     const auto& c = s.positions[s.indices[t + 2]];
     EXPECT_GT((b - a).cross(c - a).dot(a + b + c), 0.0f);
   }
+}
+
+// The hair region goes out with `ponyhop export` as ponyhop's heads carry it and comes back in.
+TEST(Mesh, HairRegionRoundTripsThroughTheGlbExport) {
+  BakeMesh head{"head", makeUvSphere(0.1f, 16, 8), Eigen::Vector3f(0.9f, 0.8f, 0.7f)};
+  for (const Eigen::Vector3f& p : head.mesh.positions) head.mesh.hair.push_back(std::clamp(p.z() / 0.1f, 0.0f, 1.0f));
+  Bake bake;
+  bake.root_rotation = Eigen::Quaterniond::Identity();  // positions come back as they went out
+  bake.meshes = {head};
+  BakeNode node;
+  node.name = "head";
+  node.mesh = 0;
+  bake.nodes = {node};
+  const std::string path = outFolder("mesh") + "/hair_region.glb";
+  std::string err;
+  ASSERT_TRUE(writeGlb(bake, path, &err)) << err;
+  MeshData back;
+  ASSERT_TRUE(loadMesh(path, back, &err)) << err;
+  ASSERT_EQ(back.hair.size(), back.positions.size());
+  double worst = 0.0;
+  for (size_t i = 0; i < back.positions.size(); ++i)
+    worst = std::max(worst, double(std::abs(back.hair[i] - std::clamp(back.positions[i].z() / 0.1f, 0.0f, 1.0f))));
+  EXPECT_LT(worst, 1e-5);
+  EXPECT_TRUE(back.colors.empty());  // the skin is one plain colour; the region's rgb is for other viewers
+  // head.scalp_hair = false: the head is loaded without it (drawn all skin, as before the region).
+  HeadParams hp;
+  hp.mesh = path;
+  EXPECT_EQ(assimpAssets().loadHead(hp, path, "scene.json").mesh.hair.size(), back.positions.size());
+  hp.scalp_hair = false;
+  EXPECT_TRUE(assimpAssets().loadHead(hp, path, "scene.json").mesh.hair.empty());
 }

@@ -612,6 +612,49 @@ TEST(Renderer, UploadedMeshIsDrawnWithItsTransform) {
   r.release(h);
 }
 
+// A mesh's hair region (MeshData::hair) is drawn with the hair's colour and strand highlight where
+// it is marked, and the rest of the mesh exactly as without one.
+TEST(Renderer, HairRegionIsDrawnAsHairAndTheSkinAsBefore) {
+  REQUIRE_GL();
+  Renderer& r = *gl().renderer;
+  MeshData sphere = makeUvSphere(1.0f, 48, 24);
+  const MeshHandle plain = r.upload(sphere);
+  for (const Eigen::Vector3f& p : sphere.positions)
+    sphere.hair.push_back(std::clamp((p.z() - 0.3f) / 0.1f, 0.0f, 1.0f));
+  const MeshHandle marked = r.upload(sphere);
+  Material skin;
+  skin.color = Eigen::Vector3f(0.93f, 0.78f, 0.67f);
+  ScalpHair hair;  // brown, the strands' default highlight, combed towards +z
+  const Camera cam = testCamera();
+  const RenderParams rp = testParams(1, false);
+  const Eigen::Affine3d T(Eigen::Translation3d(kSphereC) * Eigen::Scaling(kSphereR));
+  const auto draw = [&](MeshHandle h, const ScalpHair& look) {
+    return render(cam, rp, [&](Renderer& rr) { rr.drawMesh(h, T, skin, look); });
+  };
+  const auto before = draw(plain, hair), after = draw(marked, hair);
+  ScalpHair matte = hair;
+  matte.shading.highlight = 0.0f;
+  const auto dull = draw(marked, matte);
+  save("hair_region.png", after);
+  // Below the hairline (z < 0.3 R): the same pixels; above it hair: brown, red over blue.
+  const Eigen::Vector2d low = project(cam, kSphereC + kSphereR * Eigen::Vector3d(0.3, -0.9, -0.2));
+  const Eigen::Vector2d high = project(cam, kSphereC + kSphereR * Eigen::Vector3d(0.2, -0.5, 0.8));
+  const auto px = [](const std::vector<uint8_t>& img, const Eigen::Vector2d& at) {
+    const uint8_t* p = img.data() + (size_t(at.y()) * kW + size_t(at.x())) * 4;
+    return Eigen::Vector3i(p[0], p[1], p[2]);
+  };
+  EXPECT_EQ(px(before, low), px(after, low));
+  EXPECT_GT(px(after, high).x(), px(after, high).z() + 30) << px(after, high).transpose();
+  EXPECT_LT(luminance(after, int(high.x()), int(high.y())), luminance(before, int(high.x()), int(high.y())) - 40.0);
+  // The highlight knob reaches the hair region: the matte one is darker somewhere above the line.
+  double lit = 0.0, matte_lit = 0.0;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) lit += luminance(after, x, y), matte_lit += luminance(dull, x, y);
+  EXPECT_GT(lit, matte_lit + 500.0);
+  r.release(plain);
+  r.release(marked);
+}
+
 TEST(Camera, OrbitAndFollowPlaceTheEye) {
   CameraParams p;
   p.mode = CameraMode::Orbit;

@@ -86,6 +86,8 @@ TEST(SceneIo, UnknownKeyNamesKeyAndAllowed) {
 }
 
 TEST(SceneIo, WrongTypeAndRange) {
+  EXPECT_NE(errorOf(json::parse(R"({"head": {"scalp_hair": "yes"}})")).find("head.scalp_hair: must be"),
+            std::string::npos);
   EXPECT_NE(errorOf(json::parse(R"({"physics": {"dt": "fast"}})")).find("physics.dt: must be a number"),
             std::string::npos);
   const std::string e = errorOf(json::parse(R"({"physics": {"dt": -1}})"));
