@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 
 #include "engine/renderer_impl.h"
 
@@ -124,7 +125,9 @@ void Renderer::Impl::drawMaterialMeshes(GLuint p, bool hair, bool hair_only) {
     glUniform2f(loc(p, "u_shinRim"), d.material.shininess, d.material.rim);
     glBindVertexArray(g.vao);
     cullFor(g, d.model);
-    for (const MeshPart& part : hair_only ? std::vector<MeshPart>{g.hair_only} : g.parts) {
+    // The hair-only range, or the parts, without a copy of either (this runs for every draw).
+    const std::span<const MeshPart> parts = hair_only ? std::span<const MeshPart>(&g.hair_only, 1) : g.parts;
+    for (const MeshPart& part : parts) {
       const bool tex = part.texture >= 0 && size_t(part.texture) < g.textures.size();
       glUniform1i(loc(p, "u_hasTex"), tex ? 1 : 0);
       glActiveTexture(GL_TEXTURE2);
