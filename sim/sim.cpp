@@ -19,8 +19,13 @@ Sim::Sim(const Scene& scene, const AssetLoader* assets) : scene_(scene), world_(
   if (scene_.terrain) terrain_ = std::make_shared<const Terrain>(scene_.terrain->boxes);
   buildHoppers();
   buildChains();
-  if (!scene_.joints.empty()) buildJoints();
+  // The head collider first clears the chains' starting poses of the head (turning links that
+  // start inside it); the joints are assembled after, from the cleared poses, so a loop starts
+  // closed (clearing after assembly would open it). The contact set joins the world last: its
+  // record of the bodies' starting poses is taken from the assembled ones.
   if (scene_.collision) buildCollisions();
+  if (!scene_.joints.empty() && world_.ok()) buildJoints();
+  if (collisions_) collisions_->attach(world_);
   if (!world_.ok()) throw InputError(scene_.path + ": " + world_.status());
 }
 
@@ -59,7 +64,6 @@ void Sim::buildCollisions() {
     for (size_t i = 0; i < shapes.size(); ++i)
       for (size_t j = i + 1; j < shapes.size(); ++j) pairHoppers(*collisions_, shapes[i], shapes[j]);
   }
-  if (collisions_) collisions_->attach(world_);
 }
 
 void Sim::buildHead(const AssetLoader* assets) {
