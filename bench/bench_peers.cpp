@@ -15,8 +15,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
-
 // The engines that may have a module, in the order of their notes.
 struct Engine {
   const char* name;     // in the notes: "MuJoCo"
@@ -80,7 +78,7 @@ RunResult benchPeerRun(const Peer& peer, const PeerChain& chain, double dt, doub
       if (!(ok = s->finite())) break;
       if (rep == 0 && i % every == 0) traj.p.push_back(s->tip());
     }
-    per_step.push_back(seconds(total) / std::max(1L, taken));
+    per_step.push_back(durationSeconds(total) / std::max(1L, taken));
     if (!ok) {
       char b[160];
       std::snprintf(b, sizeof b, "t = %.6g s: %s's state became non-finite or ran away (dt %.6g s)", s->time(),

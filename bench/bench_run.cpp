@@ -13,8 +13,6 @@ namespace {
 
 constexpr double kDriftSample = 1.0 / 240.0;  // s, how often the long run samples energy, joints, speed
 
-double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
-
 long stepsFor(double duration, double dt) { return std::lround(duration / dt); }
 
 std::unique_ptr<Sim> build(const BenchCase& c, const Method& m, double dt) {
@@ -120,7 +118,7 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
       if (!ok) break;
       if (rep == 0 && i % every == 0) traj.p.push_back(sim->trackedPoint());
     }
-    per_step.push_back(seconds(total) / static_cast<double>(std::max(1L, taken)));
+    per_step.push_back(durationSeconds(total) / static_cast<double>(std::max(1L, taken)));
     stages.push_back(sim->world().stageTimes());
     substeps.push_back(static_cast<double>(substep_sum) / std::max(1L, taken));
     if (!sim->ok()) {  // deterministic: every repeat would stop the same way
@@ -209,7 +207,7 @@ double timeSteps(const std::function<bool()>& step, double budget, int& steps,
   // One untimed-for-the-result step: warms caches and estimates the cost.
   auto t0 = Clock::now();
   bool ok = step();
-  const double estimate = std::max(1e-7, seconds(Clock::now() - t0));
+  const double estimate = std::max(1e-7, durationSeconds(Clock::now() - t0));
   if (after_warmup) after_warmup();
   const int blocks = 5;
   // At most 2,000 steps per block for the default budgets (0.5 s and less); a longer budget (a
@@ -222,7 +220,7 @@ double timeSteps(const std::function<bool()>& step, double budget, int& steps,
     if (b > 0 && estimate * per_block * b > budget) break;  // slow: fewer blocks
     t0 = Clock::now();
     for (long i = 0; i < per_block && (ok = step()); ++i) ++steps;
-    times.push_back(seconds(Clock::now() - t0) / per_block);
+    times.push_back(durationSeconds(Clock::now() - t0) / per_block);
   }
   return median(times);
 }

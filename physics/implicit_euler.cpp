@@ -1,7 +1,8 @@
 #include "physics/implicit_euler.h"
 
 #include <Eigen/SparseCore>
-#include <Eigen/SparseLU>
+
+#include "physics/sparse_lu.h"
 
 namespace ponyhop {
 
@@ -113,14 +114,13 @@ ConstrainedStepResult linearlyImplicitEulerStep(double t, double h, ConstrainedS
   rhs.head(nv) = h * (f0 + gyro) + h * h * (kmat * v0);
   if (m > 0) rhs.tail(m) = -s.system.times(vel);
 
-  Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu;
-  lu.compute(kkt);
-  if (lu.info() != Eigen::Success) {
+  Eigen::VectorXd sol;
+  const SparseLuResult solved = sparseLuSolve(kkt, rhs, sol);
+  if (solved == SparseLuResult::Singular) {
     result.fail("implicit Euler: the linearized system is singular");
     return result;
   }
-  const Eigen::VectorXd sol = lu.solve(rhs);
-  if (lu.info() != Eigen::Success || !sol.allFinite()) {
+  if (solved != SparseLuResult::Solved || !sol.allFinite()) {
     result.fail("implicit Euler: the linear solve failed");
     return result;
   }

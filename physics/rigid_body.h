@@ -76,6 +76,11 @@ inline Eigen::Quaterniond quaternionFromRotationVector(const Eigen::Vector3d& ph
   return Eigen::Quaterniond(c, s * phi.x(), s * phi.y(), s * phi.z());
 }
 
+// The shortest rotation that turns direction `from` into direction `to` (neither need be unit):
+// Eigen's Quaterniond::FromTwoVectors, compiled once, in rigid_body.cpp. Its antiparallel case
+// instantiates a JacobiSVD, about 8 s of compiler time in every file that calls it directly.
+Eigen::Quaterniond rotationBetween(const Eigen::Vector3d& from, const Eigen::Vector3d& to);
+
 // The rotation vector (axis * angle, angle in [0, pi]) of a unit quaternion.
 inline Eigen::Vector3d rotationVector(const Eigen::Quaterniond& q_in) {
   Eigen::Quaterniond q = q_in.normalized();

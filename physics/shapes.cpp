@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "physics/mesh_sdf.h"
+#include "physics/rigid_body.h"
 
 namespace ponyhop {
 
@@ -42,7 +43,7 @@ Shape Shape::plane(const Eigen::Vector3d& normal, const Eigen::Vector3d& point) 
   Shape s;
   s.type = ShapeType::Plane;
   s.offset = point;
-  s.rotation = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), normal.normalized());
+  s.rotation = rotationBetween(Eigen::Vector3d::UnitZ(), normal.normalized());
   return s;
 }
 

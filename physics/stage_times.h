@@ -24,8 +24,10 @@
 
 namespace ponyhop {
 
-// The clock of every wall-time readout (stages, frames, the bench), and milliseconds since t0 on it.
+// The clock of every wall-time readout (stages, frames, the bench), a duration on it in seconds,
+// and milliseconds since t0 on it.
 using Clock = std::chrono::steady_clock;
+inline double durationSeconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 inline double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }

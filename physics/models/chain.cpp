@@ -6,6 +6,7 @@
 
 #include "physics/force_elements.h"
 #include "physics/models/anchor_motion.h"
+#include "physics/rigid_body.h"
 #include "physics/spherical_joint.h"
 #include "physics/validate.h"
 
@@ -51,7 +52,7 @@ Chain addChain(World& world, const ChainParams& params, int parent, const Eigen:
   const Eigen::Vector3d d = params.direction.normalized();
   const Eigen::Vector3d p0 = chain.anchor(world);
   // Body z points from the bottom end to the top end: -d along the initial chain.
-  const Eigen::Quaterniond q0 = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), -d);
+  const Eigen::Quaterniond q0 = rotationBetween(Eigen::Vector3d::UnitZ(), -d);
   const Eigen::Vector3d g = world.params().gravity;
   const Eigen::Vector3d down =
       g.norm() > 0.0 ? Eigen::Vector3d(g.normalized()) : Eigen::Vector3d(-Eigen::Vector3d::UnitZ());

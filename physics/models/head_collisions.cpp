@@ -9,6 +9,7 @@
 
 #include "physics/grid_builder_hash.h"  // generated at build time (physics/CMakeLists.txt)
 #include "physics/mesh_sdf.h"
+#include "physics/rigid_body.h"
 #include "physics/shapes.h"
 
 namespace ponyhop {
@@ -110,7 +111,7 @@ int clearInitialPose(World& world, const Chain& chain, const Shape& head, int he
     const PlacedShape placed_head = place(head, h.x, h.q);
     // The link's pose along u (its top kept, turned from its laid-out pose by the shortest arc).
     const auto pose = [&](const Eigen::Vector3d& u) {
-      link.q = (Eigen::Quaterniond::FromTwoVectors(u0, u) * q0).normalized();
+      link.q = (rotationBetween(u0, u) * q0).normalized();
       link.x = top + half * u;
     };
     const Eigen::Vector3d x0 = link.x;
@@ -154,7 +155,7 @@ int clearInitialPose(World& world, const Chain& chain, const Shape& head, int he
       continue;
     }
     // Bisection on the arc u0 -> found: lo inside, hi clear.
-    const Eigen::Quaterniond arc = Eigen::Quaterniond::FromTwoVectors(u0, *found);
+    const Eigen::Quaterniond arc = rotationBetween(u0, *found);
     const Eigen::Quaterniond identity = Eigen::Quaterniond::Identity();
     double lo = 0.0, hi = 1.0;
     while (hi - lo > 1e-3) {

@@ -3,6 +3,8 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 
+#include "physics/rigid_body.h"
+
 namespace ponyhop {
 
 std::array<CapsuleSpan, 3> hopperHull(const HopperParams& p) {
@@ -23,8 +25,8 @@ namespace {
 Shape capsuleOf(const CapsuleSpan& c) {
   const Eigen::Vector3d axis = c.a - c.b;
   const double length = axis.norm();
-  const Eigen::Quaterniond rot = length > 0.0 ? Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), axis)
-                                              : Eigen::Quaterniond::Identity();
+  const Eigen::Quaterniond rot =
+      length > 0.0 ? rotationBetween(Eigen::Vector3d::UnitZ(), axis) : Eigen::Quaterniond::Identity();
   return Shape::capsule(0.5 * length, c.ra, c.rb, 0.5 * (c.a + c.b), rot);
 }
 

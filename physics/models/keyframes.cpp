@@ -1,10 +1,12 @@
 #include "physics/models/keyframes.h"
 
-#include <Eigen/Sparse>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+
+#include "physics/sparse_lu.h"
 
 namespace ponyhop {
 
@@ -167,11 +169,8 @@ bool solveSpline(const std::vector<double>& s, Rows6& Y, const std::vector<int>&
   }
   Eigen::SparseMatrix<double> A(n, n);
   A.setFromTriplets(trip.begin(), trip.end());  // duplicates (small loops) are summed
-  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
-  lu.compute(A);
-  if (lu.info() != Eigen::Success) return false;
-  const Eigen::MatrixXd z = lu.solve(rhs);
-  if (lu.info() != Eigen::Success || !z.allFinite()) return false;
+  Eigen::MatrixXd z;
+  if (sparseLuSolve(A, rhs, z) != SparseLuResult::Solved || !z.allFinite()) return false;
   M.resize(m + 1, 6);
   for (int j = 0; j <= m; ++j) M.row(j) = z.row(mIndex(j));
   for (size_t k = 0; k < freeKnots.size(); ++k) Y.row(freeKnots[k]) = z.row(nM + static_cast<int>(k));

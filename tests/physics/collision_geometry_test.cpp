@@ -63,8 +63,8 @@ TEST(CollisionGeometry, TiltedTaperedCapsuleOnPlaneTouchesAtItsLowestEnd) {
 
 TEST(CollisionGeometry, SkewCapsulesMeetAtTheCommonPerpendicular) {
   // Capsule a along x at z = 0.05, capsule b along y at z = 0: distance between axes 0.05.
-  const Quaterniond along_x = Quaterniond::FromTwoVectors(Vector3d::UnitZ(), Vector3d::UnitX());
-  const Quaterniond along_y = Quaterniond::FromTwoVectors(Vector3d::UnitZ(), Vector3d::UnitY());
+  const Quaterniond along_x = rotationBetween(Vector3d::UnitZ(), Vector3d::UnitX());
+  const Quaterniond along_y = rotationBetween(Vector3d::UnitZ(), Vector3d::UnitY());
   const Shape a = Shape::capsule(0.2, 0.01, 0.01);
   const Shape b = Shape::capsule(0.2, 0.015, 0.015);
   const ContactPoint c = only(a, Vector3d(0.02, 0, 0.05), along_x, b, Vector3d(0, -0.03, 0), along_y);
@@ -227,7 +227,7 @@ TEST(MeshSdf, CapsuleAgainstTheGridFindsTheDeepestPointAlongTheLink) {
   const Shape head = Shape::grid(g);
   const Shape head_exact = Shape::sphere(0.1);
   // A horizontal capsule across the top of the sphere, tapered.
-  const Quaterniond along_x = Quaterniond::FromTwoVectors(Vector3d::UnitZ(), Vector3d::UnitX());
+  const Quaterniond along_x = rotationBetween(Vector3d::UnitZ(), Vector3d::UnitX());
   const Shape cap = Shape::capsule(0.03, 0.012, 0.006);
   for (double z : {0.105, 0.11, 0.12}) {
     const ContactPoint c = only(cap, Vector3d(0.01, 0, z), along_x, head, Vector3d::Zero(), kIdentity);
@@ -251,7 +251,7 @@ TEST(CollisionGeometry, MeasureAtRepeatsTheContactAtItsFeature) {
   const Shape ground = Shape::plane(Vector3d::UnitZ()), head = Shape::grid(g);
   const Shape box = Shape::box(Vector3d(0.1, 0.1, 0.05)), cap = Shape::capsule(0.05, 0.02, 0.01);
   const Quaterniond tilt(Eigen::AngleAxisd(0.3, Vector3d(1, 1, 0).normalized()));
-  const Quaterniond along_x = Quaterniond::FromTwoVectors(Vector3d::UnitZ(), Vector3d::UnitX());
+  const Quaterniond along_x = rotationBetween(Vector3d::UnitZ(), Vector3d::UnitX());
   struct Case {
     const Shape *a, *b;
     Vector3d xa;

@@ -172,7 +172,7 @@ TEST(Contact, CapsuleRestingOnTheGroundDoesNotDriftInSixtySeconds) {
   b.name = "capsule";
   b.mass = 0.5;
   b.inertia = Vector3d(0.002, 0.002, 0.0002);
-  const Quaterniond lying = Quaterniond::FromTwoVectors(Vector3d::UnitZ(), Vector3d::UnitX());
+  const Quaterniond lying = rotationBetween(Vector3d::UnitZ(), Vector3d::UnitX());
   b.q = lying;
   b.x = Vector3d(0.2, -0.1, r);
   const int cap = world.addDynamicBody(b);
