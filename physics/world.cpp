@@ -494,7 +494,7 @@ void World::stabilize() {
   if (params_.stabilization != Stabilization::Projection || joints_.empty()) return;
   const auto timed = clock_.time(Stage::Stabilize);
   updateKinematicBodies(state_.time);
-  const ProjectionResult r = projectPositions(bodies_, joints_, system_, *solver_);
+  const ProjectionResult r = projectPositions(bodies_, joints_, system_, *solver_, projection_work_);
   if (!r.status.ok() || !(r.error < 1e-6)) {
     char buf[96];
     std::snprintf(buf, sizeof buf, " (joint error %.3g m after %d iterations)", r.error, r.iterations);
@@ -502,7 +502,7 @@ void World::stabilize() {
                 "the joints were pulled far apart within one step (a step too large for stiff springs or a "
                 "fast whip): reduce dt or raise substeps, or use integrator = implicit_euler for stiff springs");
   }
-  if (Status s = ponyhop::projectVelocities(bodies_, joints_, system_, *solver_); !s.ok()) {
+  if (Status s = ponyhop::projectVelocities(bodies_, joints_, system_, *solver_, projection_work_); !s.ok()) {
     return stop("stabilize", s.message(), "redundant or duplicate joints");
   }
   checkBodies("stabilize", false);
@@ -567,7 +567,7 @@ void World::accelerationsAt(double t, const State& state, Accelerations& out) {
   applyExternalForces();
   applyControllerForces();
   solveJointForces();
-  out = gatherAccelerations();
+  gatherAccelerationsInto(out);
 }
 
 void World::evaluate() {
@@ -587,7 +587,7 @@ void World::projectVelocities() {
 }
 
 ProjectionResult World::projectPositionsOntoJoints() {
-  return ponyhop::projectPositions(bodies_, joints_, system_, *solver_);
+  return ponyhop::projectPositions(bodies_, joints_, system_, *solver_, projection_work_);
 }
 
 ProjectionResult World::assembleJoints() {
@@ -595,7 +595,7 @@ ProjectionResult World::assembleJoints() {
 }
 
 Status World::projectVelocitiesOntoJoints(Eigen::VectorXd* impulses) {
-  return ponyhop::projectVelocities(bodies_, joints_, system_, *solver_, impulses);
+  return ponyhop::projectVelocities(bodies_, joints_, system_, *solver_, projection_work_, impulses);
 }
 
 World::SavedState World::saveState() const {
@@ -643,12 +643,6 @@ void World::scatterState(const State& state) {
     s = state[k];
     s.q.normalize();  // RK4 stage quaternions are not unit
   }
-}
-
-Accelerations World::gatherAccelerations() const {
-  Accelerations a;
-  gatherAccelerationsInto(a);
-  return a;
 }
 
 void World::gatherAccelerationsInto(Accelerations& a) const {
