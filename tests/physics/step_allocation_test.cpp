@@ -70,6 +70,14 @@ long allocationsIn(F&& f) {
   return g_allocations;
 }
 
+// Allocations in 1,000 steps after 10 warm-up steps (which size the work space).
+long steadyStepAllocations(World& world) {
+  for (int i = 0; i < 10; ++i) world.step();
+  return allocationsIn([&] {
+    for (int i = 0; i < 1000; ++i) world.step();
+  });
+}
+
 ChainWorld chain(SolverKind solver, Integrator integrator, int links,
                  Stabilization stabilization = Stabilization::None) {
   PhysicsParams pp;
@@ -136,10 +144,7 @@ TEST_F(AllocationTest, CounterCountsMallocNewAndEigen) {
 TEST_F(AllocationTest, FeatherstoneStepAllocatesNothing) {
   for (Integrator integrator : {Integrator::RK4, Integrator::SymplecticEuler}) {
     ChainWorld cw = chain(SolverKind::Featherstone, integrator, 16);
-    for (int i = 0; i < 10; ++i) cw.world.step();
-    const long n = allocationsIn([&] {
-      for (int i = 0; i < 1000; ++i) cw.world.step();
-    });
+    const long n = steadyStepAllocations(cw.world);
     EXPECT_TRUE(cw.world.ok()) << cw.world.status();
     EXPECT_EQ(n, 0) << "featherstone + " << enumName(integrator) << ": allocations in 1,000 steps";
   }
@@ -173,10 +178,7 @@ TEST_F(AllocationTest, TreeFactorAllocatesNothing) {
 // allocates nothing either.
 TEST_F(AllocationTest, TreeStepAllocatesNothing) {
   ChainWorld cw = chain(SolverKind::Tree, Integrator::SymplecticEuler, 16);
-  for (int i = 0; i < 10; ++i) cw.world.step();
-  const long n = allocationsIn([&] {
-    for (int i = 0; i < 1000; ++i) cw.world.step();
-  });
+  const long n = steadyStepAllocations(cw.world);
   EXPECT_TRUE(cw.world.ok()) << cw.world.status();
   EXPECT_EQ(n, 0) << "tree + symplectic_euler: allocations in 1,000 steps";
 }
@@ -190,10 +192,7 @@ TEST_F(AllocationTest, TreeStepAllocatesNothing) {
 TEST_F(AllocationTest, TreeRattleStepAllocatesNothing) {
   for (const bool damped : {false, true}) {
     ChainWorld cw = gentleSwing(Integrator::Rattle, Stabilization::None, damped);
-    for (int i = 0; i < 10; ++i) cw.world.step();
-    const long n = allocationsIn([&] {
-      for (int i = 0; i < 1000; ++i) cw.world.step();
-    });
+    const long n = steadyStepAllocations(cw.world);
     EXPECT_TRUE(cw.world.ok()) << cw.world.status();
     EXPECT_EQ(n, 0) << "tree + rattle" << (damped ? " (damped)" : "") << ": allocations in 1,000 steps";
   }
@@ -208,10 +207,7 @@ TEST_F(AllocationTest, ProjectionStepAllocatesNothing) {
   for (Integrator integrator : {Integrator::RK4, Integrator::SymplecticEuler}) {
     ChainWorld cw = integrator == Integrator::RK4 ? chain(SolverKind::Tree, integrator, 16, Stabilization::Projection)
                                                   : gentleSwing(integrator, Stabilization::Projection, false);
-    for (int i = 0; i < 10; ++i) cw.world.step();
-    const long n = allocationsIn([&] {
-      for (int i = 0; i < 1000; ++i) cw.world.step();
-    });
+    const long n = steadyStepAllocations(cw.world);
     EXPECT_TRUE(cw.world.ok()) << cw.world.status();
     EXPECT_EQ(n, 0) << "tree + " << enumName(integrator) << " + projection: allocations in 1,000 steps";
   }
