@@ -1,18 +1,19 @@
 #include "app/pose_sampling.h"
 
 #include <cmath>
+#include <utility>
 
 namespace ponyhop {
 
 PoseSampler::PoseSampler(Sim& sim) : rt_(sim) {
-  cur_ = capturePoses(sim.time(), sim.world().bodies());
+  capturePoses(sim.time(), sim.world().bodies(), cur_);
   prev_ = cur_;
 }
 
 bool PoseSampler::stepOnce() {
   if (!rt_.step()) return false;
-  prev_ = std::move(cur_);
-  cur_ = capturePoses(rt_.time(), rt_.world().bodies());
+  std::swap(prev_, cur_);  // the older frame's storage takes the new poses: nothing allocated per step
+  capturePoses(rt_.time(), rt_.world().bodies(), cur_);
   return true;
 }
 

@@ -15,12 +15,10 @@ Eigen::Vector4d asVec(const Eigen::Quaterniond& q) { return {q.w(), q.x(), q.y()
 
 }  // namespace
 
-PoseFrame capturePoses(double t, const std::vector<RigidBody>& bodies) {
-  PoseFrame f;
-  f.t = t;
-  f.bodies.reserve(bodies.size());
-  for (const RigidBody& b : bodies) f.bodies.push_back({b.x, b.q, b.v, b.w});
-  return f;
+void capturePoses(double t, const std::vector<RigidBody>& bodies, PoseFrame& out) {
+  out.t = t;
+  out.bodies.resize(bodies.size());
+  for (size_t i = 0; i < bodies.size(); ++i) out.bodies[i] = {bodies[i].x, bodies[i].q, bodies[i].v, bodies[i].w};
 }
 
 BodyPose interpolatePose(const BodyPose& a, const BodyPose& b, double h, double s) {

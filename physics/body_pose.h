@@ -28,7 +28,8 @@ struct PoseFrame {
   std::vector<BodyPose> bodies;
 };
 
-PoseFrame capturePoses(double t, const std::vector<RigidBody>& bodies);
+// Into `out`, reusing its storage (a frame captured at every step allocates nothing once sized).
+void capturePoses(double t, const std::vector<RigidBody>& bodies, PoseFrame& out);
 
 // The state at time t in [a.t, b.t] (clamped) between two frames of the same bodies.
 PoseFrame interpolatePoses(const PoseFrame& a, const PoseFrame& b, double t);

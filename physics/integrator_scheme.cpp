@@ -70,7 +70,7 @@ class World::Rk4Scheme final : public World::ForceStagesScheme {
     }
     rk4Step(
         w.state_.time, h, w.acc_scratch_,
-        [&w](double t, const State& s, Accelerations& out) { w.accelerationsAt(t, s, out); }, state);
+        [&w](double t, const State& s, Accelerations& out) { w.accelerationsAt(t, s, out); }, state, w.rk4_work_);
     if (!w.ok()) return;  // a stage evaluation stopped the world
     w.state_.time += h;
     w.stage_time_ = w.state_.time;
@@ -127,6 +127,7 @@ class World::RattleScheme final : public World::IntegratorScheme {
     options.work = &w.rattle_work_;
     // mu: the guess in, this step's out.
     const ConstrainedStepResult r = rattleStep(w.state_.time, h, w.state_.warm_start.mu, cs, options);
+    w.rattle_iterations_ += r.iterations;
     if (!w.finishConstrainedStep(r, h)) return;
     // The next step's guess. Sized once per row layout: a steady step allocates nothing here.
     WarmStart& warm = w.state_.warm_start;

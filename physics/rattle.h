@@ -68,7 +68,7 @@ struct RattleWork {
   ConstraintSystem jn;  // J(q_n): the first kick's constraint directions
   std::vector<Vector6d> fc, v1, f0, dv;
   Eigen::VectorXd rhs, dmu;
-  VelocityProjectionWork projection;
+  ProjectionWork projection;
   std::vector<Eigen::Matrix3d> inertia, inverse_inertia;  // world frame, at the step's end
   // What the solver's factorization is (generation(), rows, positions) after the last step's
   // velocity solve: A at its end positions, the next step's chord matrix A(q_n) when nothing

@@ -17,10 +17,12 @@ void advance(const State& y0, double c, const State& rate, const Accelerations& 
 
 }  // namespace
 
-void rk4Step(double t, double h, const Accelerations& k1, const AccelerationFunction& f, State& state) {
-  const State y1 = state;  // stage 1 is the initial state; its rates are (v, q', k1)
-  State y2(state.size()), y3(state.size()), y4(state.size());
-  Accelerations k2(state.size()), k3(state.size()), k4(state.size());
+void rk4Step(double t, double h, const Accelerations& k1, const AccelerationFunction& f, State& state, Rk4Work& work) {
+  State &y1 = work.y1, &y2 = work.y2, &y3 = work.y3, &y4 = work.y4;
+  Accelerations &k2 = work.k2, &k3 = work.k3, &k4 = work.k4;
+  y1 = state;  // stage 1 is the initial state; its rates are (v, q', k1)
+  for (State* y : {&y2, &y3, &y4}) y->resize(state.size());
+  for (Accelerations* k : {&k2, &k3, &k4}) k->resize(state.size());
 
   advance(state, 0.5 * h, y1, k1, y2);
   f(t + 0.5 * h, y2, k2);

@@ -9,7 +9,14 @@
 
 namespace ponyhop {
 
+// The stages' states and accelerations, kept by the caller between steps (a steady step
+// allocates nothing once they are sized).
+struct Rk4Work {
+  State y1, y2, y3, y4;
+  Accelerations k2, k3, k4;
+};
+
 // k1: accelerations at (t, state), already computed; f evaluates the other three stages.
-void rk4Step(double t, double h, const Accelerations& k1, const AccelerationFunction& f, State& state);
+void rk4Step(double t, double h, const Accelerations& k1, const AccelerationFunction& f, State& state, Rk4Work& work);
 
 }  // namespace ponyhop

@@ -50,6 +50,13 @@ std::vector<Vector6d> dampedStep(const std::vector<RigidBody>& bodies, const Con
 ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constraints& constraints,
                                   ConstraintSystem& system, ConstraintSolver& solver, double tolerance,
                                   int max_iterations, double max_step) {
+  ProjectionWork work;
+  return projectPositions(bodies, constraints, system, solver, work, tolerance, max_iterations, max_step);
+}
+
+ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constraints& constraints,
+                                  ConstraintSystem& system, ConstraintSolver& solver, ProjectionWork& work,
+                                  double tolerance, int max_iterations, double max_step) {
   ProjectionResult result;
   system.evaluate(bodies, constraints);
   result.error = system.maxError();
@@ -73,8 +80,10 @@ ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constrai
       result.status = Status::error("the constraint matrix J M^-1 J^T is singular");
       return result;
     }
-    const Eigen::VectorXd y = solver.solve(-system.C());
-    if (!moveBodies(bodies, solver.massWeightedTranspose(bodies, system, y))) {
+    work.rhs = -system.C();
+    solver.solveInto(work.rhs, work.y);
+    solver.massWeightedTransposeInto(bodies, system, work.y, work.dv);
+    if (!moveBodies(bodies, work.dv)) {
       result.status = Status::error("non-finite position correction");
       return result;
     }
@@ -90,12 +99,12 @@ ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constrai
 
 Status projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
                          ConstraintSolver& solver, Eigen::VectorXd* impulses) {
-  VelocityProjectionWork work;
+  ProjectionWork work;
   return projectVelocities(bodies, constraints, system, solver, work, impulses);
 }
 
 Status projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
-                         ConstraintSolver& solver, VelocityProjectionWork& work, Eigen::VectorXd* impulses) {
+                         ConstraintSolver& solver, ProjectionWork& work, Eigen::VectorXd* impulses) {
   system.evaluate(bodies, constraints);
   if (impulses) impulses->resize(0);
   if (system.rows() == 0) return {};
@@ -116,8 +125,7 @@ Status projectVelocities(std::vector<RigidBody>& bodies, const Constraints& cons
 }
 
 void massMetricCorrection(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
-                          const ConstraintSolver& solver, const std::vector<Vector6d>& vel,
-                          VelocityProjectionWork& work) {
+                          const ConstraintSolver& solver, const std::vector<Vector6d>& vel, ProjectionWork& work) {
   system.timesInto(vel, work.rhs);
   work.rhs = -work.rhs;
   solver.solveInto(work.rhs, work.y);

@@ -22,6 +22,14 @@
 
 namespace ponyhop {
 
+// The projections' work space (kept between calls by the caller: a steady step allocates
+// nothing). The position projection's Newton steps use rhs, y and dv as the velocity
+// projection does.
+struct ProjectionWork {
+  std::vector<Vector6d> vel, dv;
+  Eigen::VectorXd rhs, y;
+};
+
 struct [[nodiscard]] ProjectionResult {
   int iterations = 0;
   double error = 0.0;  // max joint error after the projection (m for spherical joints)
@@ -37,24 +45,24 @@ struct [[nodiscard]] ProjectionResult {
 ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constraints& constraints,
                                   ConstraintSystem& system, ConstraintSolver& solver, double tolerance = 1e-12,
                                   int max_iterations = 10, double max_step = INFINITY);
+// The same with the caller's work space (the Newton steps allocate nothing once it is sized; the
+// assembly's damped steps still do).
+ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constraints& constraints,
+                                  ConstraintSystem& system, ConstraintSolver& solver, ProjectionWork& work,
+                                  double tolerance = 1e-12, int max_iterations = 10, double max_step = INFINITY);
 
 // Velocities of the dynamic bodies onto J v = -J_k v_k (kinematic bodies' velocities as they
 // are). Returns ok or what failed. `impulses` (optional): the multiplier y of every row (N s),
 // dv = M^-1 J^T y; a contact reads its own rows' impulse from it.
 Status projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
                          ConstraintSolver& solver, Eigen::VectorXd* impulses = nullptr);
-// The same with the caller's work space (kept between calls: a steady step allocates nothing).
-struct VelocityProjectionWork {
-  std::vector<Vector6d> vel, dv;
-  Eigen::VectorXd rhs, y;
-};
+// The same with the caller's work space.
 Status projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
-                         ConstraintSolver& solver, VelocityProjectionWork& work, Eigen::VectorXd* impulses = nullptr);
+                         ConstraintSolver& solver, ProjectionWork& work, Eigen::VectorXd* impulses = nullptr);
 // The mass-metric correction of per-body velocities `vel` with the solver already factored at
 // `system`: (J M^-1 J^T) y = -J vel into work.y, M^-1 J^T y into work.dv (the kinematic bodies'
 // zero). projectVelocities applies it to the bodies; RATTLE's corrector to a velocity change.
 void massMetricCorrection(const std::vector<RigidBody>& bodies, const ConstraintSystem& system,
-                          const ConstraintSolver& solver, const std::vector<Vector6d>& vel,
-                          VelocityProjectionWork& work);
+                          const ConstraintSolver& solver, const std::vector<Vector6d>& vel, ProjectionWork& work);
 
 }  // namespace ponyhop

@@ -19,6 +19,7 @@
 #include "physics/physics_params.h"
 #include "physics/rattle.h"
 #include "physics/rigid_body.h"
+#include "physics/rk4.h"
 #include "physics/stability_monitor.h"
 #include "physics/stabilization.h"
 #include "physics/stage_times.h"
@@ -64,6 +65,9 @@ class World {
   double errorEstimateSum() const { return error_sum_; }
   // The order of the method in use (1 symplectic/implicit Euler, 2 RATTLE, 4 RK4).
   int methodOrder() const;
+  // RATTLE: the position solve's iterations summed over every step taken since construction
+  // (steps later undone by a split included): what its warm start saves.
+  long rattleIterations() const { return rattle_iterations_; }
   // RATTLE's corrector for velocity-dependent forces (physics/rattle.h; on by default, and only
   // run when a force element or controller dependsOnVelocity()). Off: the classical explicit
   // second kick, first order with damping: for tests that measure what the corrector buys.
@@ -211,7 +215,6 @@ class World {
   void accelerationsAt(double t, const State& state, Accelerations& out);
   State gatherState() const;
   void scatterState(const State& state);
-  Accelerations gatherAccelerations() const;
   // The same into existing storage (a steady step allocates nothing).
   void gatherStateInto(State& out) const;
   void gatherAccelerationsInto(Accelerations& out) const;
@@ -246,6 +249,8 @@ class World {
   std::vector<Snapshot> substep_starts_;  // substep()'s snapshot per split depth
   SavedState dt_start_;                   // step(): the dt's start, for RATTLE's redo at the end's count
   RattleWork rattle_work_;                // RATTLE: the step's work space (sized once)
+  ProjectionWork projection_work_;        // stabilize(): the projections' work space (sized once)
+  Rk4Work rk4_work_;                      // RK4 (multiplier solvers): the stages (sized once)
   // The bodies moved since the last acceleration-level solve (a RATTLE step, a restore):
   // lambda() runs it on demand.
   bool forces_stale_ = false;
@@ -258,6 +263,7 @@ class World {
   int last_substeps_ = 0;
   double last_error_ = 0.0;
   int tolerance_misses_ = 0;       // substeps accepted above their budget at the deepest split
+  long rattle_iterations_ = 0;     // rattleIterations()
   double last_error_ratio_ = 0.0;  // step(): the largest estimate / budget of the dt (tolerance mode)
   double error_sum_ = 0.0;         // errorEstimateSum()
 };

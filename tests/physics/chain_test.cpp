@@ -110,6 +110,19 @@ TEST(PhysicsChain, ProjectionKeepsJointsClosed) {
   }
 }
 
+// World::maxJointError() (joint by joint, nothing allocated: `sim --csv` reads it for its rows) is
+// exactly the stacked system's max |C|, on a chain drifting without stabilization.
+TEST(PhysicsChain, MaxJointErrorIsTheStackedSystemsBitForBit) {
+  ChainWorld cw = chainWorld(Integrator::SymplecticEuler, Stabilization::None, 1.0 / 240.0);
+  for (int i = 0; i < 24; ++i) {
+    cw.world.step();
+    ConstraintSystem system;
+    system.evaluate(cw.world.bodies(), cw.world.joints());
+    ASSERT_GT(system.maxError(), 0.0);
+    EXPECT_EQ(cw.world.maxJointError(), system.maxError()) << "step " << i;
+  }
+}
+
 // F_c = J^T lambda does no work when J v = 0 (fixed anchor): sum F_c.v + t_c.w ~ 0 relative to
 // sum |F_c||v| + |t_c||w|. With a shaking anchor the joint to it does work (a positive check
 // that the measurement can see power).
