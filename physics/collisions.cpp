@@ -329,8 +329,9 @@ bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Const
   const bool has_joints = joint_system_.rows() > 0;
   if (has_joints && !solver_->factor(bodies, joint_system_)) return false;
   // The columns' storage and the joint solves' work space are kept from stage to stage: a
-  // steady stage allocates nothing here.
-  w_.resize(m);
+  // steady stage allocates nothing here. w_ never shrinks (the push-out keeps its first rows):
+  // a column beyond the rows in use keeps its storage for the next stage's.
+  if (w_.size() < static_cast<size_t>(m)) w_.resize(m);
   for (int k = 0; k < m; ++k) {
     const JRow& j = jrows_[k];
     std::vector<Vector6d>& w = w_[k];
@@ -344,18 +345,20 @@ bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Const
       for (size_t i = 0; i < n; ++i) w[i] -= joint_corr_[i];
     }
   }
+  // D_ik = J_i W_k, symmetrized against the round-off (D is symmetric positive semidefinite):
+  // both entries of a pair get the mean of the two products, in place.
+  const auto entry = [this](int i, int k) {
+    const JRow& j = jrows_[i];
+    double v = 0.0;
+    if (j.a != kWorldBody) v += j.ja.dot(w_[k][j.a]);
+    if (j.b != kWorldBody) v += j.jb.dot(w_[k][j.b]);
+    return v;
+  };
   delassus_.resize(m, m);
   for (int i = 0; i < m; ++i) {
-    const JRow& j = jrows_[i];
-    for (int k = 0; k < m; ++k) {
-      double v = 0.0;
-      if (j.a != kWorldBody) v += j.ja.dot(w_[k][j.a]);
-      if (j.b != kWorldBody) v += j.jb.dot(w_[k][j.b]);
-      delassus_(i, k) = v;
-    }
+    delassus_(i, i) = entry(i, i);
+    for (int k = i + 1; k < m; ++k) delassus_(i, k) = delassus_(k, i) = 0.5 * (entry(i, k) + entry(k, i));
   }
-  // Symmetrize the round-off (D is symmetric positive semidefinite).
-  delassus_ = 0.5 * (delassus_ + delassus_.transpose()).eval();
   return true;
 }
 
@@ -458,15 +461,15 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
     const int mo = static_cast<int>(rows.size());
     if (pass == 0) {
       // The same poses and rows as the impulses: their W_c columns and D, normal rows only (each
-      // block's first), without factoring the joints again.
-      Eigen::MatrixXd normal_d(mo, mo);
-      std::vector<std::vector<Vector6d>> normal_w(mo);
+      // block's first), without factoring the joints again. Block i's first row is at i or after
+      // it, so the columns are gathered in place by swaps (no column is reallocated) and D's
+      // entries into a kept matrix.
+      normal_d_.resize(mo, mo);
       for (int i = 0; i < mo; ++i) {
-        for (int k = 0; k < mo; ++k) normal_d(i, k) = delassus_(blocks[i].first, blocks[k].first);
-        normal_w[i] = std::move(w_[blocks[i].first]);
+        for (int k = 0; k < mo; ++k) normal_d_(i, k) = delassus_(blocks[i].first, blocks[k].first);
+        std::swap(w_[i], w_[blocks[i].first]);
       }
-      delassus_ = std::move(normal_d);
-      w_ = std::move(normal_w);
+      delassus_.swap(normal_d_);
     } else {
       buildJacobians(bodies, rows, true);
       if (!buildDelassus(bodies, joints)) return Status::error("the joints' constraint matrix is singular");
@@ -484,7 +487,8 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
     stats_.iterations += pushed.sweeps;
     stats_.sweeps += pushed.sweeps;
     stats_.capped += pushed.capped ? 1 : 0;
-    std::vector<Vector6d> dq(bodies.size(), Vector6d::Zero());
+    std::vector<Vector6d>& dq = joint_corr_;  // free between the Delassus builds
+    dq.assign(bodies.size(), Vector6d::Zero());
     for (int k = 0; k < mo; ++k)
       for (size_t i = 0; i < bodies.size(); ++i) dq[i] += d(k) * w_[k][i];
     for (size_t i = 0; i < bodies.size(); ++i) {

@@ -250,8 +250,10 @@ double gridSearch(const Core& c, const PlacedShape& b, double reach, long* queri
   }
   *none = !(fs[best] < reach) && !maybe;
   if (*none) return static_cast<double>(best) / n;
-  return minimizeConvex(f, std::max(0, best - 1) / static_cast<double>(n),
-                        std::min(n, best + 1) / static_cast<double>(n), g.cell() / (30.0 * len));
+  // The bracket's ends are samples when the bisection reached them (a NaN is not, and is asked).
+  const int lo = std::max(0, best - 1), hi = std::min(n, best + 1);
+  return minimizeConvex(f, lo / static_cast<double>(n), hi / static_cast<double>(n), g.cell() / (30.0 * len), fs[lo],
+                        fs[hi]);
 }
 
 // The smallest D_b(p(s)) - r(s) over s for a rounded a; its parameter in *at. A grid b whose

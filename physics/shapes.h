@@ -32,6 +32,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cmath>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -114,8 +116,11 @@ double gridGapBound(const SignedDistanceGrid& g, const Eigen::Vector3d& a, const
 Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& x, const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
                                        const Eigen::Vector3d& p2);
 // Minimum of a convex function on [lo, hi] by golden-section search; returns the argument.
+// f(lo) and f(hi) when the caller has them already (NaN: evaluated here).
 template <class F>
-double minimizeConvex(F f, double lo, double hi, double tolerance = 1e-12) {
+double minimizeConvex(F f, double lo, double hi, double tolerance = 1e-12,
+                      double flo = std::numeric_limits<double>::quiet_NaN(),
+                      double fhi = std::numeric_limits<double>::quiet_NaN()) {
   constexpr double kInvPhi = 0.6180339887498949;
   double a = lo, b = hi;
   double c = b - kInvPhi * (b - a), d = a + kInvPhi * (b - a);
@@ -137,7 +142,9 @@ double minimizeConvex(F f, double lo, double hi, double tolerance = 1e-12) {
   }
   const double m = 0.5 * (a + b);
   // The ends are candidates too (a monotone f has its minimum there).
-  const double fm = f(m), flo = f(lo), fhi = f(hi);
+  const double fm = f(m);
+  if (std::isnan(flo)) flo = f(lo);
+  if (std::isnan(fhi)) fhi = f(hi);
   if (flo <= fm && flo <= fhi) return lo;
   if (fhi <= fm) return hi;
   return m;
