@@ -104,8 +104,8 @@ static void cullFor(const GpuMesh& g, const Eigen::Matrix4f& model) {
 // A shadow level's largest error, in texels of the frame's shadow map (GpuMesh::shadow_levels).
 // The map's depth is drawn with a slope-scaled offset and read 1.5 texels out along the normal
 // (FramePlan::normal_offset), so a caster within a texel of the surface shadows no lit pixel of
-// its own; measured on the head scenes at 1280x720: 0-2 pixels over the comparator's threshold at
-// one texel, 3-27 at two (docs/bench/render.md).
+// its own; measured on the head scenes at 1280x720: 0-10 pixels over the comparator's threshold
+// (docs/RENDERING.md, Shadows).
 constexpr double kShadowLevelTexels = 1.0;
 
 std::pair<size_t, GLsizei> shadowRange(const GpuMesh& g, const Eigen::Matrix4f& model, double texel_world) {
