@@ -1,6 +1,8 @@
 // Meshes into GPU buffers (Renderer::upload, release): a vertex array per mesh, with the file's
 // materials (vertex colours, texture coordinates, textures) when it has colours.
 
+#include <meshoptimizer.h>
+
 #include "engine/renderer_impl.h"
 
 namespace ponyhop {
@@ -95,7 +97,46 @@ std::vector<uint32_t> sortByHair(const MeshData& m, GpuMesh& g) {
   return sorted;
 }
 
+// Fewest triangles for which a mesh gets shadow levels: below it the shadow pass's cost per
+// triangle is not worth the load time.
+constexpr size_t kShadowLevelMinTriangles = 8192;
+// The levels' error bounds, as fractions of the mesh's extent (meshopt_simplifyScale), finest
+// first: doubling, so that a frame's texel finds one within a factor of two of what it allows.
+constexpr float kShadowLevelErrors[] = {1.0f / 2048, 1.0f / 1024, 1.0f / 512, 1.0f / 256, 1.0f / 128};
+
 }  // namespace
+
+// The shadow pass draws a large mesh once more than the main pass (44,544 triangles for the
+// default head: most of a head scene's shadow pass on llvmpipe, which sets up every triangle on
+// the calling thread). A depth map drawn from a surface within a fraction of a texel of the real
+// one is the same map, and the main pass keeps every triangle, so the sculpted detail that
+// shading shows stays (docs/RENDERING.md, Shadows). Each level is meshoptimizer's edge collapse
+// (quadric error, positions only) of the level before it, to what is left of its bound: its
+// distance to the mesh is at most the previous level's plus its own to that level (stored,
+// reached rather than asked), and a cascade costs a fraction of simplifying the whole mesh each
+// time. The indices, into the same vertices, are appended to `indices`. A level that saves
+// under a quarter of the previous one's triangles is not kept.
+std::vector<GpuMesh::ShadowLevel> shadowLevels(const MeshData& m, std::vector<uint32_t>& indices) {
+  std::vector<GpuMesh::ShadowLevel> levels;
+  if (m.triangleCount() < kShadowLevelMinTriangles || m.positions.empty()) return levels;
+  const float* xyz = m.positions.front().data();
+  const size_t stride = sizeof(Eigen::Vector3f);
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
+  const float scale = meshopt_simplifyScale(xyz, m.positions.size(), stride);
+  std::vector<uint32_t> from = m.indices, out(m.indices.size());
+  float error = 0.0f;  // of `from`, relative to scale
+  for (float bound : kShadowLevelErrors) {
+    float reached = 0.0f;
+    const size_t n = meshopt_simplify(out.data(), from.data(), from.size(), xyz, m.positions.size(), stride, 0,
+                                      bound - error, 0, &reached);
+    if (n == 0 || 4 * n > 3 * from.size()) continue;
+    error += reached;
+    levels.push_back({error * scale, uint32_t(indices.size()), uint32_t(n)});
+    indices.insert(indices.end(), out.begin(), out.begin() + long(n));
+    from.assign(out.begin(), out.begin() + long(n));
+  }
+  return levels;
+}
 
 MeshHandle Renderer::upload(const MeshData& m) {
   Impl& I = *impl_;
@@ -105,7 +146,8 @@ MeshHandle Renderer::upload(const MeshData& m) {
     uploadWithMaterials(m, g);
   else
     uploadPlain(m, g);
-  const std::vector<uint32_t> indices = g.hair && m.colors.empty() ? sortByHair(m, g) : m.indices;
+  std::vector<uint32_t> indices = g.hair && m.colors.empty() ? sortByHair(m, g) : m.indices;
+  g.shadow_levels = shadowLevels(m, indices);
   glGenBuffers(1, &g.ebo);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
   glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(indices.size() * sizeof(uint32_t)), indices.data(), GL_STATIC_DRAW);

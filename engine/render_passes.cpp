@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <span>
+#include <utility>
 
 #include "engine/renderer_impl.h"
 
@@ -100,6 +101,23 @@ static void cullFor(const GpuMesh& g, const Eigen::Matrix4f& model) {
   glCullFace((g.closed > 0) != mirrored ? GL_BACK : GL_FRONT);
 }
 
+// A shadow level's largest error, in texels of the frame's shadow map (GpuMesh::shadow_levels).
+// The map's depth is drawn with a slope-scaled offset and read 1.5 texels out along the normal
+// (FramePlan::normal_offset), so a caster within a texel of the surface shadows no lit pixel of
+// its own; measured on the head scenes at 1280x720: 0-10 pixels over the comparator's threshold
+// (docs/RENDERING.md, Shadows).
+constexpr double kShadowLevelTexels = 1.0;
+
+std::pair<size_t, GLsizei> shadowRange(const GpuMesh& g, const Eigen::Matrix4f& model, double texel_world) {
+  std::pair<size_t, GLsizei> range{0, g.index_count};
+  const double scale = model.topLeftCorner<3, 3>().colwise().norm().maxCoeff();
+  if (!(scale > 0.0)) return range;
+  const double allowed = kShadowLevelTexels * texel_world / scale;
+  for (const GpuMesh::ShadowLevel& l : g.shadow_levels)
+    if (l.error <= allowed) range = {l.first, GLsizei(l.count)};
+  return range;
+}
+
 // Meshes with their file's materials (main pass): one draw per part, its texture on unit 2. Those
 // with a hair region by their own programs, with their ScalpHair: `hair_only` draws the triangles
 // that are all hair (GpuMesh::hair_only), else the parts.
@@ -159,7 +177,12 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
       glUniform2f(l_sr, d.material.shininess, d.material.rim);
       glBindVertexArray(g.vao);
       cullFor(g, d.model);
-      glDrawElements(GL_TRIANGLES, g.materials && !depth_only ? g.skin_count : g.index_count, GL_UNSIGNED_INT, nullptr);
+      if (depth_only) {
+        const auto [first, count] = shadowRange(g, d.model, frustum.texel_world);
+        glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT, reinterpret_cast<const void*>(first * sizeof(uint32_t)));
+      } else {
+        glDrawElements(GL_TRIANGLES, g.materials ? g.skin_count : g.index_count, GL_UNSIGNED_INT, nullptr);
+      }
     }
     glDisable(GL_CULL_FACE);
     glCullFace(GL_BACK);

@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "engine/color.h"
@@ -43,7 +44,24 @@ struct GpuMesh {
   int closed = 0;
   std::vector<MeshPart> parts;
   std::vector<GLuint> textures;
+  // Simplified copies of a large mesh for the shadow pass alone (shadowLevels, mesh_upload.cpp),
+  // finest first, their indices after the mesh's own in the EBO: each within `error` (the mesh's
+  // units) of its surface. The main pass always draws the whole mesh.
+  struct ShadowLevel {
+    float error = 0.0f;
+    uint32_t first = 0, count = 0;
+  };
+  std::vector<ShadowLevel> shadow_levels;
 };
+
+// Simplified copies of a large mesh for the shadow pass (mesh_upload.cpp): each within its
+// error of the mesh, finest first; their indices, into the mesh's vertices, appended to `indices`.
+// None for a mesh under 8192 triangles.
+std::vector<GpuMesh::ShadowLevel> shadowLevels(const MeshData& m, std::vector<uint32_t>& indices);
+// The index range (first index, count) the shadow pass draws mesh `g` with under `model`, in a
+// map of `texel_world` m texels (render_passes.cpp): the coarsest level within a texel, else the
+// whole mesh.
+std::pair<size_t, GLsizei> shadowRange(const GpuMesh& g, const Eigen::Matrix4f& model, double texel_world);
 
 struct MeshDraw {
   int mesh;

@@ -12,6 +12,7 @@ PACKAGES=(
   libosmesa6-dev                       # headless OpenGL (Mesa llvmpipe)
   python3-glad                         # generates the GL loader at build time (offline, --reproducible)
   libassimp-dev                        # mesh and animation import
+  libmeshoptimizer-dev                 # simplified shadow casters of large meshes (engine/mesh_upload.cpp)
   libimgui-dev libstb-dev              # tuning panel; PNG reading/writing (stb_image, stb_image_write)
   zlib1g-dev                           # fast deflate for PNG frames
   libglfw3-dev                         # the window of `ponyhop run`
