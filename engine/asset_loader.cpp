@@ -1,6 +1,8 @@
 #include "engine/asset_loader.h"
 
 #include <cstdio>
+#include <mutex>
+#include <set>
 
 #include "engine/animation_import.h"
 #include "engine/mesh.h"
@@ -14,8 +16,14 @@ HeadAsset AssimpAssets::loadHead(const HeadParams& head, const std::string& mesh
   HeadAsset a;
   std::string err;
   if (!loadMesh(mesh_path, a.mesh, &err)) throw InputError(scene_path + ": head.mesh: " + err);
-  // The file's own colours (textures, vertex colours, several materials) or head.color.
-  for (const std::string& w : a.mesh.warnings) std::fprintf(stderr, "ponyhop: warning: head.mesh: %s\n", w.c_str());
+  // The file's own colours (textures, vertex colours, several materials) or head.color. A
+  // warning is said once a process: the app reloads the head with every edit of the scene.
+  static std::mutex said_mutex;
+  static std::set<std::string> said;
+  for (const std::string& w : a.mesh.warnings) {
+    const std::lock_guard<std::mutex> lock(said_mutex);
+    if (said.insert(w).second) std::fprintf(stderr, "ponyhop: warning: head.mesh: %s\n", w.c_str());
+  }
   if (head.materials == HeadMaterials::Color) a.mesh.dropMaterials();
   if (!head.scalp_hair) a.mesh.hair.clear();
   // Placement from the head itself (sim/head_fit.h).

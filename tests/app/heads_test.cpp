@@ -185,5 +185,40 @@ TEST(HeadsTexture, TexturedCubeShowsItsTextureAndAMissingOneIsNamed) {
   EXPECT_NE(missing.out.find("CesiumLogoFlat.png"), std::string::npos) << missing.out;
 }
 
+// A model that names no skin (Quake II MD2: assimp puts its placeholder "$texture_dummy.bmp" in
+// the material) takes the image beside it under its name, and says nothing when there is none; a
+// texture a file names but that is not there is named once, plainly, however often the head loads.
+TEST(HeadsTexture, AnUnnamedSkinIsFoundBesideTheModelAndAMissingNamedOneIsSaidOnce) {
+  const std::string sydney = kModels + "MD2/sydney.md2";
+  const std::string dwarf = kModels + "COB/dwarf.cob";
+  ASSERT_TRUE(fs::exists(sydney) && fs::exists(dwarf)) << "scripts/setup.sh installs assimp-testmodels";
+  MeshData m;
+  std::string err;
+  ASSERT_TRUE(loadMesh(sydney, m, &err)) << err;
+  EXPECT_EQ(m.textures.size(), 1u) << "sydney.bmp, beside sydney.md2";
+  EXPECT_TRUE(m.warnings.empty()) << m.warnings.front();
+
+  const std::string lone = scratch("heads_lone_md2");
+  fs::copy_file(sydney, lone + "/sydney.md2", fs::copy_options::overwrite_existing);
+  MeshData bare;
+  ASSERT_TRUE(loadMesh(lone + "/sydney.md2", bare, &err)) << err;
+  EXPECT_TRUE(bare.textures.empty());
+  EXPECT_TRUE(bare.warnings.empty()) << "no texture named, none beside: nothing to say, not " << bare.warnings.front();
+
+  HeadParams head;
+  head.anchor_space = AnchorSpace::Bounds;
+  ::testing::internal::CaptureStderr();
+  assimpAssets().loadHead(head, dwarf, "dwarf.json");
+  assimpAssets().loadHead(head, dwarf, "dwarf.json");
+  const std::string said = ::testing::internal::GetCapturedStderr();
+  std::printf("%s", said.c_str());
+  for (const char* name : {"axe.jpg", "dwarf.jpg"}) {
+    const std::string line = std::string("the texture ") + name + " that dwarf.cob names is not there";
+    const size_t at = said.find(line);
+    EXPECT_NE(at, std::string::npos) << said;
+    EXPECT_EQ(said.find(line, at + 1), std::string::npos) << "said twice:\n" << said;
+  }
+}
+
 }  // namespace
 }  // namespace ponyhop
