@@ -220,5 +220,56 @@ TEST(HeadsTexture, AnUnnamedSkinIsFoundBesideTheModelAndAMissingNamedOneIsSaidOn
   }
 }
 
+// Whole characters the automatic fit gets wrong say so, and tell how to pick the head by hand; the
+// box given picks it (fit only: no simulation).
+struct CharacterCase {
+  const char* name;
+  const char* path;  // under kModels
+};
+void PrintTo(const CharacterCase& c, std::ostream* os) { *os << c.name; }
+const CharacterCase kUnsure[] = {
+    {"faerie", "MD2/faerie.md2"},            // Quake II: wings above and beside the head
+    {"bcn_epileptic", "X/BCN_Epileptic.X"},  // modelled head down along -z: the feet come out on top
+};
+class UnsureCharacters : public ::testing::TestWithParam<CharacterCase> {};
+
+TEST_P(UnsureCharacters, SaySoAndTellHowToPickTheHeadByHand) {
+  const std::string mesh = kModels + GetParam().path;
+  ASSERT_TRUE(fs::exists(mesh)) << mesh << " is missing: scripts/setup.sh installs assimp-testmodels";
+  MeshData m;
+  std::string err;
+  ASSERT_TRUE(loadMesh(mesh, m, &err)) << err;
+  HeadParams head;
+  const HeadFit fit = fitHead(head, mesh, m);
+  EXPECT_TRUE(fit.whole_body);
+  ASSERT_FALSE(fit.unsure.empty());
+  const std::string said = unsureFitMessage(fit, m);
+  std::printf("%s\n", said.c_str());
+  EXPECT_NE(said.find("--set head.box_min="), std::string::npos) << said;
+
+  // By hand: the head is the vertices inside the box, and the fit is sure.
+  head.box_min = m.bbox.min().cast<double>();
+  head.box_max = m.bbox.center().cast<double>();
+  const HeadFit hand = fitHead(head, mesh, m);
+  EXPECT_TRUE(hand.by_hand);
+  EXPECT_TRUE(hand.unsure.empty());
+  Eigen::AlignedBox3f inside;
+  for (const auto& p : m.positions)
+    if ((p.array() >= m.bbox.min().array()).all() && (p.array() <= m.bbox.center().array()).all()) inside.extend(p);
+  EXPECT_TRUE(hand.head_bounds.isApprox(inside));
+}
+
+INSTANTIATE_TEST_SUITE_P(ThirdParty, UnsureCharacters, ::testing::ValuesIn(kUnsure),
+                         [](const ::testing::TestParamInfo<CharacterCase>& i) { return std::string(i.param.name); });
+
+// The heads that land well say nothing.
+TEST_P(Heads, AGoodFitSaysNothing) {
+  const std::string mesh = kModels + GetParam().path;
+  MeshData m;
+  std::string err;
+  ASSERT_TRUE(loadMesh(mesh, m, &err)) << err;
+  EXPECT_EQ(fitHead(HeadParams{}, mesh, m).unsure, "");
+}
+
 }  // namespace
 }  // namespace ponyhop
