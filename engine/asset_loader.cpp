@@ -1,6 +1,8 @@
 #include "engine/asset_loader.h"
 
 #include <cstdio>
+#include <mutex>
+#include <set>
 
 #include "engine/animation_import.h"
 #include "engine/mesh.h"
@@ -14,12 +16,21 @@ HeadAsset AssimpAssets::loadHead(const HeadParams& head, const std::string& mesh
   HeadAsset a;
   std::string err;
   if (!loadMesh(mesh_path, a.mesh, &err)) throw InputError(scene_path + ": head.mesh: " + err);
-  // The file's own colours (textures, vertex colours, several materials) or head.color.
-  for (const std::string& w : a.mesh.warnings) std::fprintf(stderr, "ponyhop: warning: head.mesh: %s\n", w.c_str());
-  if (head.materials == HeadMaterials::Color) a.mesh.dropMaterials();
-  if (!head.scalp_hair) a.mesh.hair.clear();
   // Placement from the head itself (sim/head_fit.h).
   const HeadFit fit = fitHead(head, mesh_path, a.mesh);
+  // The file's textures that cannot be read, and a head that is a guess. Each is said once a
+  // process: the app reloads the head with every edit of the scene.
+  std::vector<std::string> warnings = a.mesh.warnings;
+  if (!fit.unsure.empty()) warnings.push_back(mesh_path + ": " + unsureFitMessage(fit, a.mesh));
+  static std::mutex said_mutex;
+  static std::set<std::string> said;
+  for (const std::string& w : warnings) {
+    const std::lock_guard<std::mutex> lock(said_mutex);
+    if (said.insert(w).second) std::fprintf(stderr, "ponyhop: warning: head.mesh: %s\n", w.c_str());
+  }
+  // The file's own colours (textures, vertex colours, several materials) or head.color.
+  if (head.materials == HeadMaterials::Color) a.mesh.dropMaterials();
+  if (!head.scalp_hair) a.mesh.hair.clear();
   a.mesh_to_body = headMeshToBody(head, fit);
   a.anchor = a.mesh_to_body * headAnchorInMesh(head, fit, a.mesh);
   a.centre = a.mesh_to_body * fit.head_bounds.center().cast<double>();

@@ -31,16 +31,44 @@ static std::string lowerExtension(const std::string& path) {
 
 namespace {
 
+// assimp's MD2 importer names this placeholder when the file names no skin (its source says
+// "TODO: guess the name of the texture file from the model file name"): not a file anyone named.
+constexpr const char* kAssimpDummyTexture = "$texture_dummy.bmp";
+
+// The skin of a model that names none: as Quake II keeps them, an image beside the model under
+// its name (sydney.md2, sydney.bmp), else the first (by name) that extends its name
+// (faerie.md2, faerie2.bmp). Empty when there is none.
+std::string skinBesideModel(const std::string& mesh_path) {
+  namespace fs = std::filesystem;
+  const fs::path mesh(mesh_path);
+  const std::string stem = mesh.stem().string();
+  std::error_code ec;
+  std::string exact, extended;
+  for (const fs::directory_entry& e :
+       fs::directory_iterator(mesh.parent_path().empty() ? "." : mesh.parent_path(), ec)) {
+    const std::string ext = lowerExtension(e.path().string());
+    if (ext != "bmp" && ext != "png" && ext != "jpg" && ext != "jpeg" && ext != "tga") continue;
+    const std::string name = e.path().stem().string();
+    if (name == stem) exact = e.path().string();
+    if (name.size() > stem.size() && name.compare(0, stem.size(), stem) == 0 &&
+        (extended.empty() || e.path().string() < extended)) {
+      extended = e.path().string();
+    }
+  }
+  return exact.empty() ? extended : exact;
+}
+
 // The base-colour texture of a material: an image embedded in the file ("*N" or by name), or a
-// file beside the mesh. Empty image + a warning when it cannot be read.
+// file beside the mesh. Empty image + a warning (one plain sentence) when it cannot be read.
 MeshTexture readTexture(const aiScene* scene, const aiString& ref, const std::string& mesh_path, std::string* warning) {
   MeshTexture img;
   const aiTexture* emb = scene->GetEmbeddedTexture(ref.C_Str());
   int w = 0, h = 0, n = 0;
   unsigned char* data = nullptr;
+  const std::string mesh_name = std::filesystem::path(mesh_path).filename().string();
   std::string what = ref.C_Str();
   if (emb) {
-    what = mesh_path + " (embedded " + what + ")";
+    what = "the texture " + what + " embedded in " + mesh_name;
     if (emb->mHeight == 0) {  // compressed (png, jpg...): mWidth bytes
       data = stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(emb->pcData), int(emb->mWidth), &w, &h, &n, 4);
     } else {  // raw texels, BGRA
@@ -53,16 +81,27 @@ MeshTexture readTexture(const aiScene* scene, const aiString& ref, const std::st
       }
       return img;
     }
+  } else if (what == kAssimpDummyTexture) {
+    what = skinBesideModel(mesh_path);
+    if (what.empty()) return img;  // the file names no texture and none lies beside it: nothing to say
+    data = stbi_load(what.c_str(), &w, &h, &n, 4);
+    what = "the skin " + what;
   } else {
     std::string rel = what;
     for (char& c : rel)
       if (c == '\\') c = '/';
     const std::filesystem::path p = std::filesystem::path(mesh_path).parent_path() / rel;
-    what = p.string();
-    data = stbi_load(what.c_str(), &w, &h, &n, 4);
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(p, ec)) {
+      *warning = "the texture " + what + " that " + mesh_name + " names is not there (no file " + p.string() +
+                 "): drawn without it";
+      return img;
+    }
+    what = "the texture " + p.string();
+    data = stbi_load(p.string().c_str(), &w, &h, &n, 4);
   }
   if (!data) {
-    *warning = "texture " + what + " cannot be read (" + (stbi_failure_reason() ? stbi_failure_reason() : "?") +
+    *warning = what + " is not an image ponyhop reads (" + (stbi_failure_reason() ? stbi_failure_reason() : "?") +
                "): drawn without it";
     return img;
   }
@@ -144,7 +183,7 @@ bool importMesh(const std::string& path, MeshData& out, std::string* err) {
           if (img.width > 0) {
             id = int(m.textures.size());
             m.textures.push_back(std::move(img));
-          } else {
+          } else if (!warning.empty()) {
             m.warnings.push_back(warning);
           }
           it = texture_of.emplace(ref.C_Str(), id).first;

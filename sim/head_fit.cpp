@@ -4,10 +4,12 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <set>
 #include <vector>
 
@@ -23,15 +25,34 @@ Eigen::Matrix3d upFix(UpAxis a) {
   return Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
 }
 
+// Vertices of a body's own pieces that are no part of its outline: those whose every triangle has
+// an edge longer than a quarter of the mesh's height. Low-poly characters (Quake's MD2) model
+// wings, capes and flags as a few large flat polygons; taken as slices of the body they widen the
+// head, and above the neck they join its piece.
+std::vector<bool> outlineVertices(const MeshData& m, float height) {
+  std::vector<bool> kept(m.positions.size(), false);
+  const float limit2 = (0.25f * height) * (0.25f * height);
+  for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
+    const Eigen::Vector3f& a = m.positions[m.indices[t]];
+    const Eigen::Vector3f& b = m.positions[m.indices[t + 1]];
+    const Eigen::Vector3f& c = m.positions[m.indices[t + 2]];
+    if (std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()}) > limit2) continue;
+    kept[m.indices[t]] = kept[m.indices[t + 1]] = kept[m.indices[t + 2]] = true;
+  }
+  return kept;
+}
+
 // The head of a whole-body mesh: walking down from the top, the head widens, narrows at the neck
 // and widens again at the shoulders; the neck is the narrowest slice between. Returns the neck's
-// height, or the top seventh of the mesh when no neck shows between 8 % and 25 % from its top.
-float findNeck(const MeshData& m, int up, float top, float height) {
+// height, or nothing when no neck shows between 8 % and 25 % from its top.
+std::optional<float> findNeck(const MeshData& m, const std::vector<bool>& kept, int up, float top, float height) {
   constexpr int kBins = 64;
   const int a1 = (up + 1) % 3, a2 = (up + 2) % 3;
   std::vector<Eigen::Vector2f> lo(kBins, Eigen::Vector2f::Constant(std::numeric_limits<float>::max()));
   std::vector<Eigen::Vector2f> hi(kBins, Eigen::Vector2f::Constant(std::numeric_limits<float>::lowest()));
-  for (const auto& p : m.positions) {
+  for (size_t i = 0; i < m.positions.size(); ++i) {
+    if (!kept[i]) continue;
+    const Eigen::Vector3f& p = m.positions[i];
     const int b = std::clamp(int((top - p[up]) / height * kBins), 0, kBins - 1);
     const Eigen::Vector2f q(p[a1], p[a2]);
     lo[size_t(b)] = lo[size_t(b)].cwiseMin(q);
@@ -52,7 +73,7 @@ float findNeck(const MeshData& m, int up, float top, float height) {
       break;
     }
   }
-  if (narrowing < 0) return top - height / 7.0f;
+  if (narrowing < 0) return std::nullopt;
   int neck = narrowing;
   for (int b = narrowing; b < limit && w[size_t(b)] <= 1.15f * head_w; ++b) {
     if (w[size_t(b)] < w[size_t(neck)]) neck = b;
@@ -60,14 +81,14 @@ float findNeck(const MeshData& m, int up, float top, float height) {
   // A person is 6 to 8 heads tall: a "neck" in the top 8 % is hair, horns or a hat narrowing, and
   // one below the top quarter is the waist of a figure whose head and shoulders are one width.
   const float from_top = (float(neck) + 0.5f) / kBins;
-  if (from_top < 0.08f || from_top > 0.25f) return top - height / 7.0f;
+  if (from_top < 0.08f || from_top > 0.25f) return std::nullopt;
   return top - from_top * height;
 }
 
 // The head's bounds above the neck: the largest connected piece there (by vertex count) and the
 // pieces that touch its bounds (horns, eyes, a hat), not a hand raised beside it. Vertices are
 // joined by position, so texture seams do not split a piece.
-Eigen::AlignedBox3f headAboveNeck(const MeshData& m, int up, float neck) {
+Eigen::AlignedBox3f headAboveNeck(const MeshData& m, const std::vector<bool>& kept, int up, float neck) {
   std::vector<uint32_t> parent(m.positions.size());
   for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
   const auto find = [&parent](uint32_t i) {
@@ -89,7 +110,7 @@ Eigen::AlignedBox3f headAboveNeck(const MeshData& m, int up, float neck) {
   }
   std::map<uint32_t, std::pair<size_t, Eigen::AlignedBox3f>> pieces;
   for (uint32_t i = 0; i < m.positions.size(); ++i) {
-    if (m.positions[i][up] < neck) continue;
+    if (m.positions[i][up] < neck || !kept[i]) continue;
     auto& piece = pieces[find(i)];
     if (piece.first == 0) piece.second.setEmpty();
     ++piece.first;
@@ -151,16 +172,49 @@ HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData&
   f.head_bounds = mesh.bbox;
   if (mesh.bbox.isEmpty()) return f;
   const int up = upIndex(f.up);
-  const Eigen::Vector3f size = mesh.bbox.sizes();
-  const float height = size[up];
-  const float wide = std::max(size[(up + 1) % 3], size[(up + 2) % 3]);
-  const float deep = std::min(size[(up + 1) % 3], size[(up + 2) % 3]);
-  // A whole body: much taller than wide, or (arms spread in a T pose) much taller than deep. Keep
-  // the part above the neck.
-  if (height > 1.6f * wide || height > 2.2f * deep) {
-    f.whole_body = true;
-    f.neck = findNeck(mesh, up, mesh.bbox.max()[up], height);
-    f.head_bounds = headAboveNeck(mesh, up, f.neck);
+  if (head.box_min != head.box_max) {
+    // By hand: the vertices inside the box (the box itself when it holds none).
+    const Eigen::AlignedBox3f box(head.box_min.cast<float>(), head.box_max.cast<float>());
+    f.by_hand = f.whole_body = true;
+    f.head_bounds.setEmpty();
+    for (const auto& p : mesh.positions)
+      if (box.contains(p)) f.head_bounds.extend(p);
+    if (f.head_bounds.isEmpty()) f.head_bounds = box;
+    f.neck = f.head_bounds.min()[up];
+  } else {
+    // The body's outline, without its large flat polygons.
+    const std::vector<bool> kept = outlineVertices(mesh, mesh.bbox.sizes()[up]);
+    Eigen::AlignedBox3f outline;
+    for (size_t i = 0; i < kept.size(); ++i)
+      if (kept[i]) outline.extend(mesh.positions[i]);
+    if (outline.isEmpty()) outline = mesh.bbox;
+    const Eigen::Vector3f size = outline.sizes();
+    const float height = size[up];
+    const float wide = std::max(size[(up + 1) % 3], size[(up + 2) % 3]);
+    const float deep = std::min(size[(up + 1) % 3], size[(up + 2) % 3]);
+    // A whole body: much taller than wide, or (arms spread in a T pose) much taller than deep. Keep
+    // the part above the neck.
+    if (height > 1.6f * wide || height > 2.2f * deep) {
+      f.whole_body = true;
+      const float top = outline.max()[up];
+      const std::optional<float> neck = findNeck(mesh, kept, up, top, height);
+      f.neck = neck.value_or(top - height / 7.0f);
+      f.head_bounds = headAboveNeck(mesh, kept, up, f.neck);
+      // A head is about as tall as it is wide or deep (0.9 to 1.4 for people; hair, horns, ears
+      // and the top seventh of a body without a neck move it): far outside, the part taken is not
+      // a head (a wing or a shoulder beside it, or the feet of a body upside down). The top seventh
+      // alone is no reason: it holds the head of most figures whose neck is as wide as the head.
+      const Eigen::Vector3f h = f.head_bounds.sizes();
+      const float ratio = h[up] / std::max({h[(up + 1) % 3], h[(up + 2) % 3], 1e-12f});
+      if (ratio < 0.6f || ratio > 2.0f) {
+        char buf[256];
+        std::snprintf(
+            buf, sizeof(buf), "%s; the part taken is %.2g times as tall as it is wide or deep, a head about 1",
+            neck ? "a neck was found" : "no neck shows between 8 % and 25 % from the top, the top seventh was taken",
+            double(ratio));
+        f.unsure = buf;
+      }
+    }
   }
   const Eigen::Vector3d c = f.head_bounds.center().cast<double>();
   const Eigen::Vector3d half = 0.5 * f.head_bounds.sizes().cast<double>();
@@ -169,6 +223,20 @@ HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData&
   const bool use_centre = head.pivot == HeadPivot::Bounds || (head.pivot == HeadPivot::Auto && !origin_central);
   if (use_centre) f.pivot = c;
   return f;
+}
+
+std::string unsureFitMessage(const HeadFit& fit, const MeshData& mesh) {
+  const auto box = [](const Eigen::AlignedBox3f& b) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "[%.4g,%.4g,%.4g] to [%.4g,%.4g,%.4g]", double(b.min().x()), double(b.min().y()),
+                  double(b.min().z()), double(b.max().x()), double(b.max().y()), double(b.max().z()));
+    return std::string(buf);
+  };
+  return "this looks like a whole body and its head is a guess (" + fit.unsure +
+         "). If the picture is wrong, pick the head by hand with a box in the mesh's coordinates: --set "
+         "head.box_min=[x,y,z] --set head.box_max=[x,y,z] (the guess: " +
+         box(fit.head_bounds) + "; the whole mesh: " + box(mesh.bbox) + ", " + (fit.up == UpAxis::Z ? "z" : "y") +
+         " up)";
 }
 
 Eigen::Affine3d headMeshToBody(const HeadParams& head, const HeadFit& fit) {

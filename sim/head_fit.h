@@ -23,6 +23,8 @@ struct HeadFit {
   Eigen::AlignedBox3f head_bounds;                  // mesh coordinates: the whole mesh, or above the neck
   bool whole_body = false;                          // the mesh is taller than a head: its top part was taken
   float neck = 0.0f;                                // mesh units along the up axis, whole_body only
+  bool by_hand = false;                             // head.box_min/box_max picked the head
+  std::string unsure;                               // why the head found is a guess (empty: it is not)
   Eigen::Vector3d pivot = Eigen::Vector3d::Zero();  // mesh coordinates of the body origin
 };
 
@@ -34,6 +36,10 @@ UpAxis detectUpAxis(const std::string& path, const MeshData& mesh, std::string* 
 
 // The fit of `mesh` (loaded from `path`) under `head`.
 HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData& mesh);
+
+// What to tell the user when fit.unsure is set: why, and how to pick the head by hand
+// (head.box_min/box_max), with the whole mesh's bounds and the guess in the mesh's coordinates.
+std::string unsureFitMessage(const HeadFit& fit, const MeshData& mesh);
 
 // Body-from-mesh transform (formula above).
 Eigen::Affine3d headMeshToBody(const HeadParams& head, const HeadFit& fit);

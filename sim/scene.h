@@ -183,6 +183,10 @@ struct HeadParams {
   // Ponytail anchor, head coordinates (mesh units), used when anchor_space is "mesh": the default
   // head's bun (assets/head/README.md).
   Eigen::Vector3d anchor{0.0, 0.0906, -0.1140};
+  // The head's part of a whole-body mesh picked by hand (mesh units, the mesh's own axes): the
+  // vertices inside this box. Equal corners (the default): found from the mesh (sim/head_fit.h).
+  Eigen::Vector3d box_min{0.0, 0.0, 0.0};
+  Eigen::Vector3d box_max{0.0, 0.0, 0.0};
   HeadMaterials materials = HeadMaterials::Auto;
   Eigen::Vector3d color{0.93, 0.78, 0.67};  // rgb 0..1, skin
   bool scalp_hair = true;                   // the hair region the mesh marks (the default head's) drawn as hair
@@ -221,6 +225,14 @@ struct HeadParams {
        .max = 1e6,
        .help = "Ponytail anchor in the mesh's coordinates (anchor_space mesh)",
        .apply = Apply::Restart});
+    v("box_min", box_min,
+      {.min = -1e6,
+       .max = 1e6,
+       .help = "The head's part of a whole-body mesh by hand: low corner of a box in the mesh's coordinates "
+               "(equal to box_max: found from the mesh)",
+       .apply = Apply::Restart});
+    v("box_max", box_max,
+      {.min = -1e6, .max = 1e6, .help = "High corner of the head's box (mesh coordinates)", .apply = Apply::Restart});
     v("materials", materials,
       {.help = "auto: the file's textures, vertex colours, colours when it has more than one plain colour; color: "
                "head.color"});

@@ -26,6 +26,12 @@ std::string formatNumber(double x) {
   return buf;
 }
 
+std::string vectorText(const Eigen::Vector3d& v) {
+  char buf[96];
+  std::snprintf(buf, sizeof(buf), "[%.10g, %.10g, %.10g]", v.x(), v.y(), v.z());
+  return buf;
+}
+
 std::string rangeText(const FieldMeta& m) {
   const bool has_min = std::isfinite(m.min), has_max = std::isfinite(m.max);
   std::string unit = (m.unit && *m.unit) ? std::string(" ") + m.unit : "";
@@ -504,6 +510,13 @@ void validateScene(const Scene& scene_in, const std::string& source) {
     if (resolveScenePath(scene.head->mesh, scene.path).empty()) {
       errors.push_back("head.mesh: file not found: \"" + scene.head->mesh +
                        "\" (looked in the working directory, beside the scene and in the repository)");
+    }
+    const auto& h = *scene.head;
+    if (h.box_min != h.box_max && !(h.box_max.array() > h.box_min.array()).all()) {
+      errors.push_back(
+          "head.box_max: must exceed head.box_min on every axis (x, y, z) to pick the head by hand, or "
+          "equal it to find the head from the mesh (got min " +
+          vectorText(h.box_min) + ", max " + vectorText(h.box_max) + ")");
     }
     const auto& a = scene.head->animation;
     if (!a.clip.empty() && a.clip != "mesh") {

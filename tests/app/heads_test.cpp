@@ -185,5 +185,91 @@ TEST(HeadsTexture, TexturedCubeShowsItsTextureAndAMissingOneIsNamed) {
   EXPECT_NE(missing.out.find("CesiumLogoFlat.png"), std::string::npos) << missing.out;
 }
 
+// A model that names no skin (Quake II MD2: assimp puts its placeholder "$texture_dummy.bmp" in
+// the material) takes the image beside it under its name, and says nothing when there is none; a
+// texture a file names but that is not there is named once, plainly, however often the head loads.
+TEST(HeadsTexture, AnUnnamedSkinIsFoundBesideTheModelAndAMissingNamedOneIsSaidOnce) {
+  const std::string sydney = kModels + "MD2/sydney.md2";
+  const std::string dwarf = kModels + "COB/dwarf.cob";
+  ASSERT_TRUE(fs::exists(sydney) && fs::exists(dwarf)) << "scripts/setup.sh installs assimp-testmodels";
+  MeshData m;
+  std::string err;
+  ASSERT_TRUE(loadMesh(sydney, m, &err)) << err;
+  EXPECT_EQ(m.textures.size(), 1u) << "sydney.bmp, beside sydney.md2";
+  EXPECT_TRUE(m.warnings.empty()) << m.warnings.front();
+
+  const std::string lone = scratch("heads_lone_md2");
+  fs::copy_file(sydney, lone + "/sydney.md2", fs::copy_options::overwrite_existing);
+  MeshData bare;
+  ASSERT_TRUE(loadMesh(lone + "/sydney.md2", bare, &err)) << err;
+  EXPECT_TRUE(bare.textures.empty());
+  EXPECT_TRUE(bare.warnings.empty()) << "no texture named, none beside: nothing to say, not " << bare.warnings.front();
+
+  HeadParams head;
+  head.anchor_space = AnchorSpace::Bounds;
+  ::testing::internal::CaptureStderr();
+  assimpAssets().loadHead(head, dwarf, "dwarf.json");
+  assimpAssets().loadHead(head, dwarf, "dwarf.json");
+  const std::string said = ::testing::internal::GetCapturedStderr();
+  std::printf("%s", said.c_str());
+  for (const char* name : {"axe.jpg", "dwarf.jpg"}) {
+    const std::string line = std::string("the texture ") + name + " that dwarf.cob names is not there";
+    const size_t at = said.find(line);
+    EXPECT_NE(at, std::string::npos) << said;
+    EXPECT_EQ(said.find(line, at + 1), std::string::npos) << "said twice:\n" << said;
+  }
+}
+
+// Whole characters the automatic fit gets wrong say so, and tell how to pick the head by hand; the
+// box given picks it (fit only: no simulation).
+struct CharacterCase {
+  const char* name;
+  const char* path;  // under kModels
+};
+void PrintTo(const CharacterCase& c, std::ostream* os) { *os << c.name; }
+const CharacterCase kUnsure[] = {
+    {"faerie", "MD2/faerie.md2"},            // Quake II: wings above and beside the head
+    {"bcn_epileptic", "X/BCN_Epileptic.X"},  // modelled head down along -z: the feet come out on top
+};
+class UnsureCharacters : public ::testing::TestWithParam<CharacterCase> {};
+
+TEST_P(UnsureCharacters, SaySoAndTellHowToPickTheHeadByHand) {
+  const std::string mesh = kModels + GetParam().path;
+  ASSERT_TRUE(fs::exists(mesh)) << mesh << " is missing: scripts/setup.sh installs assimp-testmodels";
+  MeshData m;
+  std::string err;
+  ASSERT_TRUE(loadMesh(mesh, m, &err)) << err;
+  HeadParams head;
+  const HeadFit fit = fitHead(head, mesh, m);
+  EXPECT_TRUE(fit.whole_body);
+  ASSERT_FALSE(fit.unsure.empty());
+  const std::string said = unsureFitMessage(fit, m);
+  std::printf("%s\n", said.c_str());
+  EXPECT_NE(said.find("--set head.box_min="), std::string::npos) << said;
+
+  // By hand: the head is the vertices inside the box, and the fit is sure.
+  head.box_min = m.bbox.min().cast<double>();
+  head.box_max = m.bbox.center().cast<double>();
+  const HeadFit hand = fitHead(head, mesh, m);
+  EXPECT_TRUE(hand.by_hand);
+  EXPECT_TRUE(hand.unsure.empty());
+  Eigen::AlignedBox3f inside;
+  for (const auto& p : m.positions)
+    if ((p.array() >= m.bbox.min().array()).all() && (p.array() <= m.bbox.center().array()).all()) inside.extend(p);
+  EXPECT_TRUE(hand.head_bounds.isApprox(inside));
+}
+
+INSTANTIATE_TEST_SUITE_P(ThirdParty, UnsureCharacters, ::testing::ValuesIn(kUnsure),
+                         [](const ::testing::TestParamInfo<CharacterCase>& i) { return std::string(i.param.name); });
+
+// The heads that land well say nothing.
+TEST_P(Heads, AGoodFitSaysNothing) {
+  const std::string mesh = kModels + GetParam().path;
+  MeshData m;
+  std::string err;
+  ASSERT_TRUE(loadMesh(mesh, m, &err)) << err;
+  EXPECT_EQ(fitHead(HeadParams{}, mesh, m).unsure, "");
+}
+
 }  // namespace
 }  // namespace ponyhop

@@ -97,6 +97,10 @@ TEST(SceneIo, WrongTypeAndRange) {
   EXPECT_NE(errorOf(json::parse(R"({"anchor": {}, "chain": {"links": 2.5}})")).find("whole number"), std::string::npos);
   EXPECT_NE(errorOf(json::parse(R"({"physics": {"integrator": "leapfrog"}})")).find("\"rk4\""), std::string::npos);
   EXPECT_NE(errorOf(json::parse(R"({"physics": {"gravity": [0, 0]}})")).find("3 numbers"), std::string::npos);
+  // head.box_min/box_max: a box with volume, or equal corners (found from the mesh).
+  const std::string box = errorOf(json::parse(R"({"head": {"box_min": [1, 1, 1], "box_max": [0, 2, 2]}})"));
+  EXPECT_NE(box.find("head.box_max: must exceed head.box_min on every axis"), std::string::npos) << box;
+  EXPECT_NE(errorOf(json::parse(R"({"head": {"box_min": [0, "a", 0]}})")).find("head.box_min"), std::string::npos);
 }
 
 TEST(SceneIo, EveryProblemIsListed) {
