@@ -101,6 +101,17 @@ void addShiftedForce(const Eigen::Vector3d& d, const Vector6d& f, Vector6d& out)
   out(5) += f(5) + (d(0) * f(1) - d(1) * f(0));
 }
 
+// Calls the pass specialized on a node's dofs (f1, f3, f6 for 1, 3, 6).
+template <class F1, class F3, class F6>
+void dispatch(int dofs, F1&& f1, F3&& f3, F6&& f6) {
+  if (dofs == 3)
+    f3();
+  else if (dofs == 1)
+    f1();
+  else
+    f6();
+}
+
 // Newton-Euler at the centre: F = M A + b, M = diag(m I, I_world), b = [-f; w x I w - t].
 Matrix6 spatialInertia(const RigidBody& b, const Eigen::Matrix3d& inertia_world) {
   Matrix6 m = Matrix6::Zero();
@@ -684,14 +695,6 @@ void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorX
   const size_t n = nodes_.size();
   jointKinematics(bodies, kin_, written);
   for (size_t i = 0; i < n; ++i) writeInertiaAndBias(bodies[nodes_[i].body], kin_[i].R, pass_[i].ia, pass_[i].pa);
-  const auto dispatch = [](int dofs, auto&& f1, auto&& f3, auto&& f6) {
-    if (dofs == 3)
-      f3();
-    else if (dofs == 1)
-      f1();
-    else
-      f6();
-  };
   for (size_t r = n; r-- > 0;) {
     dispatch(
         nodes_[r].dofs, [&] { abaInward<1>(r, tau); }, [&] { abaInward<3>(r, tau); }, [&] { abaInward<6>(r, tau); });
@@ -851,14 +854,6 @@ bool ArticulatedSystem::closeLoops(const std::vector<RigidBody>& bodies, Eigen::
     if (l.node_a >= 0) loop_pa_[l.node_a].middleCols(l.row, l.rows) -= l.eval.ja.transpose();
     if (l.node_b >= 0) loop_pa_[l.node_b].middleCols(l.row, l.rows) -= l.eval.jb.transpose();
   }
-  const auto dispatch = [](int dofs, auto&& f1, auto&& f3, auto&& f6) {
-    if (dofs == 3)
-      f3();
-    else if (dofs == 1)
-      f1();
-    else
-      f6();
-  };
   const auto passes = [&]<int M>(const LoopJoint& l) {
     for (size_t r = n; r-- > 0;) {
       dispatch(

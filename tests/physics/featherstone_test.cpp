@@ -18,6 +18,7 @@ namespace ponyhop {
 namespace {
 
 using testing::exactPhysics;
+using testing::joinTips;
 
 AnchorParams anchor(AnchorMotion m) {
   AnchorParams a;
@@ -32,14 +33,6 @@ AnchorParams anchor(AnchorMotion m) {
 //      with a foot, and a chain on the foot;
 //   3: closed loops: two chains from the world joined at their tips (a loop through the world),
 //      and a free hub with two chains joined at their tips (a loop of dynamic bodies).
-// Joins the tips of chains a and b at their midpoint (a spherical joint).
-void joinTips(World& world, const Chain& a, const Chain& b) {
-  const Eigen::Vector3d mid = 0.5 * (a.tip(world) + b.tip(world));
-  const RigidBody& ta = world.body(a.links.back());
-  const RigidBody& tb = world.body(b.links.back());
-  world.addJoint(std::make_unique<SphericalJoint>(a.links.back(), ta.q.conjugate() * (mid - ta.x), b.links.back(),
-                                                  tb.q.conjugate() * (mid - tb.x)));
-}
 World makeSystem(int which, const PhysicsParams& pp) {
   if (which == 0) {
     ChainParams cp;
