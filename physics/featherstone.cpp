@@ -2,7 +2,9 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <cstdio>
 #include <limits>
+#include <tuple>
 #include <type_traits>
 
 #include "physics/integrator.h"
@@ -99,6 +101,17 @@ void addShiftedForce(const Eigen::Vector3d& d, const Vector6d& f, Vector6d& out)
   out(5) += f(5) + (d(0) * f(1) - d(1) * f(0));
 }
 
+// Calls the pass specialized on a node's dofs (f1, f3, f6 for 1, 3, 6).
+template <class F1, class F3, class F6>
+void dispatch(int dofs, F1&& f1, F3&& f3, F6&& f6) {
+  if (dofs == 3)
+    f3();
+  else if (dofs == 1)
+    f1();
+  else
+    f6();
+}
+
 // Newton-Euler at the centre: F = M A + b, M = diag(m I, I_world), b = [-f; w x I w - t].
 Matrix6 spatialInertia(const RigidBody& b, const Eigen::Matrix3d& inertia_world) {
   Matrix6 m = Matrix6::Zero();
@@ -163,7 +176,10 @@ bool ArticulatedSystem::sameSignature(const std::vector<RigidBody>& bodies, cons
 }
 
 Status ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Constraints& joints) {
-  if (sameSignature(bodies, joints)) return built_;
+  if (sameSignature(bodies, joints)) {
+    for (LoopJoint& l : loops_) l.constraint = joints[l.joint].get();
+    return built_;
+  }
   signature_ = {static_cast<int>(bodies.size()), static_cast<int>(joints.size())};
   for (const RigidBody& b : bodies) signature_.push_back(b.isDynamic() ? 1 : 0);
   for (const auto& j : joints) signature_.insert(signature_.end(), {j->bodyA(), j->bodyB()});
@@ -181,6 +197,7 @@ Status ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Cons
   const size_t n = bodies.size();
   std::vector<std::vector<std::pair<int, int>>> adjacent(n);  // (joint, other body) between dynamic bodies
   std::vector<int> grounding(n, -1);                          // joint to the world or a prescribed body
+  std::vector<char> loop(joints.size(), 0);                   // the joint closes a loop (not in the tree)
   for (size_t j = 0; j < joints.size(); ++j) {
     const Constraint& c = *joints[j];
     if (!dynamic_cast<const SphericalJoint*>(&c) && !dynamic_cast<const PrismaticJoint*>(&c)) {
@@ -196,10 +213,10 @@ Status ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Cons
     } else if (da || db) {
       const int body = da ? a : b;
       if (grounding[body] >= 0) {
-        return fail("body " + name(body) + " is held by joints " + std::to_string(grounding[body]) + " and " +
-                    std::to_string(j) + " to prescribed bodies: a closed loop");
+        loop[j] = 1;  // a second hold of one body: a loop through the world or the prescribed body
+      } else {
+        grounding[body] = static_cast<int>(j);
       }
-      grounding[body] = static_cast<int>(j);
     }
   }
 
@@ -219,19 +236,21 @@ Status ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Cons
         }
       }
     }
+    // The first held body (in body order) is the root; every other hold closes a loop.
     int root = component.front(), held = -1;
     for (int b : component) {
       if (grounding[b] < 0) continue;
-      if (held >= 0) {
-        return fail("bodies " + name(held) + " and " + name(b) +
-                    " of one connected system are both held by the world or a prescribed body: a closed loop");
+      if (held >= 0 && b > held) {
+        loop[grounding[b]] = 1;
+      } else {
+        if (held >= 0) loop[grounding[held]] = 1;
+        held = root = b;
       }
-      held = root = b;
     }
     for (int b : component) seen[b] = 2;  // 2: in this component, not yet placed
 
-    // Breadth-first from the root: parents before children. Reaching a placed body again
-    // through another joint is a loop.
+    // Breadth-first from the root: parents before children. A joint that reaches a placed body
+    // again closes a loop.
     const size_t first = nodes_.size();
     const auto addNode = [&](int body, int parent, int joint) -> Status {
       Node nd;
@@ -286,10 +305,10 @@ Status ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Cons
     for (size_t k = first; k < nodes_.size(); ++k) {
       const int body = nodes_[k].body;
       for (const auto& [j, other] : adjacent[body]) {
-        if (j == parent_joint[body]) continue;
+        if (j == parent_joint[body] || loop[j]) continue;
         if (seen[other] == 1) {
-          return fail("joint " + std::to_string(j) + " between " + name(body) + " and " + name(other) +
-                      " closes a loop");
+          loop[j] = 1;
+          continue;
         }
         seen[other] = 1;
         parent_joint[other] = j;
@@ -298,6 +317,35 @@ Status ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Cons
       }
     }
   }
+  // The loop joints, their rows and the work space of closeLoops() and projectLoops().
+  std::vector<int> node_of(n, -1);
+  for (size_t i = 0; i < nodes_.size(); ++i) node_of[nodes_[i].body] = static_cast<int>(i);
+  const auto nodeOf = [&](int b) { return b == kWorldBody ? -1 : node_of[b]; };
+  loops_.clear();
+  loop_rows_ = 0;
+  for (size_t j = 0; j < joints.size(); ++j) {
+    if (!loop[j]) continue;
+    LoopJoint l;
+    l.joint = static_cast<int>(j);
+    l.node_a = nodeOf(joints[j]->bodyA());
+    l.node_b = nodeOf(joints[j]->bodyB());
+    l.constraint = joints[j].get();
+    l.row = loop_rows_;
+    l.rows = joints[j]->dimension();
+    l.eval.C.resize(l.rows);
+    l.eval.ja.resize(l.rows, 6);
+    l.eval.jb.resize(l.rows, 6);
+    l.eval.bias.resize(l.rows);
+    loop_rows_ += l.rows;
+    loops_.push_back(l);
+  }
+  for (std::vector<LoopBlock>* v : {&loop_pa_, &loop_u_, &loop_acc_})
+    v->assign(nodes_.size(), LoopBlock(6, loop_rows_));
+  loop_y_.resize(dofs_, loop_rows_);
+  loop_k_.resize(loop_rows_, loop_rows_);
+  loop_llt_ = Eigen::LLT<Eigen::MatrixXd>(loop_rows_);
+  for (Eigen::VectorXd* v : {&loop_rhs_, &loop_lambda_}) v->setZero(loop_rows_);
+  loop_step_.setZero(dofs_);
   coords_.x.assign(nodes_.size(), Eigen::Vector3d::Zero());
   coords_.q.assign(nodes_.size(), Eigen::Quaterniond::Identity());
   coords_.s.assign(nodes_.size(), 0.0);
@@ -647,14 +695,6 @@ void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorX
   const size_t n = nodes_.size();
   jointKinematics(bodies, kin_, written);
   for (size_t i = 0; i < n; ++i) writeInertiaAndBias(bodies[nodes_[i].body], kin_[i].R, pass_[i].ia, pass_[i].pa);
-  const auto dispatch = [](int dofs, auto&& f1, auto&& f3, auto&& f6) {
-    if (dofs == 3)
-      f3();
-    else if (dofs == 1)
-      f1();
-    else
-      f6();
-  };
   for (size_t r = n; r-- > 0;) {
     dispatch(
         nodes_[r].dofs, [&] { abaInward<1>(r, tau); }, [&] { abaInward<3>(r, tau); }, [&] { abaInward<6>(r, tau); });
@@ -664,6 +704,7 @@ void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorX
         nodes_[i].dofs, [&] { abaOutward<1>(i, udot); }, [&] { abaOutward<3>(i, udot); },
         [&] { abaOutward<6>(i, udot); });
   }
+  loop_failed_ = loop_rows_ > 0 && !closeLoops(bodies, udot);
   // Accelerations and constraint forces of the bodies: F^J_i = I^A A + p^A, and a body's
   // constraint force F^J_i - sum_c X_c^T F^J_c (children come after parents: one pass back).
   for (size_t i = 0; i < n; ++i) pass_[i].u = pass_[i].ia * pass_[i].acc + pass_[i].pa;  // u is free now: F^J
@@ -689,6 +730,244 @@ void ArticulatedSystem::aba(std::vector<RigidBody>& bodies, const Eigen::VectorX
     b.constraint_force = Eigen::Vector3d(fc[0], fc[1], fc[2]);
     b.constraint_torque = Eigen::Vector3d(fc[3], fc[4], fc[5]);
   }
+  // A loop joint's force J^T lambda on its dynamic bodies is a constraint force too (ABA took it
+  // as an external one).
+  for (const LoopJoint& l : loops_) {
+    const auto lambda = loop_lambda_.segment(l.row, l.rows);
+    for (const auto& [node, j] : {std::pair{l.node_a, &l.eval.ja}, std::pair{l.node_b, &l.eval.jb}}) {
+      if (node < 0) continue;
+      const Vector6d f = j->transpose() * lambda;
+      RigidBody& b = bodies[nodes_[node].body];
+      b.constraint_force += f.head<3>();
+      b.constraint_torque += f.tail<3>();
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Closed loops (featherstone.h, "Closed loops"; docs/SOLVERS.md)
+
+void ArticulatedSystem::setLoopStabilization(Stabilization stabilization, double baumgarte_alpha,
+                                             double baumgarte_beta) {
+  loop_stabilization_ = stabilization;
+  loop_alpha_ = baumgarte_alpha;
+  loop_beta_ = baumgarte_beta;
+}
+
+double ArticulatedSystem::evaluateLoops(const std::vector<RigidBody>& bodies) {
+  double error = 0.0;
+  for (LoopJoint& l : loops_) {
+    const Constraint& c = *l.constraint;
+    c.evaluate(bodyOf(bodies, c.bodyA()), bodyOf(bodies, c.bodyB()), l.eval);
+    error = std::max(error, c.error(l.eval));
+  }
+  return error;
+}
+
+// The ABA's response to unit forces, columns [col, col + m) of the loop rows: row k applies the
+// force J_a(k)^T on body a and J_b(k)^T on body b. With no velocity terms, no gravity and no
+// base motion, ABA's passes reduce to (the articulated inertias, U and D^-1 are the ABA's):
+//   inward:  p^A_i = -F_i + sum_c X_c^T p^a_c,  u = -S^T p^A,  p^a = p^A + U D^-1 u;
+//   outward: A' = X A_p (0 at a root),  u' = D^-1 (u - U^T A'),  A = A' + S u'.
+// u' of every row is a column of H^-1 L^T (L = J Phi), since ABA solves H u' = tau - C and a force
+// F on the bodies is the generalized force Phi^T F. A spherical joint runs in world axes as
+// abaInward<3> does: S_w = [r_i~; I], U_w, D_w, and u' = R_p^T u'_w.
+namespace {
+// Columns [col, col + m) of a 6 x rows block: a fixed 6 x M block when M is (a spherical loop
+// joint's three rows, the common case: its products unrolled), else dynamic.
+template <int M, class Block>
+auto loopCols(Block& b, int col, int m) {
+  if constexpr (M == Eigen::Dynamic) {
+    return b.middleCols(col, m);
+  } else {
+    (void)m;
+    return b.template middleCols<M>(col);
+  }
+}
+}  // namespace
+
+template <int D, int M>
+void ArticulatedSystem::loopInward(size_t r, int col, int m) {
+  const Node& nd = nodes_[r];
+  const Kinematics& k = kin_[r];
+  const Pass& p = pass_[r];
+  const auto pa = loopCols<M>(loop_pa_[r], col, m);
+  auto u = loopCols<M>(loop_u_[r], col, m).template topRows<D>();
+  if constexpr (D == 3) {
+    for (int c = 0; c < m; ++c)
+      u.col(c) = k.r_i.cross(Eigen::Vector3d(pa.col(c).template head<3>())) - pa.col(c).template tail<3>();
+  } else {
+    u.noalias() = -k.S.leftCols<D>().transpose() * pa;
+  }
+  if (nd.parent_node < 0) return;
+  // p^a = p^A + U D^-1 u, carried to the parent's centre: X^T p^a.
+  Eigen::Matrix<double, 6, M, Eigen::ColMajor, 6, M == Eigen::Dynamic ? 6 : M> f = pa;
+  f.noalias() += p.U.leftCols<D>() * (p.dinv.topLeftCorner<D, D>() * u);
+  auto parent = loopCols<M>(loop_pa_[nd.parent_node], col, m);
+  parent.template topRows<3>() += f.template topRows<3>();
+  for (int c = 0; c < m; ++c) {
+    const Eigen::Vector3d fl = f.col(c).template head<3>();
+    parent.col(c).template tail<3>() += f.col(c).template tail<3>() + k.d.cross(fl);
+  }
+}
+
+template <int D, int M>
+void ArticulatedSystem::loopOutward(size_t i, int col, int m) {
+  const Node& nd = nodes_[i];
+  const Kinematics& k = kin_[i];
+  const Pass& p = pass_[i];
+  auto acc = loopCols<M>(loop_acc_[i], col, m);
+  const auto u = loopCols<M>(loop_u_[i], col, m).template topRows<D>();
+  if (nd.parent_node >= 0) {  // A' = X A_p
+    const auto ap = loopCols<M>(loop_acc_[nd.parent_node], col, m);
+    acc = ap;
+    for (int c = 0; c < m; ++c) {
+      const Eigen::Vector3d w = ap.col(c).template tail<3>();
+      acc.col(c).template head<3>() += w.cross(k.d);
+    }
+  } else {
+    acc.setZero();
+  }
+  const Eigen::Matrix<double, D, M, D == 1 ? Eigen::RowMajor : Eigen::ColMajor, D, M == Eigen::Dynamic ? 6 : M> ud =
+      p.dinv.topLeftCorner<D, D>() * (u - p.U.leftCols<D>().transpose() * acc);
+  if constexpr (D == 3) {
+    loopCols<M>(loop_y_, col, m).template middleRows<3>(nd.dof).noalias() = k.Rp.transpose() * ud;
+    acc.template bottomRows<3>() += ud;
+    for (int c = 0; c < m; ++c) {
+      const Eigen::Vector3d w = ud.col(c);
+      acc.col(c).template head<3>() += k.r_i.cross(w);
+    }
+  } else {
+    loopCols<M>(loop_y_, col, m).template middleRows<D>(nd.dof) = ud;
+    acc.noalias() += k.S.leftCols<D>() * ud;
+  }
+}
+
+// K lambda = -(J A_0 + J'q' [+ 2 alpha C' + beta^2 C]), with K = J (the bodies' accelerations
+// of each row's unit force) = L H^-1 L^T; then u' += H^-1 L^T lambda and, for the bodies and
+// their joint forces, A += A(rows) lambda, p^A += p^A(rows) lambda (linear in the forces).
+bool ArticulatedSystem::closeLoops(const std::vector<RigidBody>& bodies, Eigen::VectorXd& udot) {
+  const size_t n = nodes_.size();
+  evaluateLoops(bodies);
+  for (size_t i = 0; i < n; ++i) loop_pa_[i].setZero();
+  for (const LoopJoint& l : loops_) {
+    if (l.node_a >= 0) loop_pa_[l.node_a].middleCols(l.row, l.rows) -= l.eval.ja.transpose();
+    if (l.node_b >= 0) loop_pa_[l.node_b].middleCols(l.row, l.rows) -= l.eval.jb.transpose();
+  }
+  const auto passes = [&]<int M>(const LoopJoint& l) {
+    for (size_t r = n; r-- > 0;) {
+      dispatch(
+          nodes_[r].dofs, [&] { loopInward<1, M>(r, l.row, l.rows); }, [&] { loopInward<3, M>(r, l.row, l.rows); },
+          [&] { loopInward<6, M>(r, l.row, l.rows); });
+    }
+    for (size_t i = 0; i < n; ++i) {
+      dispatch(
+          nodes_[i].dofs, [&] { loopOutward<1, M>(i, l.row, l.rows); }, [&] { loopOutward<3, M>(i, l.row, l.rows); },
+          [&] { loopOutward<6, M>(i, l.row, l.rows); });
+    }
+  };
+  for (const LoopJoint& l : loops_) {
+    if (l.rows == 3) {
+      passes.template operator()<3>(l);
+    } else {
+      passes.template operator()<Eigen::Dynamic>(l);
+    }
+  }
+  // K and the right-hand side, joint by joint: the acceleration and velocity of each end (a
+  // dynamic body's from the passes, a prescribed body's as prescribed, the world's zero).
+  const bool baumgarte = loop_stabilization_ == Stabilization::Baumgarte;
+  for (const LoopJoint& l : loops_) {
+    auto k = loop_k_.middleRows(l.row, l.rows);
+    auto rhs = loop_rhs_.segment(l.row, l.rows);
+    k.setZero();
+    rhs = l.eval.bias;
+    for (const auto& [node, body, j] : {std::tuple{l.node_a, l.constraint->bodyA(), &l.eval.ja},
+                                        std::tuple{l.node_b, l.constraint->bodyB(), &l.eval.jb}}) {
+      const RigidBody& b = bodyOf(bodies, body);
+      Vector6d acc, vel;
+      vel << b.v, b.w;
+      if (node >= 0) {
+        k.noalias() += *j * loop_acc_[node];
+        acc = pass_[node].acc;
+      } else {
+        acc << b.a, b.alpha;
+      }
+      rhs.noalias() += *j * acc;
+      if (baumgarte) rhs.noalias() += 2.0 * loop_alpha_ * (*j * vel);
+    }
+    if (baumgarte) rhs += loop_beta_ * loop_beta_ * l.eval.C;
+  }
+  loop_llt_.compute(loop_k_);
+  if (loop_llt_.info() != Eigen::Success) return false;
+  loop_lambda_ = loop_llt_.solve(loop_rhs_);
+  loop_lambda_ = -loop_lambda_;
+  udot.noalias() += loop_y_ * loop_lambda_;
+  for (size_t i = 0; i < n; ++i) {
+    pass_[i].acc.noalias() += loop_acc_[i] * loop_lambda_;
+    pass_[i].pa.noalias() += loop_pa_[i] * loop_lambda_;
+  }
+  return true;
+}
+
+// Post-stabilization of the loops (as projectPositions/projectVelocities for the multiplier
+// solvers, in joint space): dq = -H^-1 L^T K^-1 C applied to the coordinates (a free root's x
+// and rotation vector, a spherical joint's rotation vector in the parent's frame, a slide) until
+// max |C| <= 1e-12, then du = -H^-1 L^T K^-1 (J V) until C' is at round-off. H^-1 L^T and K are the
+// last closeLoops()'s (the last stage of the step: a chord iteration, converging because they are
+// within a step of the pose projected). The metric H makes each correction the smallest change
+// of kinetic energy, as the mass metric does for the bodies.
+Status ArticulatedSystem::projectLoops(std::vector<RigidBody>& bodies) {
+  constexpr double kTolerance = 1e-12;  // m, as projectPositions
+  constexpr int kIterations = 20;
+  double error = evaluateLoops(bodies);
+  for (int it = 0; it < kIterations && error > kTolerance; ++it) {
+    for (const LoopJoint& l : loops_) loop_rhs_.segment(l.row, l.rows) = l.eval.C;
+    loop_lambda_ = loop_llt_.solve(loop_rhs_);
+    loop_step_.noalias() = loop_y_ * loop_lambda_;
+    for (size_t i = 0; i < nodes_.size(); ++i) {
+      const Node& nd = nodes_[i];
+      switch (nd.type) {
+        case Type::Free:
+          coords_.x[i] -= loop_step_.segment<3>(nd.dof);
+          coords_.q[i] = renormalized(quaternionFromRotationVector(-loop_step_.segment<3>(nd.dof + 3)) * coords_.q[i]);
+          break;
+        case Type::Spherical:
+          coords_.q[i] = renormalized(quaternionFromRotationVector(-loop_step_.segment<3>(nd.dof)) * coords_.q[i]);
+          break;
+        case Type::Prismatic:
+          coords_.s[i] -= loop_step_(nd.dof);
+          break;
+      }
+    }
+    writeState(bodies);
+    error = evaluateLoops(bodies);
+  }
+  if (!(error < 1e-6)) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "the loop projection left a loop joint open by %.3g m", error);
+    return Status::error(buf);
+  }
+  // C' = J V (a prescribed end moves as prescribed): the velocities are the bodies'.
+  double last = std::numeric_limits<double>::infinity();
+  for (int it = 0; it < kIterations; ++it) {
+    double residual = 0.0;
+    for (const LoopJoint& l : loops_) {
+      auto r = loop_rhs_.segment(l.row, l.rows);
+      r.setZero();
+      for (const auto& [body, j] :
+           {std::pair{l.constraint->bodyA(), &l.eval.ja}, std::pair{l.constraint->bodyB(), &l.eval.jb}}) {
+        const RigidBody& b = bodyOf(bodies, body);
+        r.noalias() += j->leftCols<3>() * b.v + j->rightCols<3>() * b.w;
+      }
+      residual = std::max(residual, r.lpNorm<Eigen::Infinity>());
+    }
+    if (!(residual < 0.5 * last)) break;  // at round-off: no longer contracting
+    last = residual;
+    loop_lambda_ = loop_llt_.solve(loop_rhs_);
+    u_.noalias() -= loop_y_ * loop_lambda_;
+    writeState(bodies);
+  }
+  return {};
 }
 
 // RNEA (John survey: "propagate velocities and accelerations outward, forces inward"):
@@ -909,6 +1188,11 @@ Status ArticulatedSystem::derivative(double t, const Coordinates& c, const Eigen
   stopped_ = !hooks.forces();
   if (stopped_) return {};           // the world stopped itself with its own message
   aba(bodies, nullptr, udot, true);  // the bodies are writeState()'s, here or at the end of the last step
+  if (loop_failed_) {
+    return Status::error(
+        "the loop joints' rows are redundant (the loop-closure matrix L H^-1 L^T is singular): "
+        "a loop joint repeats what the tree or another loop joint already holds");
+  }
   if (!udot.allFinite()) return Status::error("non-finite joint accelerations");
   return {};
 }
@@ -1020,6 +1304,9 @@ Status ArticulatedSystem::step(double t, double h, Integrator integrator, std::v
   }
   hooks.kinematics(t + h);
   writeState(bodies);
+  if (loop_rows_ > 0 && loop_stabilization_ == Stabilization::Projection) {
+    if (Status st = projectLoops(bodies); !st.ok()) return st;
+  }
   remember(bodies);
   written_time_ = t + h;
   return {};

@@ -32,12 +32,26 @@
 // H^-1 (tau - C) with C = RNEA(0) equals ABA; ABA's body accelerations equal the multiplier
 // solvers' on the same state.
 //
-// What it cannot express, reported by build() as a message naming the solver: closed loops
-// (two joints reaching one body, or two joints to the world/kinematic bodies in one
-// component), contacts and any joint type other than spherical and prismatic, a prismatic joint
-// whose sliding frame is on the child.
+// Closed loops (John survey, "Dealing with Closed Loops": a spanning tree, the tree's dynamics,
+// the loops mimicked by constraint forces): build() keeps a spanning tree of the joints (breadth
+// first from each component's first held body) and makes every other joint a loop joint (a second
+// joint reaching a placed body, a second hold on the world or a prescribed body). A loop joint's
+// rows (its Constraint::evaluate: C, J_a, J_b, J'q' on the maximal bodies) are closed by
+// multipliers lambda in joint space, L = J Phi (Phi: u -> the bodies' twists):
+//   u' = u'_0 + H^-1 L^T lambda,   K lambda = -(J A_0 + J'q' [+ 2 alpha C' + beta^2 C]),
+//   K = L H^-1 L^T,
+// where u'_0, A_0 is the plain ABA and H^-1 L^T is the ABA's response to each row's unit force
+// (the force-free passes over the articulated inertias the ABA has just built: closeLoops()).
+// Drift of C is stabilized as for the multiplier solvers (physics.stabilization): Baumgarte in
+// the right-hand side above, or projection after each step onto C = 0 and C' = 0 in the joint-space
+// mass metric H (projectLoops()). Adaptive dynamics does not take loops.
+//
+// What it cannot express, reported by build() as a message naming the solver: contacts and any
+// joint type other than spherical and prismatic, a prismatic joint whose sliding frame is on the
+// child.
 #pragma once
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <functional>
@@ -86,6 +100,10 @@ class ArticulatedSystem {
   Status step(double t, double h, Integrator integrator, std::vector<RigidBody>& bodies, const ReducedHooks& hooks);
   // The force evaluation at time t without stepping (World::evaluate).
   Status evaluate(double t, std::vector<RigidBody>& bodies, const ReducedHooks& hooks);
+
+  // Loop closure (closed loops, above): the drift correction of the loop joints' rows.
+  void setLoopStabilization(Stabilization stabilization, double baumgarte_alpha, double baumgarte_beta);
+  int loopRows() const { return loop_rows_; }  // rows of the loop joints (0 for a tree)
 
   int dofs() const { return dofs_; }
   int nodeCount() const { return static_cast<int>(nodes_.size()); }
@@ -157,6 +175,17 @@ class ArticulatedSystem {
     Vector6d acc;  // A
   };
 
+  // A joint outside the spanning tree, closed by multipliers: its rows [row, row + rows) of K;
+  // node_a, node_b: the nodes of its bodies (-1 for the world or a prescribed body).
+  struct LoopJoint {
+    int joint = -1;
+    const Constraint* constraint = nullptr;  // refreshed by build() every step
+    int node_a = -1, node_b = -1;
+    int row = 0, rows = 0;
+    ConstraintRows eval;  // its rows at the current state
+  };
+  using LoopBlock = Eigen::Matrix<double, 6, Eigen::Dynamic>;
+
   bool sameSignature(const std::vector<RigidBody>& bodies, const Constraints& joints) const;
   // written: the bodies are as writeState() left them (unit quaternions, used as they are) and
   // only what ABA reads is needed (a spherical joint's S is left out: ABA runs on r_i and R_p).
@@ -171,6 +200,19 @@ class ArticulatedSystem {
   // step after the last one wrote them): forward kinematics is not repeated.
   Status derivative(double t, const Coordinates& c, const Eigen::VectorXd& u, std::vector<RigidBody>& bodies,
                     const ReducedHooks& hooks, Eigen::VectorXd& udot, bool written = false);
+  // The loop joints' rows at the bodies as they are (eval of each), largest joint error.
+  double evaluateLoops(const std::vector<RigidBody>& bodies);
+  // After ABA's outward pass: the loop multipliers, u' and the node accelerations and joint forces
+  // corrected by them. False when K is not positive definite (redundant loop rows).
+  bool closeLoops(const std::vector<RigidBody>& bodies, Eigen::VectorXd& udot);
+  // One pass of closeLoops() over node r / i for the loop rows [col, col + m); M = m when fixed.
+  template <int D, int M>
+  void loopInward(size_t r, int col, int m);
+  template <int D, int M>
+  void loopOutward(size_t i, int col, int m);
+  // Projection of the coordinates onto the loops' C = 0, then of u onto C' = 0, in the metric H,
+  // with the last closeLoops()'s H^-1 L^T and K (a chord iteration). Bodies written after.
+  Status projectLoops(std::vector<RigidBody>& bodies);
   void rates(const Coordinates& c, const Eigen::VectorXd& u, Coordinates& out) const;
   bool bodiesChanged(const std::vector<RigidBody>& bodies) const;
   void remember(const std::vector<RigidBody>& bodies);
@@ -218,6 +260,19 @@ class ArticulatedSystem {
   std::vector<char> active_;                                        // work space of the choice: the set chosen
   Eigen::VectorXd lock_tau_;                                        // work space of lock(): H w, then the speed change
   double written_time_ = std::numeric_limits<double>::quiet_NaN();  // time of the bodies step() wrote last
+  // Closed loops (sized by build()).
+  std::vector<LoopJoint> loops_;
+  int loop_rows_ = 0;
+  Stabilization loop_stabilization_ = Stabilization::Projection;
+  double loop_alpha_ = 0.0, loop_beta_ = 0.0;
+  bool loop_failed_ = false;         // the last closeLoops() met a singular K
+  std::vector<LoopBlock> loop_pa_;   // per node: the p^A of each row's unit force (6 x loop rows)
+  std::vector<LoopBlock> loop_u_;    // per node: u = -S^T p^A of each row (first dofs rows)
+  std::vector<LoopBlock> loop_acc_;  // per node: the acceleration A of each row
+  Eigen::MatrixXd loop_y_;           // H^-1 L^T (dofs x loop rows)
+  Eigen::MatrixXd loop_k_;           // K = L H^-1 L^T
+  Eigen::LLT<Eigen::MatrixXd> loop_llt_;
+  Eigen::VectorXd loop_rhs_, loop_lambda_, loop_step_;
 };
 
 }  // namespace ponyhop

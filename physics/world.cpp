@@ -544,8 +544,14 @@ void World::reducedStep(double h) {
                       std::to_string(reduced_->jointCount()) + " joints of the scene (0 to " +
                       std::to_string(reduced_->jointCount()) + ")");
   }
+  if (s.ok() && reduced_->loopRows() > 0 && (params_.adaptive_joints > 0 || params_.adaptive_tolerance > 0.0)) {
+    s = Status::error(
+        "adaptive dynamics (physics.adaptive_joints, physics.adaptive_tolerance) cannot take a closed "
+        "loop: set both to 0 for this scene");
+  }
   if (s.ok()) {
     reduced_->setAdaptive(params_.adaptive_joints, params_.adaptive_tolerance);
+    reduced_->setLoopStabilization(params_.stabilization, params_.baumgarte_alpha, params_.baumgarte_beta);
     s = h > 0.0 ? reduced_->step(state_.time, h, scheme_->kind(), bodies_, hooks)
                 : reduced_->evaluate(state_.time, bodies_, hooks);
   }

@@ -11,6 +11,7 @@
 
 #include "physics/models/chain.h"
 #include "physics/models/hopper.h"
+#include "physics/spherical_joint.h"
 #include "physics/world.h"
 
 namespace ponyhop::testing {
@@ -84,5 +85,14 @@ struct HopperWorld {
       : world(pp), hopper(Hopper::add(world, hp)) {}
   const RigidBody& body() const { return world.body(hopper->model().body); }
 };
+
+// A spherical joint at the midpoint of two chains' tips (each tip's point in its own frame).
+inline void joinTips(World& world, const Chain& a, const Chain& b) {
+  const Eigen::Vector3d mid = 0.5 * (a.tip(world) + b.tip(world));
+  const RigidBody& ta = world.body(a.links.back());
+  const RigidBody& tb = world.body(b.links.back());
+  world.addJoint(std::make_unique<SphericalJoint>(a.links.back(), ta.q.conjugate() * (mid - ta.x), b.links.back(),
+                                                  tb.q.conjugate() * (mid - tb.x)));
+}
 
 }  // namespace ponyhop::testing

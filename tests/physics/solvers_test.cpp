@@ -19,6 +19,7 @@ namespace ponyhop {
 namespace {
 
 using testing::exactPhysics;
+using testing::joinTips;
 using testing::linkPositions;
 using testing::maxDistance;
 using testing::runFor;
@@ -79,15 +80,6 @@ TEST(PhysicsSolver, TreeLambdaMatchesDenseOnChainsOfSeveralSizes) {
     stir(cw.world, 7u + links);
     EXPECT_LT(lambdaMismatch(cw.world), 1e-9) << links << " links";
   }
-}
-
-// A spherical joint at the midpoint of two chains' tips (each tip's point in its own frame).
-void joinTips(World& world, const Chain& a, const Chain& b) {
-  const Eigen::Vector3d mid = 0.5 * (a.tip(world) + b.tip(world));
-  const RigidBody& ta = world.body(a.links.back());
-  const RigidBody& tb = world.body(b.links.back());
-  world.addJoint(std::make_unique<SphericalJoint>(a.links.back(), ta.q.conjugate() * (mid - ta.x), b.links.back(),
-                                                  tb.q.conjugate() * (mid - tb.x)));
 }
 
 // A dynamic body hanging from the world by a spherical joint 5 cm above its centre.
