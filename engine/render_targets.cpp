@@ -111,6 +111,19 @@ void Renderer::Impl::ensureSingleSampleTargets(int w, int h) {
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, ground_lo_depth);
   glBindFramebuffer(GL_FRAMEBUFFER, ground_up_fbo);
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, main_color_tex, 0);
+  // The upsampled ground kept between frames: the main target's format, so that its copy into it
+  // is a memory copy.
+  if (!ground_full_fbo) {
+    glGenFramebuffers(1, &ground_full_fbo);
+    glGenTextures(1, &ground_full_tex);
+  }
+  glBindTexture(GL_TEXTURE_2D, ground_full_tex);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+  linearClampToEdge();
+  glBindFramebuffer(GL_FRAMEBUFFER, ground_full_fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, ground_full_tex, 0);
+  ground_key.clear();  // new textures: nothing kept
+  ground_full_key.clear();
 }
 
 void Renderer::Impl::ensureShadowMap(int size) {
