@@ -293,9 +293,6 @@ bool Renderer::Impl::screenRects(const Eigen::Matrix4f& view_proj, int w, int h,
       if (!add(Eigen::Vector3d(v.pos[0], v.pos[1], v.pos[2]))) return false;
     emit();
   }
-  const auto unite = [](const PixelRect& a, const PixelRect& b) {
-    return PixelRect{std::min(a.x0, b.x0), std::min(a.y0, b.y0), std::max(a.x1, b.x1), std::max(a.y1, b.y1)};
-  };
   const auto overlap = [](const PixelRect& a, const PixelRect& b) {
     const int64_t dx = std::min(a.x1, b.x1) - std::max(a.x0, b.x0), dy = std::min(a.y1, b.y1) - std::max(a.y0, b.y0);
     return dx > 0 && dy > 0 ? dx * dy : int64_t(0);
@@ -304,7 +301,7 @@ bool Renderer::Impl::screenRects(const Eigen::Matrix4f& view_proj, int w, int h,
     merged = false;
     for (size_t i = 0; i < out.size() && !merged; ++i)
       for (size_t j = i + 1; j < out.size() && !merged; ++j) {
-        const PixelRect u = unite(out[i], out[j]);
+        const PixelRect u = out[i] | out[j];
         // Merged when the union adds no more pixels than the pair shades twice, or than 8 blocks.
         if (u.area() - (out[i].area() + out[j].area() - overlap(out[i], out[j])) <=
             std::max<int64_t>(overlap(out[i], out[j]), 8 * 256)) {

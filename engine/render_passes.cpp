@@ -354,7 +354,7 @@ void Renderer::Impl::groundShadowPass(const FramePlan& f) {
 // the shadow texture's shaded texels (GROUND_LIT); then the ring around it to the edge, with
 // both. Most ground pixels are in the square, and the shadows in a small part of it. Leaves the
 // empty VAO bound.
-void Renderer::Impl::drawGroundParts(const FramePlan& f, int vw, int vh) {
+void Renderer::Impl::drawGroundParts(const FramePlan& f, int vw, int vh, const PixelRect& clip) {
   const Camera& cam = camera;
   for (GLuint p : {prog_ground, prog_ground_near, prog_ground_near_lit}) {
     setFrameUniforms(p, f);
@@ -378,35 +378,74 @@ void Renderer::Impl::drawGroundParts(const FramePlan& f, int vw, int vh) {
     glUseProgram(p);
     glUniform1f(loc(p, "u_quadHalf"), inner);
   }
+  // Each draw scissored to its part of the clip rectangle (none: not drawn).
+  glEnable(GL_SCISSOR_TEST);
+  const auto draw = [&](const PixelRect& part, GLint count) {
+    const PixelRect r = part & clip;
+    if (r.empty()) return;
+    glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+    glDrawArrays(GL_TRIANGLE_STRIP, 0, count);
+  };
+  const PixelRect all{0, 0, vw, vh};
   if (!boxed || whole) {
     glUseProgram(boxed ? prog_ground_near : prog_ground_near_lit);
-    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    draw(all, 4);
   } else {
-    glEnable(GL_SCISSOR_TEST);
     glUseProgram(prog_ground_near);
-    glScissor(sr.x0, sr.y0, sr.x1 - sr.x0, sr.y1 - sr.y0);
-    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    draw(sr, 4);
     glUseProgram(prog_ground_near_lit);
     const PixelRect around[4] = {
         {0, 0, vw, sr.y0}, {0, sr.y1, vw, vh}, {0, sr.y0, sr.x0, sr.y1}, {sr.x1, sr.y0, vw, sr.y1}};
-    for (const PixelRect& a : around) {
-      if (a.area() <= 0) continue;
-      glScissor(a.x0, a.y0, a.x1 - a.x0, a.y1 - a.y0);
-      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
-    }
-    glDisable(GL_SCISSOR_TEST);
+    for (const PixelRect& a : around) draw(a, 4);
   }
   glUseProgram(prog_ground);
   glUniform1f(loc(prog_ground, "u_quadInner"), inner);
-  glDrawArrays(GL_TRIANGLE_STRIP, 0, 10);
+  draw(all, 10);
+  glDisable(GL_SCISSOR_TEST);
+}
+
+// Everything the half-resolution ground and the upsampled one depend on outside the ground's
+// shadow rectangle (groundShadowRect): the uniforms drawGroundParts, the background and the
+// upsampling set, but for the light's matrix and the shadow texture, which only that rectangle
+// reads (outside it the ground is lit: the shadow texture reads 1 there, GROUND_LIT assumes 1).
+// Equal keys, equal pixels there.
+std::vector<float> Renderer::Impl::groundKey(const FramePlan& f) const {
+  std::vector<float> k(f.view_proj.data(), f.view_proj.data() + 16);
+  const auto add = [&](const auto& v) {
+    for (int i = 0; i < int(v.size()); ++i) k.push_back(float(v[i]));
+  };
+  add(camera.eye);
+  add(camera.target);
+  add(light.direction);
+  add(light.color);
+  add(params.background);
+  add(params.ground_color);
+  for (double v : {light.intensity, light.fill, light.ambient, params.grid_spacing, params.ground_height, f.fade_start,
+                   f.fade_end, f.ground_half})
+    k.push_back(float(v));
+  for (int v : {int(params.transparent), ground_lo_w, ground_lo_h, f.w, f.h, f.sky_row}) k.push_back(float(v));
+  return k;
 }
 
 // The ground, then the background around it, in a half-size texture with a depth buffer of its
 // own (no object in it): the texels around the ground's edge hold the background it fades into
 // (or alpha 0 when transparent), so the upsampled edge blends into what is drawn beside it.
 // First, before the objects: llvmpipe finishes a framebuffer's drawing at every switch, and this
-// order has one switch fewer.
+// order has one switch fewer. While groundKey() stays the same, only the last frame's shadow
+// rectangle and this frame's are drawn again (ground_lo_dirty): the rest is what it was.
 void Renderer::Impl::halfGroundPass(const FramePlan& f, RenderStats& st) {
+  const PixelRect all{0, 0, ground_lo_w, ground_lo_h};
+  std::vector<float> key = groundKey(f);
+  PixelRect shadow{0, 0, 0, 0};
+  bool whole = false;
+  if (!(f.shadows_on && groundShadowRect(f.view_proj, ground_lo_w, ground_lo_h, shadow, whole))) shadow = {0, 0, 0, 0};
+  ground_lo_kept = key == ground_key && !ground_lo_whole && !whole;
+  ground_lo_dirty = ground_lo_kept ? (ground_lo_shadow | shadow) & all : all;
+  ground_key = std::move(key);
+  ground_lo_shadow = shadow;
+  ground_lo_whole = whole;
+  if (ground_lo_dirty.empty()) return;
+  const PixelRect& d = ground_lo_dirty;
   bindShadowTextures(true);
   glBindFramebuffer(GL_FRAMEBUFFER, ground_lo_fbo);
   glViewport(0, 0, ground_lo_w, ground_lo_h);
@@ -414,57 +453,88 @@ void Renderer::Impl::halfGroundPass(const FramePlan& f, RenderStats& st) {
   glEnable(GL_DEPTH_TEST);  // (without a shadow pass before it, the state is what the last frame left)
   glDepthFunc(GL_LESS);
   glDepthMask(GL_TRUE);
+  glEnable(GL_SCISSOR_TEST);
+  glScissor(d.x0, d.y0, d.x1 - d.x0, d.y1 - d.y0);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  drawGroundParts(f, ground_lo_w, ground_lo_h);
-  if (!params.transparent) {
+  drawGroundParts(f, ground_lo_w, ground_lo_h, d);
+  // Only the rows the upsampling below sky_row reads (its pixel row y taps rows y / 2 and
+  // y / 2 + 1 at most).
+  const PixelRect bg = d & PixelRect{0, 0, ground_lo_w, std::min(ground_lo_h, f.sky_row / 2 + 2)};
+  if (!params.transparent && !bg.empty()) {
     setFrameUniforms(prog_bg, f);
     glUniform2f(loc(prog_bg, "u_viewport"), float(ground_lo_w), float(ground_lo_h));
     glDepthFunc(GL_LEQUAL);  // the far plane, where the depth is still the cleared 1
     glDepthMask(GL_FALSE);
-    // Only the rows the upsampling below sky_row reads (its pixel row y taps rows y / 2 and
-    // y / 2 + 1 at most).
-    const int lo_rows = std::min(ground_lo_h, f.sky_row / 2 + 2);
     glEnable(GL_SCISSOR_TEST);
-    glScissor(0, 0, ground_lo_w, lo_rows);
+    glScissor(bg.x0, bg.y0, bg.x1 - bg.x0, bg.y1 - bg.y0);
     glDrawArrays(GL_TRIANGLES, 0, 3);
-    glDisable(GL_SCISSOR_TEST);
     glDepthMask(GL_TRUE);
     glDepthFunc(GL_LESS);
   }
+  glDisable(GL_SCISSOR_TEST);
   glBindVertexArray(0);
   ++st.draw_calls;
 }
 
-// The half-resolution ground, a bilinear tap of it per pixel, over the frame below sky_row (the
-// objects are drawn over it); above it the background's own pass.
-void Renderer::Impl::upsampleGroundPass(const FramePlan& f, RenderStats& st) {
+// Into the bound target, inside `clip`: the half-resolution ground, a bilinear tap of it per
+// pixel, below sky_row; above it the background's own pass.
+void Renderer::Impl::upsampleGround(const FramePlan& f, const PixelRect& clip, RenderStats& st) {
   const int w = f.w, h = f.h;
-  glBindFramebuffer(GL_FRAMEBUFFER, ground_up_fbo);
   glDisable(GL_DEPTH_TEST);
-  const GLuint u = prog_ground_up;
-  glUseProgram(u);
-  glActiveTexture(GL_TEXTURE7);
-  glBindTexture(GL_TEXTURE_2D, ground_lo_tex);
-  glActiveTexture(GL_TEXTURE0);
-  glUniform1i(loc(u, "u_groundLo"), 7);
-  glBindVertexArray(empty_vao);
   glEnable(GL_SCISSOR_TEST);
-  glScissor(0, 0, w, f.sky_row);
-  glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
-  if (f.sky_row < h) {
-    // Its other uniforms are this frame's already: the half-resolution background set them (a
-    // split needs an opaque frame, which draws it).
-    glUseProgram(prog_bg);
+  glBindVertexArray(empty_vao);
+  if (const PixelRect r = clip & PixelRect{0, 0, w, f.sky_row}; !r.empty()) {
+    const GLuint u = prog_ground_up;
+    glUseProgram(u);
+    glActiveTexture(GL_TEXTURE7);
+    glBindTexture(GL_TEXTURE_2D, ground_lo_tex);
+    glActiveTexture(GL_TEXTURE0);
+    glUniform1i(loc(u, "u_groundLo"), 7);
+    glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    glActiveTexture(GL_TEXTURE7);
+    glBindTexture(GL_TEXTURE_2D, 0);  // a render target again next frame
+    glActiveTexture(GL_TEXTURE0);
+    ++st.draw_calls;
+  }
+  if (const PixelRect r = clip & PixelRect{0, f.sky_row, w, h}; !r.empty()) {
+    setFrameUniforms(prog_bg, f);
     glUniform2f(loc(prog_bg, "u_viewport"), float(w), float(h));
-    glScissor(0, f.sky_row, w, h - f.sky_row);
+    glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     ++st.draw_calls;
   }
   glDisable(GL_SCISSOR_TEST);
   glBindVertexArray(0);
-  glActiveTexture(GL_TEXTURE7);
-  glBindTexture(GL_TEXTURE_2D, 0);  // a render target again next frame
-  glActiveTexture(GL_TEXTURE0);
+}
+
+// The ground and the background at full size, under the objects. When halfGroundPass kept the
+// half-resolution ground, the upsampled one is kept too (ground_full_tex): only what the redrawn
+// texels reach is upsampled again, and the whole is copied into the main target
+// (glBlitFramebuffer of the same size and format: a memory copy on llvmpipe, about a quarter of
+// the bilinear tap's cost).
+void Renderer::Impl::upsampleGroundPass(const FramePlan& f, RenderStats& st) {
+  const PixelRect all{0, 0, f.w, f.h};
+  if (!ground_lo_kept) {
+    ground_full_key.clear();
+    glBindFramebuffer(GL_FRAMEBUFFER, ground_up_fbo);
+    upsampleGround(f, all, st);
+    return;
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, ground_full_fbo);
+  if (ground_full_key != ground_key) {
+    upsampleGround(f, all, st);
+    ground_full_key = ground_key;
+  } else if (!ground_lo_dirty.empty()) {
+    // Pixel x taps the texels at (x + 0.5) w_lo / w - 0.5 and the next: a redrawn texel column c
+    // reaches the pixels within 2 of 2c (3 for an odd width); 4 for the interpolation's rounding.
+    constexpr int kReach = 4;
+    const PixelRect& d = ground_lo_dirty;
+    upsampleGround(f, all & PixelRect{2 * d.x0 - kReach, 2 * d.y0 - kReach, 2 * d.x1 + kReach, 2 * d.y1 + kReach}, st);
+  }
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, ground_full_fbo);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, ground_up_fbo);
+  glBlitFramebuffer(0, 0, f.w, f.h, 0, 0, f.w, f.h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
   ++st.draw_calls;
 }
 
@@ -475,7 +545,7 @@ void Renderer::Impl::upsampleGroundPass(const FramePlan& f, RenderStats& st) {
 void Renderer::Impl::groundAndBackgroundPass(const FramePlan& f, RenderStats& st) {
   glBindVertexArray(empty_vao);
   if (params.ground) {
-    drawGroundParts(f, f.w, f.h);
+    drawGroundParts(f, f.w, f.h, PixelRect{0, 0, f.w, f.h});
     ++st.draw_calls;
   }
   if (!params.transparent) {

@@ -15,6 +15,20 @@ static void linearClampToEdge() {
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
 }
 
+// `fbo` with an RGBA8 colour texture `tex` of w x h (bilinear, clamped), both made at the first
+// call.
+static void colorTarget(GLuint& fbo, GLuint& tex, int w, int h) {
+  if (!fbo) {
+    glGenFramebuffers(1, &fbo);
+    glGenTextures(1, &tex);
+  }
+  glBindTexture(GL_TEXTURE_2D, tex);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+  linearClampToEdge();
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex, 0);
+}
+
 void Renderer::Impl::ensureTargets(int w, int h, int samples, bool post) {
   if (w == target_w && h == target_h && samples == target_samples && post == target_post) return;
   if (!msaa_fbo) {
@@ -51,17 +65,7 @@ void Renderer::Impl::ensureTargets(int w, int h, int samples, bool post) {
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, resolve_color);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, resolve_depth);
   output_fbo = (samples > 1 || post) ? resolve_fbo : msaa_fbo;
-  if (post) {
-    if (!post_src_fbo) {
-      glGenFramebuffers(1, &post_src_fbo);
-      glGenTextures(1, &post_src_tex);
-    }
-    glBindTexture(GL_TEXTURE_2D, post_src_tex);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
-    linearClampToEdge();
-    glBindFramebuffer(GL_FRAMEBUFFER, post_src_fbo);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, post_src_tex, 0);
-  }
+  if (post) colorTarget(post_src_fbo, post_src_tex, w, h);
   if (samples == 1) ensureSingleSampleTargets(w, h);
   target_w = w;
   target_h = h;
@@ -111,6 +115,11 @@ void Renderer::Impl::ensureSingleSampleTargets(int w, int h) {
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, ground_lo_depth);
   glBindFramebuffer(GL_FRAMEBUFFER, ground_up_fbo);
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, main_color_tex, 0);
+  // The upsampled ground kept between frames: the main target's format, so that its copy into it
+  // is a memory copy.
+  colorTarget(ground_full_fbo, ground_full_tex, w, h);
+  ground_key.clear();  // new textures: nothing kept
+  ground_full_key.clear();
 }
 
 void Renderer::Impl::ensureShadowMap(int size) {

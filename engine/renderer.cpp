@@ -76,14 +76,14 @@ Renderer::~Renderer() {
   GLuint bufs[] = {I.hull_vbo,       I.hull_ebo,  I.hull_shadow_vbo, I.hull_shadow_ebo,
                    I.hull_instances, I.lines_vbo, I.hair_vbo,        I.hair_ebo};
   glDeleteBuffers(8, bufs);
-  GLuint fbos[] = {I.msaa_fbo, I.resolve_fbo,   I.shadow_fbo,    I.ground_shadow_fbo,
-                   I.surf_fbo, I.ground_lo_fbo, I.ground_up_fbo, I.post_src_fbo};
-  glDeleteFramebuffers(8, fbos);
+  GLuint fbos[] = {I.msaa_fbo,      I.resolve_fbo,   I.shadow_fbo,   I.ground_shadow_fbo, I.surf_fbo,
+                   I.ground_lo_fbo, I.ground_up_fbo, I.post_src_fbo, I.ground_full_fbo};
+  glDeleteFramebuffers(9, fbos);
   GLuint rbs[] = {I.msaa_color,          I.msaa_depth,    I.resolve_color,
                   I.ground_shadow_depth, I.resolve_depth, I.ground_lo_depth};
   glDeleteRenderbuffers(6, rbs);
   if (I.main_color_tex) glDeleteTextures(1, &I.main_color_tex);
-  for (GLuint t : {I.surf_tex, I.key_tex, I.rest_tex, I.ground_lo_tex, I.post_src_tex})
+  for (GLuint t : {I.surf_tex, I.key_tex, I.rest_tex, I.ground_lo_tex, I.post_src_tex, I.ground_full_tex})
     if (t) glDeleteTextures(1, &t);
   if (I.shadow_tex) glDeleteTextures(1, &I.shadow_tex);
   if (I.ground_shadow_tex) glDeleteTextures(1, &I.ground_shadow_tex);

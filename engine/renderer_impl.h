@@ -176,7 +176,8 @@ struct Renderer::Impl {
   GLuint surf_fbo = 0, surf_tex = 0, key_tex = 0, rest_tex = 0;
   // With a single-sample target: the ground (over the background) at half resolution.
   GLuint ground_lo_fbo = 0, ground_lo_tex = 0, ground_lo_depth = 0;
-  GLuint ground_up_fbo = 0;  // main_color_tex without a depth buffer
+  GLuint ground_up_fbo = 0;                         // main_color_tex without a depth buffer
+  GLuint ground_full_fbo = 0, ground_full_tex = 0;  // the upsampled ground kept (groundKey)
   int ground_lo_w = 0, ground_lo_h = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0;
   GLuint raw_depth_sampler = 0;                         // reads shadow_tex without comparison (blocker search)
@@ -235,6 +236,15 @@ struct Renderer::Impl {
   struct PixelRect {
     int x0, y0, x1, y1;  // [x0, x1) x [y0, y1)
     int64_t area() const { return int64_t(x1 - x0) * (y1 - y0); }
+    bool empty() const { return x1 <= x0 || y1 <= y0; }
+    PixelRect operator&(const PixelRect& o) const {  // the intersection
+      return {std::max(x0, o.x0), std::max(y0, o.y0), std::min(x1, o.x1), std::min(y1, o.y1)};
+    }
+    PixelRect operator|(const PixelRect& o) const {  // the box around both (an empty one counts as none)
+      if (empty()) return o;
+      if (o.empty()) return *this;
+      return {std::min(x0, o.x0), std::min(y0, o.y0), std::max(x1, o.x1), std::max(y1, o.y1)};
+    }
   };
   bool screenRects(const Eigen::Matrix4f& view_proj, int w, int h, std::vector<PixelRect>& rects) const;
   std::vector<PixelRect> rects;  // scratch of the passes (kept: no allocation per frame)
@@ -242,6 +252,21 @@ struct Renderer::Impl {
   // The pixel rectangle (of a w x h viewport) outside which the ground is lit: its shadow texture
   // reads 1 there. False: none (nothing shadowed); `whole` set when it cannot be bounded.
   bool groundShadowRect(const Eigen::Matrix4f& view_proj, int w, int h, PixelRect& rect, bool& whole) const;
+
+  // The ground kept between frames (halfGroundPass, upsampleGroundPass). Outside the pixel
+  // rectangle its shadow texture shades (groundShadowRect), the ground and the background depend
+  // only on what groundKey() holds: while that stays the same (a fixed camera and light), a frame
+  // draws again only where the last frame's shadow or this one's is. ground_key: the key of what
+  // ground_lo_tex holds (empty: nothing kept); ground_lo_shadow: the last frame's shadow rectangle
+  // in its pixels (empty: none), ground_lo_whole: it could not be bounded. ground_full_key: the key
+  // of ground_full_tex, the upsampled ground and sky at full size (empty: not kept), copied into
+  // the main target instead of upsampling the whole frame again.
+  std::vector<float> groundKey(const FramePlan& f) const;
+  std::vector<float> ground_key, ground_full_key;
+  PixelRect ground_lo_shadow{0, 0, 0, 0};
+  bool ground_lo_whole = false;
+  bool ground_lo_kept = false;            // this frame drew ground_lo_tex again only in ...
+  PixelRect ground_lo_dirty{0, 0, 0, 0};  // ... these pixels of it
 
   // Targets (render_targets.cpp).
   void ensureTargets(int w, int h, int samples, bool post);
@@ -267,7 +292,9 @@ struct Renderer::Impl {
   void setFrameUniforms(GLuint prog, const FramePlan& f) {
     setCommonUniforms(prog, f.view_proj, f.light_vp, f.normal_offset, f.shadows_on);
   }
-  void drawGroundParts(const FramePlan& f, int vw, int vh);
+  // clip: the pixels of the vw x vh viewport to draw (the ground kept outside them).
+  void drawGroundParts(const FramePlan& f, int vw, int vh, const PixelRect& clip);
+  void upsampleGround(const FramePlan& f, const PixelRect& clip, RenderStats& st);
   void drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj, bool depth_only);
   // prog: the program for the main pass's camera-facing ribbons (0: prog_hair).
   void drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only, const Eigen::Vector3d& light_dir, GLuint prog = 0);

@@ -766,3 +766,49 @@ TEST(Renderer, DemoFrame720p) {
   ASSERT_EQ(px.size(), size_t(1280 * 720 * 4));
   r.release(h);
 }
+
+// A single-sample frame keeps the half-resolution ground, and the ground upsampled from it, from
+// the last frame while the camera and the light stay (render_passes.cpp, groundKey()): it draws
+// again only where the last frame's ground shadow was and where this one's is. Each frame of a
+// still camera must be the frame a renderer that kept nothing draws (here: the same frame right
+// after one from another camera), to the byte: the shadow moved, gone, come back.
+TEST(Renderer, TheGroundKeptBetweenFramesIsTheGroundDrawnAnew) {
+  REQUIRE_GL();
+  const Camera cam = testCamera();
+  Camera other = cam;
+  other.eye.x() += 0.3;
+  const RenderParams rp = testParams(1);
+  const auto sphereAt = [](const Eigen::Vector3d& c) { return [c](Renderer& r) { r.drawSphere(c, 0.1, red()); }; };
+  const auto nothing = [](Renderer&) {};
+  const Eigen::Vector3d a(0.0, 0.0, 0.2), b(0.3, 0.15, 0.25), c(-0.25, -0.1, 0.3);
+  render(other, rp, nothing);
+  std::vector<std::vector<uint8_t>> kept;
+  kept.push_back(render(cam, rp, sphereAt(a)));  // drawn whole
+  kept.push_back(render(cam, rp, sphereAt(b)));  // the half-resolution ground kept
+  kept.push_back(render(cam, rp, sphereAt(b)));  // the upsampled ground kept too
+  kept.push_back(render(cam, rp, sphereAt(c)));
+  kept.push_back(render(cam, rp, nothing));
+  kept.push_back(render(cam, rp, sphereAt(a)));
+  const std::vector<Eigen::Vector3d> at = {a, b, b, c, Eigen::Vector3d::Zero(), a};
+  std::vector<uint8_t> lit;
+  for (size_t i = 0; i < kept.size(); ++i) {
+    render(other, rp, nothing);
+    const auto anew = i == 4 ? render(cam, rp, nothing) : render(cam, rp, sphereAt(at[i]));
+    if (i == 4) lit = anew;
+    ASSERT_EQ(kept[i].size(), anew.size());
+    size_t differ = 0;
+    for (size_t k = 0; k < anew.size(); ++k) differ += kept[i][k] != anew[k];
+    EXPECT_EQ(differ, 0u) << "frame " << i << ": the kept ground differs from the ground drawn anew";
+  }
+  save("kept_ground_c.png", kept[3]);
+  // The frames do show a shadow: outside the sphere's disc (and 3 pixels around it), the frame
+  // with the sphere at c differs from the one without it (its shadow on the ground).
+  const Eigen::Vector2d centre = project(cam, c);
+  const double r_px = (project(cam, c + cam.view().block<1, 3>(1, 0).transpose() * 0.1) - centre).norm();
+  int shadow = 0;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x)
+      shadow += (Eigen::Vector2d(x, y) - centre).norm() > r_px + 3.0 &&
+                std::abs(luminance(kept[3], x, y) - luminance(lit, x, y)) > 3.0;
+  EXPECT_GT(shadow, 200) << "no shadow on the ground";
+}
