@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "bench/bench_adaptive.h"
+#include "bench/bench_loops.h"
 #include "bench/bench_peers.h"
 #include "bench/bench_report.h"
 #include "bench/bench_run.h"
@@ -68,6 +69,7 @@ struct BenchArgs {
   std::string ponytail_scene = "assets/scenes/ponytail.json";
   bool adaptive_only = false;
   AdaptiveBenchOptions adaptive;
+  bool loops_only = false;
   std::string command_line;
 };
 
@@ -847,6 +849,9 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 65536));
   cmd->add_option("--adaptive-seconds", args->adaptive.seconds, "Simulated seconds per run of --adaptive-only (2)")
       ->check(CLI::Range(0.01, 600.0));
+  cmd->add_flag("--loops-only", args->loops_only,
+                "Only closed loops (the four-bar, the hair loop): closure, energy, cost, agreement; writes "
+                "OUT/loops.md (--dts, --repeats, --quick apply)");
   cmd->callback([args, &exit_code] {
     const auto list = [](const auto& v) {
       std::string s;
@@ -887,6 +892,21 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
         a.command_line = args->command_line + " --adaptive-only --adaptive-links " + list(a.links) +
                          " --adaptive-budgets " + list(a.budgets) + " --adaptive-seconds " + fmt(a.seconds, "%g");
         exit_code = runAdaptiveBench(a);
+        return;
+      }
+      if (args->loops_only) {
+        LoopBenchOptions l;
+        l.out = args->out;
+        if (args->quick) {
+          l.four_bar_seconds = 1.0;
+          l.hair_loop_seconds = 0.5;
+          l.agree_dts = {240, 960};
+          l.repeats = 1;
+        }
+        if (!args->dts.empty()) l.dts = args->dts;
+        if (args->repeats > 0) l.repeats = args->repeats;
+        l.command_line = args->command_line + " --loops-only";
+        exit_code = runLoopBench(l);
         return;
       }
       exit_code = runBench(*args);

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "physics/hinge_joint.h"
 #include "physics/models/hopper_collisions.h"
 
 namespace ponyhop {
@@ -17,6 +18,19 @@ Material material(const Eigen::Vector3f& color, float specular, float shininess)
 }
 Material material(const Eigen::Vector3d& color, float specular, float shininess) {
   return material(Eigen::Vector3f(color.cast<float>()), specular, shininess);
+}
+
+// Every hinge of the world (physics/hinge_joint.h) as an axle along its axis through its pivot,
+// 3 radii long on each side: the four-bar's ground pivots.
+void drawHinges(const World& world, double radius, const Eigen::Vector3d& color, Renderer& renderer) {
+  for (const auto& joint : world.joints()) {
+    const auto* h = dynamic_cast<const HingeJoint*>(joint.get());
+    if (!h) continue;
+    const RigidBody& a = bodyOf(world.bodies(), h->bodyA());
+    const Eigen::Vector3d p = a.pointToWorld(h->pointA()), n = a.q * h->axisA();
+    renderer.drawTaperedCapsule(p - 3.0 * radius * n, p + 3.0 * radius * n, 0.6 * radius, 0.6 * radius,
+                                material(color, 0.6f, 80.0f));
+  }
 }
 
 // The hopper: a rounded body (a fat capsule along x with a cap and two side pods), a ball at the
@@ -134,6 +148,14 @@ HairMesh SceneDraw::chainHair(const Sim& sim, const Chain& chain, const ChainSec
 
 void SceneDraw::drawChain(const Sim& sim, const Chain& chain, const ChainSection& look, Renderer& renderer) const {
   const World& world = sim.world();
+  if (look.hinge.norm() > 1e-9) {
+    // A chain on a root hinge is a linkage (the four-bar), not hair: each link a rigid bar, and
+    // an axle through every hinge of the world (drawHinges).
+    for (const CapsuleSegment& c : chain.segments(world))
+      renderer.drawTaperedCapsule(c.top, c.bottom, c.radius_top, c.radius_bottom, material(look.color, 0.45f, 48.0f));
+    drawHinges(world, chain.radii.front(), look.hair.tie_color, renderer);
+    return;
+  }
   renderer.drawHair(chainHair(sim, chain, look));
   // The hair tie: a short band around the root, along the first link.
   const Eigen::Vector3d root = chain.anchor(world);

@@ -7,6 +7,7 @@
 #include <tuple>
 #include <type_traits>
 
+#include "physics/hinge_joint.h"
 #include "physics/integrator.h"
 #include "physics/prismatic_joint.h"
 #include "physics/small_matrix.h"
@@ -200,6 +201,10 @@ Status ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Cons
   std::vector<char> loop(joints.size(), 0);                   // the joint closes a loop (not in the tree)
   for (size_t j = 0; j < joints.size(); ++j) {
     const Constraint& c = *joints[j];
+    if (dynamic_cast<const HingeJoint*>(&c)) {
+      loop[j] = 1;  // a hinge is always a loop joint (physics/hinge_joint.h): its rows join the loop rows
+      continue;
+    }
     if (!dynamic_cast<const SphericalJoint*>(&c) && !dynamic_cast<const PrismaticJoint*>(&c)) {
       return fail("joint " + std::to_string(j) + " ('" + c.typeName() +
                   "') cannot be expressed in reduced coordinates (spherical and prismatic joints only; a contact "

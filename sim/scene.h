@@ -348,16 +348,27 @@ struct JointEnd {
   }
 };
 
-// A spherical joint the scene adds between two points on any two bodies (docs/PHYSICS.md, "Closed
+// A joint's kind: a ball joint (3 rows), or a hinge about `axis` (5 rows, physics/hinge_joint.h).
+enum class JointType { Spherical, Hinge };
+template <>
+struct EnumNames<JointType> {
+  static constexpr std::array<std::string_view, 2> names{"spherical", "hinge"};
+};
+
+// A joint the scene adds between two points on any two bodies (docs/PHYSICS.md, "Closed
 // loops"): a chain's tip tied back to the head closes a loop. Its two points must meet at t = 0
 // (the bodies between them are moved onto it); a loop that cannot close is refused.
 struct JointSection {
   std::string name;  // named in messages
+  JointType type = JointType::Spherical;
+  Eigen::Vector3d axis{0.0, 0.0, 0.0};  // hinge: its axis (world, at t = 0, before assembly)
   JointEnd a, b;
 
   template <class V>
   void reflect(V& v) {
     v("name", name, {.help = "Name of the joint (messages)"});
+    v("type", type, {.help = "spherical: a ball joint; hinge: turns only about axis"});
+    v("axis", axis, {.min = -1, .max = 1, .help = "Hinge axis (world, at t = 0); type hinge only"});
     v("a", a, {.help = "First end"});
     v("b", b, {.help = "Second end"});
   }
@@ -421,7 +432,7 @@ struct Scene {
   std::vector<ChainListSection> chains;  // more chains in the same world (each with its own attachment)
   std::optional<HopperSection> hopper;
   std::vector<HopperSection> hoppers;  // more hoppers in the same world (each with its own position)
-  std::vector<JointSection> joints;    // spherical joints between points on two bodies (closed loops)
+  std::vector<JointSection> joints;    // spherical joints and hinges between points on two bodies (closed loops)
   std::optional<CollisionSection> collision;
   std::optional<TerrainSection> terrain;
   std::vector<std::string> notes;  // what the reader chose for the user (not a field), shown on stderr
@@ -455,8 +466,8 @@ struct Scene {
     v("hopper", hopper, {.help = "Raibert hopper (body, leg, ground contact, controller)"});
     v("hoppers", hoppers, {.help = "More hoppers in the same world, each a hopper section", .apply = Apply::Restart});
     v("joints", joints,
-      {.help = "Spherical joints between points on two bodies (a chain's link end, the head, a hopper part, the "
-               "world): closed loops",
+      {.help = "Spherical joints and hinges between points on two bodies (a chain's link end, the head, a hopper "
+               "part, the world): closed loops",
        .apply = Apply::Restart});
     v("collision", collision, {.help = "Collisions: the ponytail against the head"});
     v("terrain", terrain,

@@ -580,6 +580,9 @@ void validateScene(const Scene& scene_in, const std::string& source) {
       }
     }
     if (fixed) errors.push_back(key + ": both ends are on bodies that do not move (the world or the head)");
+    if (joint.type == JointType::Hinge && !(joint.axis.norm() > 1e-9)) {
+      errors.push_back(key + ".axis: a hinge needs its axis (a non-zero vector, world, at t = 0)");
+    }
   }
   if (scene.collision && !scene.collision->head) {
     const auto& c = *scene.collision;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "physics/hinge_joint.h"
 #include "physics/models/anchor_motion.h"
 #include "physics/models/hopper_collisions.h"
 #include "physics/models/keyframes.h"
@@ -25,6 +26,7 @@ Sim::Sim(const Scene& scene, const AssetLoader* assets) : scene_(scene), world_(
   // record of the bodies' starting poses is taken from the assembled ones.
   if (scene_.collision) buildCollisions();
   if (!scene_.joints.empty() && world_.ok()) buildJoints();
+  if (world_.ok()) buildServos();
   if (collisions_) collisions_->attach(world_);
   if (!world_.ok()) throw InputError(scene_.path + ": " + world_.status());
 }
@@ -223,7 +225,13 @@ void Sim::buildJoints() {
     Eigen::Vector3d pa, pb;
     const int a = end(j.a, pa), b = end(j.b, pb);
     gap0.push_back((bodyOf(world_.bodies(), a).pointToWorld(pa) - bodyOf(world_.bodies(), b).pointToWorld(pb)).norm());
-    scene_joints_.push_back(world_.addJoint(std::make_unique<SphericalJoint>(a, pa, b, pb)));
+    if (j.type == JointType::Hinge) {
+      const Eigen::Vector3d n = j.axis.normalized();
+      scene_joints_.push_back(world_.addJoint(std::make_unique<HingeJoint>(
+          a, pa, bodyOf(world_.bodies(), a).q.conjugate() * n, b, pb, bodyOf(world_.bodies(), b).q.conjugate() * n)));
+    } else {
+      scene_joints_.push_back(world_.addJoint(std::make_unique<SphericalJoint>(a, pa, b, pb)));
+    }
   }
   const auto name = [this](size_t i) {
     const std::string& n = scene_.joints[i].name;
@@ -253,6 +261,18 @@ void Sim::buildJoints() {
                      "); remove it");
   }
   world_.projectVelocities();
+}
+
+// Each chain's root-hinge servo (chain.servo), made after the assembly so that its target starts
+// at the crank's assembled angle (no jump at t = 0).
+void Sim::buildServos() {
+  for (size_t i = 0; i < chains_.size(); ++i) {
+    const ServoParams& s = chainSection(scene_, i).servo;
+    if (chains_[i].empty() || !(s.stiffness > 0.0 || s.damping > 0.0)) continue;
+    const auto* hinge = dynamic_cast<const HingeJoint*>(world_.joints()[size_t(chains_[i].joints.front())].get());
+    if (hinge)
+      world_.addController(std::make_shared<HingeServo>(world_.bodies(), *hinge, s.speed, s.stiffness, s.damping));
+  }
 }
 
 bool Sim::step() {

@@ -98,6 +98,7 @@ class Sim {
   void buildChain(const ChainSection& c, const ChainListSection* listed, const std::string& key);
   void buildHoppers();
   void buildJoints();
+  void buildServos();
   void buildCollisions();
   Eigen::Vector3d standOffAnchor(const ChainParams& c) const;
 

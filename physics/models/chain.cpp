@@ -5,6 +5,7 @@
 #include <string>
 
 #include "physics/force_elements.h"
+#include "physics/hinge_joint.h"
 #include "physics/models/anchor_motion.h"
 #include "physics/rigid_body.h"
 #include "physics/spherical_joint.h"
@@ -20,6 +21,15 @@ Status validate(const ChainParams& p, const std::string& prefix) {
   }
   if (!(p.direction.norm() > 1e-9)) {
     return Status::error(prefix + ".direction = (0, 0, 0): must be a non-zero vector (the chain's initial direction)");
+  }
+  const bool servo = p.servo.stiffness > 0.0 || p.servo.damping > 0.0;
+  if (servo && !(p.hinge.norm() > 1e-9)) {
+    return Status::error(prefix + ".servo: a servo turns the root hinge: set " + prefix +
+                         ".hinge to its axis (it is 0 0 0: a spherical root joint)");
+  }
+  if (p.hinge.norm() > 1e-9 && p.hinge.normalized().cross(p.direction.normalized()).norm() < 1e-6) {
+    return Status::error(prefix + ".hinge is along " + prefix +
+                         ".direction: the first link would lie on its own axis (the hinge must be across the link)");
   }
   return {};
 }
@@ -74,7 +84,13 @@ Chain addChain(World& world, const ChainParams& params, int parent, const Eigen:
 
     // Joint: link i's top end on the anchor (i = 0) or on the previous link's bottom end.
     const Eigen::Vector3d parent_point = i == 0 ? anchor_local : Eigen::Vector3d(-half);
-    chain.joints.push_back(world.addJoint(std::make_unique<SphericalJoint>(previous, parent_point, id, half)));
+    if (i == 0 && params.hinge.norm() > 1e-9) {
+      const Eigen::Vector3d axis = params.hinge.normalized();
+      chain.joints.push_back(world.addJoint(std::make_unique<HingeJoint>(
+          previous, parent_point, bodyOf(world, previous).q.conjugate() * axis, id, half, q0.conjugate() * axis)));
+    } else {
+      chain.joints.push_back(world.addJoint(std::make_unique<SphericalJoint>(previous, parent_point, id, half)));
+    }
     // Root-to-tip curves (ratio 1: exactly the root's value at every joint).
     const double damping =
         params.damping_tip == 1.0 ? params.damping : params.damping * std::pow(params.damping_tip, s);

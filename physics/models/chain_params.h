@@ -15,6 +15,24 @@ struct EnumNames<ChainAttach> {
   static constexpr std::array<std::string_view, 3> names{"anchor", "head", "hopper"};
 };
 
+// A servo on a chain's root hinge (physics/hinge_joint.h, HingeServo): a PD soft constraint that
+// turns the first link about chain.hinge at `speed` from its pose at t = 0. Off when both gains
+// are 0 (the default).
+struct ServoParams {
+  double speed = 0.0;      // rad/s, the target angle's rate
+  double stiffness = 0.0;  // N m/rad
+  double damping = 0.0;    // N m s/rad
+
+  template <class V>
+  void reflect(V& v) {
+    v("speed", speed, {.unit = "rad/s", .min = -1e3, .max = 1e3, .help = "Rate the servo turns the root hinge at"});
+    v("stiffness", stiffness,
+      {.unit = "N m/rad", .min = 0, .max = 1e6, .help = "Servo stiffness on the hinge angle (0 and damping 0: off)"});
+    v("damping", damping,
+      {.unit = "N m s/rad", .min = 0, .max = 1e4, .help = "Servo damping on the hinge rate (0 and stiffness 0: off)"});
+  }
+};
+
 // Defaults are the canonical chain: identical solid cylinders, no damping, no stiffness, no drag.
 struct ChainParams {
   int links = 8;           // count
@@ -31,6 +49,10 @@ struct ChainParams {
   double drag = 0.0;                         // N s/m per metre of link, linear air drag on each link
   Eigen::Vector3d direction{1.0, 0.0, 0.0};  // initial direction from the anchor (unit)
   ChainAttach attach = ChainAttach::Anchor;
+  // The first joint as a hinge about this axis (world, at t = 0) instead of a spherical joint; 0 0 0:
+  // spherical. The four-bar's crank (assets/scenes/four_bar.json).
+  Eigen::Vector3d hinge{0.0, 0.0, 0.0};
+  ServoParams servo;  // drives the root hinge
 
   template <class V>
   void reflect(V& v) {
@@ -74,6 +96,12 @@ struct ChainParams {
     v("direction", direction,
       {.min = -1, .max = 1, .help = "Initial direction from the anchor", .apply = Apply::Restart});
     v("attach", attach, {.help = "What the first link hangs from", .apply = Apply::Restart});
+    v("hinge", hinge,
+      {.min = -1,
+       .max = 1,
+       .help = "The first joint turns only about this axis (world, at t = 0): a hinge; 0 0 0: spherical",
+       .apply = Apply::Restart});
+    v("servo", servo, {.help = "A servo that turns the root hinge at a given speed", .apply = Apply::Restart});
   }
 };
 

@@ -1,10 +1,11 @@
-// The hopper's joints against what is known: the prismatic knee's and the ground contact's
-// Jacobians and velocity-product terms against finite differences along exact free motions, the
-// knee holding without any stabilization while the leg tumbles, and physical nonsense refused.
+// The hopper's joints (and the four-bar's hinge) against what is known: the prismatic knee's, the
+// hinge's and the ground contact's Jacobians and velocity-product terms against finite differences along exact free
+// motions, the knee holding without any stabilization while the leg tumbles, and physical nonsense refused.
 #include <gtest/gtest.h>
 
 #include <random>
 
+#include "physics/hinge_joint.h"
 #include "physics/models/hopper.h"
 #include "physics/models/hopper_foot.h"
 #include "physics/prismatic_joint.h"
@@ -60,6 +61,20 @@ TEST(HopperKnee, PrismaticJacobianAndBiasMatchFiniteDifferences) {
         0, Eigen::Vector3d(0.01, -0.02, -0.1), quaternionFromRotationVector(Eigen::Vector3d(0.2, -0.1, 0.3)), 1,
         Eigen::Vector3d(-0.03, 0.01, 0.15), quaternionFromRotationVector(Eigen::Vector3d(0.1, 0.2, -0.2)));
     expectDerivativesMatch(knee, a, b, false);
+  }
+}
+
+// The four-bar's hinge (physics/hinge_joint.h) by the same check: its ball rows and its two axis
+// rows, a tilted axis, points off the centres.
+TEST(HopperKnee, HingeJacobianAndBiasMatchFiniteDifferences) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 20; ++trial) {
+    const RigidBody a = randomBody(rng, Eigen::Vector3d(0.0, 0.0, 0.6));
+    const RigidBody b = randomBody(rng, Eigen::Vector3d(0.0, 0.0, 0.3));
+    const Eigen::Vector3d axis = Eigen::Vector3d(0.3, 1.0, -0.2).normalized();
+    const HingeJoint hinge(0, Eigen::Vector3d(0.01, -0.02, -0.1), a.q.conjugate() * axis, 1,
+                           Eigen::Vector3d(-0.03, 0.01, 0.15), b.q.conjugate() * axis);
+    expectDerivativesMatch(hinge, a, b, false);
   }
 }
 

@@ -3,6 +3,8 @@
 // three agreeing; a loop that cannot close and a redundant joint are refused by name, never a NaN.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <numbers>
 #include <string>
 
 #include "sim/scene_io.h"
@@ -100,6 +102,72 @@ TEST(Loops, JointEndsAreChecked) {
   EXPECT_NE(link.find("joints.0.a.link: 3 is not a link of chain (it has 3"), std::string::npos) << link;
   const std::string fixed = err(R"({"joints": [{"a": {"body": "world"}}]})");
   EXPECT_NE(fixed.find("joints.0: both ends are on bodies that do not move"), std::string::npos) << fixed;
+}
+
+// The four-bar (assets/scenes/four_bar.json): a hinge crank on the anchor turned by a servo, the
+// coupler on ball joints, the follower on a hinge to the world. A quarter second at the scene's
+// step: every solver holds both hinges (the linkage stays in its plane, the loop closed), the
+// crank follows its servo, the solvers agree.
+TEST(Loops, TheFourBarTurnsInEverySolver) {
+  const auto load = [](const std::string& solver) {
+    return loadScene("assets/scenes/four_bar.json", {{"physics.solver", solver}});
+  };
+  Sim dense(load("dense")), tree(load("tree")), feather(load("featherstone"));
+  const Eigen::Vector3d o1(0.0, 0.0, 0.16);
+  const auto crankAngle = [&](const Sim& s) {
+    const Eigen::Vector3d d = s.chain()->bottom(s.world(), 0) - o1;
+    return std::atan2(d.x(), d.z());  // about +y, from up toward +x
+  };
+  const double start = crankAngle(dense);
+  double closure = 0.0, out_of_plane = 0.0, apart = 0.0;
+  for (int i = 0; i < 60 && dense.ok() && tree.ok() && feather.ok(); ++i) {
+    dense.step();
+    tree.step();
+    feather.step();
+    for (const Sim* s : {&dense, &tree, &feather}) {
+      closure = std::max(closure, s->maxJointError());
+      for (int k = 0; k < 3; ++k)
+        out_of_plane = std::max(out_of_plane, std::abs(s->chain()->bottom(s->world(), k).y()));
+    }
+    for (int k = 0; k < 2; ++k) {  // the crank's and the coupler's far ends (the follower's is pinned)
+      const Eigen::Vector3d p = dense.chain()->bottom(dense.world(), k);
+      apart = std::max({apart, (p - tree.chain()->bottom(tree.world(), k)).norm(),
+                        (p - feather.chain()->bottom(feather.world(), k)).norm()});
+    }
+  }
+  ASSERT_TRUE(dense.ok() && tree.ok() && feather.ok()) << dense.status() << tree.status() << feather.status();
+  std::printf("four-bar: closure %.3g, out of plane %.3g m, solvers %.3g m apart; crank turned %.4f rad\n", closure,
+              out_of_plane, apart, crankAngle(dense) - start);
+  EXPECT_EQ(feather.world().reduced()->loopRows(), 10) << "both hinges are loop joints";
+  EXPECT_LT(closure, 1e-10);
+  EXPECT_LT(out_of_plane, 1e-10);
+  EXPECT_LT(apart, 1e-5);
+  for (const Sim* s : {&dense, &tree, &feather})
+    EXPECT_NEAR(crankAngle(*s) - start, 0.25 * std::numbers::pi, 0.02) << "the servo turns the crank at pi rad/s";
+}
+
+TEST(Loops, HingesAndServosAreChecked) {
+  const auto err = [](const std::string& text) {
+    try {
+      Sim sim(parseScene(json::parse(text), "t.json"));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string axis =
+      err(R"({"anchor": {}, "chain": {"links": 3}, "joints": [{"type": "hinge", "a": {"body": "chain"}}]})");
+  EXPECT_NE(axis.find("joints.0.axis: a hinge needs its axis"), std::string::npos) << axis;
+  const std::string type = err(R"({"anchor": {}, "chain": {}, "joints": [{"type": "slider"}]})");
+  EXPECT_NE(type.find("joints.0.type"), std::string::npos) << type;
+  EXPECT_NE(type.find("hinge"), std::string::npos) << type;
+  const std::string servo = err(R"({"anchor": {}, "chain": {"servo": {"stiffness": 1}}})");
+  EXPECT_NE(servo.find("t.json: chain.servo: a servo turns the root hinge: set chain.hinge"), std::string::npos)
+      << servo;
+  const std::string along = err(R"({"anchor": {}, "chain": {"direction": [0, 0, 1], "hinge": [0, 0, -1]}})");
+  EXPECT_NE(along.find("chain.hinge is along chain.direction"), std::string::npos) << along;
+  const std::string range = err(R"({"anchor": {}, "chain": {"servo": {"damping": -1}}})");
+  EXPECT_NE(range.find("chain.servo.damping"), std::string::npos) << range;
 }
 
 }  // namespace
