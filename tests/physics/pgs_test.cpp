@@ -83,5 +83,32 @@ TEST(Pgs, FrictionBeyondTheConeSlidesAtItsBound) {
   EXPECT_NEAR(s.u(2), 0.0, kTol);
 }
 
+// A sliding contact solved as one block (exact_blocks) with a coupled 3 x 3 block, the way the
+// contact stage solves it: the answer is on the rim against the slip (p_t = -mu p_n d, the slip
+// after it along +d, the normal at its target), and it is the same from a cold start (the guess
+// opposite the sticking impulse) as from a warm one pointing 60 deg off (the search near the
+// last direction brackets the root from there).
+TEST(Pgs, ExactBlockSlidesOnTheRimFromAnyStart) {
+  Eigen::MatrixXd d(3, 3);
+  d << 2.0, 0.3, -0.2, 0.3, 1.5, 0.4, -0.2, 0.4, 1.0;
+  const Eigen::Vector3d u0(-1.0, 2.0, 1.0);
+  const std::vector<std::pair<int, int>> blocks = {{0, 3}};
+  PgsSettings settings{1e-12, 100, true, true};
+  Eigen::VectorXd cold;
+  projectedGaussSeidel(d, u0, Eigen::Vector3d::Zero(), blocks, {0.4}, cold, settings);
+  Eigen::VectorXd warm = Eigen::Vector3d(0.5, -0.1, 0.17);
+  projectedGaussSeidel(d, u0, Eigen::Vector3d::Zero(), blocks, {0.4}, warm, settings);
+  for (const Eigen::VectorXd& p : {cold, warm}) {
+    const Eigen::VectorXd u = u0 + d * p;
+    EXPECT_NEAR(u(0), 0.0, 1e-9);
+    EXPECT_GT(p(0), 0.0);
+    EXPECT_NEAR(p.tail<2>().norm(), 0.4 * p(0), 1e-9);
+    // The slip is along -p_t: their cross product vanishes and their dot product is negative.
+    EXPECT_NEAR(p(1) * u(2) - p(2) * u(1), 0.0, 1e-7);
+    EXPECT_LT(p.tail<2>().dot(u.tail<2>()), 0.0);
+  }
+  EXPECT_NEAR((cold - warm).norm(), 0.0, 1e-7);
+}
+
 }  // namespace
 }  // namespace ponyhop
