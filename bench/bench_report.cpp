@@ -167,8 +167,8 @@ void writeScalingSection(std::ostream& f, const std::vector<ScalingRow>& rows,
        "every solver with the drift control it ships with (tree and dense: position projection after a "
        "symplectic Euler step, and RATTLE, the default integrator; featherstone: joint coordinates, no drift) and "
        "symplectic Euler without stabilization, labelled *no drift control*. Joint error: the largest joint gap "
-       "over the timed run (sampled every 1/240 s; the peers' from their links' ends). Skipped: the first 1/240 s "
-       "put the round over the CPU budget. Left out is what `ponyhop sim` writes (`--csv`: a summary row's energy "
+       "over the timed run (sampled every 1/240 s; the peers' from their links' ends). Skipped: its first step put the "
+       "round over the CPU budget. Left out is what `ponyhop sim` writes (`--csv`: a summary row's energy "
        "and joint error once per 1 ms).\n\n";
   if (!build_notes.empty()) {
     f << "Build flags:\n\n";

@@ -159,7 +159,7 @@ std::vector<ScalingConfig> ourScalingConfigs(const std::string& scene, const std
 
 // The sweep at one N: `rounds` interleaved rounds of every configuration, each over the first
 // `seconds` of the swing. A configuration whose first round would take more than `budget` s of
-// CPU (estimated after its first 1/240 s) is skipped at this N; one that stops is not repeated.
+// CPU (estimated from its first step) is skipped at this N; one that stops is not repeated.
 std::vector<ScalingRow> runScalingSweep(const std::vector<ScalingConfig>& configs, int links, int rounds,
                                         double seconds, double budget);
 

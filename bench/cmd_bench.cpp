@@ -117,7 +117,7 @@ Config makeConfig(bool quick) {
     c.long_hopper = 10.0;
     c.repeats = 3;
     for (int n = 2; n <= 1024; n *= 2) c.scaling_links.push_back(n);
-    c.scaling_budget = 1.0;
+    c.scaling_budget = 3.0;
     c.scaling_rounds = 5;
     c.scaling_seconds = 0.25;
   }
@@ -827,7 +827,7 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
                   "Our solvers in the sweep, e.g. tree,featherstone (default all; for profiling one)")
       ->delimiter(',');
   cmd->add_option("--scaling-budget", args->scaling_budget,
-                  "CPU seconds a configuration's round of the sweep may take, else it is skipped at that N (default 1; "
+                  "CPU seconds a configuration's round of the sweep may take, else it is skipped at that N (default 3; "
                   "quick 0.2)")
       ->check(CLI::Range(0.0, 3600.0));
   cmd->add_option("--scaling-rounds", args->scaling_rounds,
