@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 
 #include "physics/stage_times.h"
 
@@ -26,7 +27,54 @@ constexpr Engine kEngines[] = {{"MuJoCo", "mujoco", "libmujoco-dev"},
                                {"ODE", "ode", "libode-dev"},
                                {"DART", "dart", "libdart-dev"}};
 
+// The first line a shell command prints ("" when it fails).
+std::string firstLine(const std::string& cmd) {
+  std::string out;
+  if (FILE* p = popen((cmd + " 2>/dev/null").c_str(), "r")) {
+    char b[512];
+    if (std::fgets(b, sizeof b, p)) out = b;
+    pclose(p);
+  }
+  while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
+  return out;
+}
+
 }  // namespace
+
+std::vector<std::string> buildFlagNotes() {
+  std::vector<std::string> notes{std::string("ours: ") + PONYHOP_BUILD_FLAGS +
+                                 "; the peer modules (our glue code) are compiled with the same flags"};
+  struct Package {
+    const char* engine;
+    const char* package;
+    const char* pc;  // pkg-config module, or ""
+  };
+  constexpr Package kPackages[] = {{"MuJoCo", "libmujoco-dev", ""},
+                                   {"Bullet", "libbullet-dev", "bullet-float64"},
+                                   {"ODE", "libode-dev", "ode"},
+                                   {"DART", "libdart-dev", "dart"}};
+  for (const Package& p : kPackages) {
+    const std::string version = firstLine(std::string("dpkg-query -W -f='${Version}' ") + p.package);
+    if (version.empty()) continue;
+    std::string line = std::string(p.engine) + ": Debian package " + p.package + " " + version;
+    if (p.pc[0]) {
+      const std::string cflags = firstLine(std::string("pkg-config --cflags ") + p.pc);
+      line += ", pkg-config " + std::string(p.pc) + " --cflags '" + cflags + "'";
+    }
+    notes.push_back(line);
+  }
+  // Without -ffile-prefix-map=<the current folder>=.: it names where the bench ran, not a flag.
+  std::string debian;
+  std::istringstream words(firstLine("dpkg-buildflags --get CXXFLAGS"));
+  for (std::string w; words >> w;) {
+    if (w.rfind("-ffile-prefix-map", 0) != 0) debian += (debian.empty() ? "" : " ") + w;
+  }
+  notes.push_back(
+      "the engines' libraries record no compiler flags (no .comment section, no debug info): Debian "
+      "builds its packages with dpkg-buildflags' defaults unless a package's rules override them" +
+      (debian.empty() ? std::string() : " (here: CXXFLAGS '" + debian + "')"));
+  return notes;
+}
 
 PeerChain peerChainOf(const Sim& sim) {
   PeerChain m;
@@ -125,26 +173,65 @@ RunResult benchPeerRun(const Peer& peer, const PeerChain& chain, double dt, doub
   return r;
 }
 
-ScalingResult benchPeerScaling(const Peer& peer, const PeerChain& chain, double dt, double budget) {
-  ScalingResult s;
-  std::string error;
-  auto sim = peer.make(chain, dt, error);
-  if (!sim) {
-    s.status = "failed";
-    s.reason = error;
-    return s;
+double peerJointError(const PeerChain& chain, const std::vector<PeerLink>& links) {
+  double worst = 0.0;
+  Eigen::Vector3d above = chain.anchor;  // the end the next link's top must meet
+  for (const PeerLink& l : links) {
+    const Eigen::Vector3d half = l.q.normalized() * Eigen::Vector3d(0.0, 0.0, 0.5 * chain.length);
+    worst = std::max(worst, (l.x + half - above).norm());
+    above = l.x - half;
   }
-  s.us_per_step = 1e6 * timeSteps(
-                            [&] {
-                              sim->step();
-                              return true;
-                            },
-                            budget, s.steps);
-  if (!sim->finite()) {
-    s.status = "failed";
-    s.reason = peer.name + "'s state became non-finite";
+  return worst;
+}
+
+namespace {
+
+class PeerSubject final : public ScalingSubject {
+ public:
+  // The PeerSim keeps a reference to the chain it was made from: made here, from chain_.
+  static std::unique_ptr<PeerSubject> make(const Peer& peer, PeerChain chain, std::string& error) {
+    auto subject = std::unique_ptr<PeerSubject>(new PeerSubject(peer, std::move(chain)));
+    subject->sim_ = peer.make(subject->chain_, kBenchGrid, error);
+    if (!subject->sim_) return nullptr;
+    return subject;
   }
-  return s;
+  bool step() override {
+    sim_->step();
+    return true;
+  }
+  bool ok() override { return sim_->finite(); }
+  double jointError() override {
+    sim_->links(links_);
+    return peerJointError(chain_, links_);
+  }
+  std::string why() const override {
+    char b[160];
+    std::snprintf(b, sizeof b, "t = %.6g s: %s's state became non-finite or ran away", sim_->time(), name_.c_str());
+    return b;
+  }
+  double time() const override { return sim_->time(); }
+
+ private:
+  PeerSubject(const Peer& peer, PeerChain chain) : name_(peer.name), chain_(std::move(chain)) {}
+  std::string name_;
+  PeerChain chain_;
+  std::unique_ptr<PeerSim> sim_;
+  std::vector<PeerLink> links_;
+};
+
+}  // namespace
+
+ScalingConfig peerScalingConfig(const Peer& peer, const std::string& scene) {
+  ScalingConfig c;
+  c.name = peer.name;
+  c.peer = true;
+  // ODE works in maximal coordinates and pulls its joints back (ERP); the others' joints hold by
+  // construction.
+  c.drift = peer.name.rfind("ode/", 0) == 0 ? "peer: ERP 0.2 (joint error correction)" : "peer: reduced coordinates";
+  c.make = [peer, scene](int links, std::string& error) -> std::unique_ptr<ScalingSubject> {
+    return PeerSubject::make(peer, peerChainOf(Sim(loadScene(scene, scalingOverrides(links)))), error);
+  };
+  return c;
 }
 
 PeerModules loadPeerModules(const std::vector<std::string>& dirs) {

@@ -37,8 +37,17 @@ std::vector<std::string> peerModuleDirs();
 RunResult benchPeerRun(const Peer& peer, const PeerChain& chain, double dt, double horizon, int repeats,
                        double long_duration, const Trajectory& reference, double e_start);
 
-// Cost per step of the chain hanging at rest (the scaling sweep), median of blocks of steps
-// within ~budget seconds.
-ScalingResult benchPeerScaling(const Peer& peer, const PeerChain& chain, double dt, double budget);
+// The build flags of ours (this build's compiler, build type and flags) and of each engine's
+// Debian package as far as it records them (its version, its pkg-config flags; Debian's default
+// compiler flags), one line each.
+std::vector<std::string> buildFlagNotes();
+
+// The peer as a configuration of the scaling sweep (bench_run.h): the chain of `scene` with
+// scalingOverrides(N), stepped at kBenchGrid; its joint error from the links' ends.
+ScalingConfig peerScalingConfig(const Peer& peer, const std::string& scene);
+
+// The largest gap of a joint of `links` (link i's top end against link i-1's bottom end, link 0's
+// against the anchor), m.
+double peerJointError(const PeerChain& chain, const std::vector<PeerLink>& links);
 
 }  // namespace ponyhop

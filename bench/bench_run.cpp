@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 
 #include "physics/stage_times.h"
@@ -202,62 +203,125 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
   return r;
 }
 
-double timeSteps(const std::function<bool()>& step, double budget, int& steps,
-                 const std::function<void()>& after_warmup) {
-  // One untimed-for-the-result step: warms caches and estimates the cost.
-  auto t0 = Clock::now();
-  bool ok = step();
-  const double estimate = std::max(1e-7, durationSeconds(Clock::now() - t0));
-  if (after_warmup) after_warmup();
-  const int blocks = 5;
-  // At most 2,000 steps per block for the default budgets (0.5 s and less); a longer budget (a
-  // profile of a small N) raises the cap with it.
-  const long cap = std::lround(2000.0 * std::max(1.0, budget / 0.5));
-  const long per_block = std::clamp(std::lround(budget / blocks / estimate), 1L, cap);
-  std::vector<double> times;
-  steps = 0;
-  for (int b = 0; b < blocks && ok; ++b) {
-    if (b > 0 && estimate * per_block * b > budget) break;  // slow: fewer blocks
-    t0 = Clock::now();
-    for (long i = 0; i < per_block && (ok = step()); ++i) ++steps;
-    times.push_back(durationSeconds(Clock::now() - t0) / per_block);
-  }
-  return median(times);
-}
+double ScalingRow::us() const { return median(us_per_step); }
 
 std::vector<Override> scalingOverrides(int links) {
-  return {{"chain.links", std::to_string(links)}, {"anchor.motion", "fixed"}, {"chain.direction", "[0,0,-1]"}};
+  // The scene's own direction (horizontal): the chain swings from its first step.
+  return {{"chain.links", std::to_string(links)}, {"anchor.motion", "fixed"}};
 }
 
-ScalingResult benchScaling(const std::string& scene, const std::string& solver, int links, double budget) {
-  ScalingResult s;
-  BenchCase c;
-  c.scene = scene;
-  // Hanging straight down at rest: the same work per step as any motion, and no whip to stop
-  // an explicit step, so every N runs its steps.
-  c.overrides = scalingOverrides(links);
-  const Method m{solver, "symplectic_euler", "none"};
-  auto sim = build(c, m, kBenchGrid);
-  if (!sim->ok()) {
-    s.status = "failed";
-    s.reason = sim->status();
-    return s;
+namespace {
+
+class SimSubject final : public ScalingSubject {
+ public:
+  explicit SimSubject(std::unique_ptr<Sim> sim) : sim_(std::move(sim)) {
+    // Timed as the peers' steps are, without the per-stage clock (its reads were 4-5 % of a tree
+    // step at N = 8).
+    sim_->world().setStageTiming(false);
   }
-  // The steps are timed as the peers' are, without the per-stage clock (its reads were 4-5 % of
-  // a tree step at N = 8); the joint-force stage's share comes from one more block with it on.
-  sim->world().setStageTiming(false);
-  const double per_step = timeSteps([&] { return sim->step(); }, budget, s.steps);
-  s.us_per_step = 1e6 * per_step;
-  sim->world().setStageTiming(true);
-  sim->world().resetStageTimes();
-  int staged = 0;
-  for (const int extra = std::max(1, s.steps / 5); sim->ok() && staged < extra && sim->step();) ++staged;
-  s.joint_forces_us = 1e6 * sim->world().stageTimes()[Stage::JointForces] / std::max(1, staged);
-  if (!sim->ok()) {
-    s.status = "failed";
-    s.reason = sim->status();
+  bool step() override { return sim_->step(); }
+  bool ok() override { return sim_->ok(); }
+  double jointError() override { return sim_->maxJointError(); }
+  std::string why() const override { return sim_->status(); }
+  double time() const override { return sim_->time(); }
+
+ private:
+  std::unique_ptr<Sim> sim_;
+};
+
+}  // namespace
+
+std::vector<ScalingConfig> ourScalingConfigs(const std::string& scene, const std::vector<std::string>& solvers) {
+  struct Ours {
+    Method m;
+    const char* drift;
+  };
+  const Ours all[] = {
+      {{"tree", "symplectic_euler", "projection"}, "projection"},
+      {{"tree", "rattle", "projection"}, "RATTLE (the default integrator)"},
+      {{"tree", "symplectic_euler", "none"}, "none: no drift control"},
+      {{"dense", "symplectic_euler", "projection"}, "projection"},
+      {{"dense", "rattle", "projection"}, "RATTLE (the default integrator)"},
+      {{"dense", "symplectic_euler", "none"}, "none: no drift control"},
+      {{"featherstone", "symplectic_euler", "none"}, "joint coordinates: no drift"},
+  };
+  std::vector<ScalingConfig> out;
+  for (const Ours& o : all) {
+    if (!solvers.empty() && std::find(solvers.begin(), solvers.end(), o.m.solver) == solvers.end()) continue;
+    ScalingConfig c;
+    c.name = o.m.name();
+    c.drift = o.drift;
+    c.make = [scene, m = o.m](int links, std::string& error) -> std::unique_ptr<ScalingSubject> {
+      BenchCase bc;
+      bc.scene = scene;
+      bc.overrides = scalingOverrides(links);
+      auto sim = build(bc, m, kBenchGrid);
+      if (!sim->ok()) {
+        error = sim->status();
+        return nullptr;
+      }
+      return std::make_unique<SimSubject>(std::move(sim));
+    };
+    out.push_back(std::move(c));
   }
-  return s;
+  return out;
+}
+
+std::vector<ScalingRow> runScalingSweep(const std::vector<ScalingConfig>& configs, int links, int rounds,
+                                        double seconds, double budget) {
+  const long steps = std::max(1L, stepsFor(seconds, kBenchGrid));
+  const long block = std::max(1L, std::lround(kDriftSample / kBenchGrid));  // joint error sampled between blocks
+  std::vector<ScalingRow> rows(configs.size());
+  for (size_t i = 0; i < configs.size(); ++i) {
+    rows[i].config = configs[i].name;
+    rows[i].drift = configs[i].drift;
+    rows[i].peer = configs[i].peer;
+    rows[i].links = links;
+    rows[i].steps = steps;
+  }
+  for (int round = 0; round < std::max(1, rounds); ++round) {
+    for (size_t k = 0; k < configs.size(); ++k) {
+      const size_t i = round % 2 == 0 ? k : configs.size() - 1 - k;  // ABBA: every other round reversed
+      ScalingRow& row = rows[i];
+      if (row.status != "ok") continue;  // stopped or skipped in the first round: deterministic
+      std::string error;
+      auto subject = configs[i].make(links, error);
+      if (!subject) {
+        row.status = "cannot_run";
+        row.reason = error;
+        continue;
+      }
+      double cpu = 0.0;
+      for (long done = 0; done < steps && row.status == "ok";) {
+        // The first round's first step alone: it estimates the round's cost before a block of an
+        // O(n^3) configuration at N = 1024 (seconds a step) is spent on it.
+        const long n = round == 0 && done == 0 ? 1 : std::min(block - done % block, steps - done);
+        const double t0 = threadCpuSeconds();
+        bool ok = true;
+        for (long s = 0; s < n && (ok = subject->step()); ++s) {
+        }
+        cpu += threadCpuSeconds() - t0;
+        done += n;
+        if (!ok || !subject->ok()) {
+          row.status = "failed";
+          row.reason = subject->why();
+          break;
+        }
+        if (round == 0) {
+          row.joint_error = std::max(row.joint_error, subject->jointError());
+          if (done == 1 && cpu * steps > budget) {
+            row.status = "skipped";
+            char b[160];
+            std::snprintf(b, sizeof b, "about %.3g s of CPU per round (%.3g us/step) > the budget %.3g s",
+                          cpu / n * steps, 1e6 * cpu / n, budget);
+            row.reason = b;
+          }
+        }
+      }
+      if (row.status == "ok") row.us_per_step.push_back(1e6 * cpu / steps);
+    }
+  }
+  return rows;
 }
 
 }  // namespace ponyhop

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -110,24 +111,60 @@ struct RunResult {
 RunResult benchRun(const BenchCase& c, const Method& method, double dt, double horizon, int repeats,
                    const Trajectory& reference);
 
-// Cost per step of a chain of `links` links with `solver` (symplectic Euler, no stabilization,
-// fixed anchor, chain hanging at rest, dt 1/1920 s: one solve per step), median of blocks of steps within ~budget
-// seconds.
-struct ScalingResult {
-  std::string status = "ok";
-  std::string reason;
-  double us_per_step = 0.0;
-  double joint_forces_us = 0.0;  // the joint-force stage's share per step
-  int steps = 0;
-};
-// Cost per step (s, median of up to 5 blocks of steps within ~budget seconds) of step(), after
-// one warm-up step that also estimates it (after_warmup runs next). steps: the steps timed.
-double timeSteps(const std::function<bool()>& step, double budget, int& steps,
-                 const std::function<void()>& after_warmup = {});
+// The scaling sweep (docs/bench/README.md, "Scaling"): cost per step against chain length, in
+// motion. The chain of `links` links is released horizontally from a fixed anchor (the bench's
+// fixed-anchor case) and every configuration, ours and the peers', is timed over the same first
+// `seconds` of its swing at dt = kBenchGrid. The configurations run in interleaved rounds (in
+// order, then in reverse order: ABBA), so that a change of load or clock speed meets all alike;
+// a step's cost is the thread's CPU time (a preempted bench is not charged).
 
-// The scaling sweep's chain: `links` links hanging straight down at rest from a fixed anchor.
+// One chain of the sweep, stepped in place.
+class ScalingSubject {
+ public:
+  virtual ~ScalingSubject() = default;
+  virtual bool step() = 0;          // false when the run stopped (why())
+  virtual bool ok() = 0;            // still running, checked between timed blocks (a peer: finite)
+  virtual double jointError() = 0;  // m, the largest gap of a joint now
+  virtual std::string why() const = 0;
+  virtual double time() const = 0;  // s, simulated
+};
+
+// A configuration of the sweep: one of ours (a Method) or a peer engine.
+struct ScalingConfig {
+  std::string name;   // tree/symplectic_euler/projection, mujoco/RK4
+  std::string drift;  // how its joints are held: "projection", "none: no drift control", ...
+  bool peer = false;
+  // A fresh chain of `links` links at t = 0; nullptr with `error` set when it cannot be built.
+  std::function<std::unique_ptr<ScalingSubject>(int links, std::string& error)> make;
+};
+
+// One configuration at one N over the rounds.
+struct ScalingRow {
+  std::string config, drift;
+  bool peer = false;
+  int links = 0;
+  std::string status = "ok";  // ok | failed (stopped within the timed run) | skipped (over the budget) | cannot_run
+  std::string reason;
+  long steps = 0;                   // per round
+  std::vector<double> us_per_step;  // CPU, one per round, in round order
+  double joint_error = 0.0;         // m, largest over the timed run (sampled every 1/240 s)
+  double us() const;                // the median round (0 when none)
+};
+
+// Our configurations of the sweep: per solver its drift control as shipped (tree and dense:
+// projection, and RATTLE, the default integrator; featherstone: joint coordinates, no drift),
+// plus symplectic Euler without stabilization (tree, dense), labelled as such. `solvers`: only
+// these (empty: all).
+std::vector<ScalingConfig> ourScalingConfigs(const std::string& scene, const std::vector<std::string>& solvers);
+
+// The sweep at one N: `rounds` interleaved rounds of every configuration, each over the first
+// `seconds` of the swing. A configuration whose first round would take more than `budget` s of
+// CPU (estimated from its first step) is skipped at this N; one that stops is not repeated.
+std::vector<ScalingRow> runScalingSweep(const std::vector<ScalingConfig>& configs, int links, int rounds,
+                                        double seconds, double budget);
+
+// The sweep's chain: `links` links released horizontally from the fixed anchor.
 std::vector<Override> scalingOverrides(int links);
-ScalingResult benchScaling(const std::string& scene, const std::string& solver, int links, double budget);
 
 double median(std::vector<double> v);
 

@@ -8,9 +8,9 @@
 //             the released chain is chaotic, so the horizon is where that holds (found, stated);
 //   long runs: energy drift (fixed anchor), joint drift, whether the motion stays bounded;
 //   cost:     microseconds per step and per simulated second (median of repeats), per stage.
-// Scaling: cost per step for N = 2 ... 1024 per solver. The peer engines whose modules were built
-// (MuJoCo, Bullet, ODE, DART: bench/peer.h) run the fixed-anchor chains and the scaling
-// sweep beside them, with a table of ours / fastest peer per N. Writes CSV, Markdown and PNGs.
+// Scaling: cost per step for N = 2 ... 1024, in motion, ours and the peers interleaved. The peer engines whose modules
+// were built (MuJoCo, Bullet, ODE, DART: bench/peer.h) run the fixed-anchor chains and the scaling sweep beside them,
+// with a table of ours / fastest peer per N. Writes CSV, Markdown and PNGs.
 #include <sys/utsname.h>
 
 #include <algorithm>
@@ -63,11 +63,14 @@ struct BenchArgs {
   bool scaling_only = false;
   std::vector<int> scaling_links;            // empty: the mode's set
   std::vector<std::string> scaling_solvers;  // empty: every solver of ours
-  double scaling_budget = -1.0;              // s per (solver, N); < 0: the mode's
+  double scaling_budget = -1.0;              // s of CPU per round of a configuration; < 0: the mode's
+  int scaling_rounds = -1;                   // interleaved rounds; < 0: the mode's
+  double scaling_seconds = -1.0;             // s of motion timed per round; < 0: the mode's
   bool collision = true;
   bool collision_only = false;
   std::string ponytail_scene = "assets/scenes/ponytail.json";
   bool adaptive_only = false;
+  bool equal_accuracy_only = false;
   AdaptiveBenchOptions adaptive;
   bool loops_only = false;
   std::string command_line;
@@ -84,7 +87,9 @@ struct Config {
   double long_fixed = 0.0, long_shake = 0.0, long_hopper = 0.0;  // s
   int repeats = 1;
   std::vector<int> scaling_links;
-  double scaling_budget = 0.0;  // s of stepping per (solver, N)
+  double scaling_budget = 0.0;   // s of CPU per round of a configuration at most (else skipped at that N)
+  int scaling_rounds = 1;        // interleaved rounds
+  double scaling_seconds = 0.0;  // s of the swing timed per round
 };
 
 Config makeConfig(bool quick) {
@@ -98,8 +103,10 @@ Config makeConfig(bool quick) {
     c.reference_h_min = 1.0 / 15360.0;
     c.long_fixed = c.long_shake = c.long_hopper = 0.5;
     c.repeats = 1;
-    c.scaling_links = {2, 4, 8, 16, 32};
-    c.scaling_budget = 0.02;
+    c.scaling_links = {2, 8, 32};
+    c.scaling_budget = 0.2;
+    c.scaling_rounds = 2;
+    c.scaling_seconds = 1.0 / 60.0;
   } else {
     c.links = {8, 32};
     c.dt_denominators = {60, 120, 240, 480, 960, 1920};
@@ -112,7 +119,9 @@ Config makeConfig(bool quick) {
     c.long_hopper = 10.0;
     c.repeats = 3;
     for (int n = 2; n <= 1024; n *= 2) c.scaling_links.push_back(n);
-    c.scaling_budget = 0.5;
+    c.scaling_budget = 3.0;
+    c.scaling_rounds = 5;
+    c.scaling_seconds = 0.25;
   }
   return c;
 }
@@ -268,11 +277,14 @@ void writeSummary(std::ofstream& f, const std::vector<std::unique_ptr<BenchCase>
   f << '\n';
 }
 
+// The README's section after the headline (cost at equal accuracy): how the bench measures.
+constexpr const char* kHowTitle = "\n## How the bench measures\n";
+
 // Markdown: one table of methods at a dt, the Pareto front, per-stage costs.
 void writeMarkdown(const std::string& path, const BenchArgs& args, const Config& cfg,
                    const std::vector<std::unique_ptr<BenchCase>>& cases, const std::vector<BenchRow>& rows,
                    const std::vector<Reference>& refs, const std::vector<ReferenceCheck>& checks,
-                   const std::vector<ScalingRow>& scaling, const std::vector<std::string>& notes,
+                   const std::string& scaling_section, const std::vector<std::string>& notes,
                    const std::string& load_before, const std::string& load_after, double wall) {
   std::ofstream f(path);
   if (!f) throw std::runtime_error(path + ": cannot write the file");
@@ -282,7 +294,9 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
     << "Made by `" << args.command_line << "` (" << (args.quick ? "quick mode" : "full") << ", " << fmt(wall, "%.0f")
     << " s wall) on " << u.nodename << " (" << u.machine << ", " << std::thread::hardware_concurrency()
     << " hardware threads); load average before " << load_before << ", after " << load_after
-    << ". Timings on a shared, loaded machine are noisy upper bounds; compare methods within one run.\n\n"
+    << ". Timings on a shared, loaded machine are noisy upper bounds; compare methods within one run.\n";
+  writeEqualAccuracySection(f, costPoints(rows), "this run (bench.csv)");
+  f << kHowTitle << "\n"
     << "Files: `bench.csv` (every run, failed ones with the World's message), `reference.csv` (the "
        "reference's convergence check), `scaling.csv`, `error_vs_cost_*.png`, `scaling.png`.\n\n"
     << "Every run uses fixed steps (`physics.substeps = 1`, `max_step_rotation = 0`, `tolerance = 0`): dt "
@@ -372,69 +386,7 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
     }
   }
 
-  if (scaling.empty()) return;
-  f << "\n## Scaling\n\n![cost against N](scaling.png)\n\n"
-    << "Chain hanging at rest from a fixed anchor, dt = 1/1920 s, median of blocks of steps. Ours: symplectic "
-       "Euler, no stabilization (one solve per step), timed with the per-stage clock off "
-       "(World::setStageTiming(false): its reads are 4-5 % of a step at N = 8, and the peers' steps carry none): "
-       "`Sim::step`, the step `ponyhop sim` takes (with the same clock off). Left out is what `ponyhop sim` "
-       "writes: at N = 1024 (featherstone, dt = 1/1920 s, whole-process CPU samples) the `--csv` summary (the "
-       "chain's energy and joint error, read only at the steps a 1 ms row takes) is 9 % of the process, and "
-       "`--poses` copies every body's pose each step, 2.5 %. As whole-process CPU (a 2 s run minus a 0.5 s "
-       "run, 6 rounds): 275 us per step with `--csv` against 258 with one `--poses` row, the summary 7 % of a "
-       "step (it was 70 us, 27 %, when every step built a constraint system). The peers (engine/integrator): "
-       "their own step.\n\n| N |";
-  std::vector<std::string> solvers;
-  for (const auto& s : scaling) {
-    if (std::find(solvers.begin(), solvers.end(), s.solver) == solvers.end()) solvers.push_back(s.solver);
-  }
-  for (const auto& s : solvers) f << ' ' << s << " us/step |";
-  f << "\n|---|";
-  for (size_t i = 0; i < solvers.size(); ++i) f << "---|";
-  f << '\n';
-  for (int n : cfg.scaling_links) {
-    f << "| " << n << " |";
-    for (const auto& s : solvers) {
-      for (const auto& r : scaling) {
-        if (r.solver == s && r.links == n) f << ' ' << (r.r.status == "ok" ? fmt(r.r.us_per_step) : r.r.status) << " |";
-      }
-    }
-    f << '\n';
-  }
-  // Ours against the fastest peer that stayed finite, per N.
-  std::vector<std::string> ours, theirs;
-  for (const auto& s : solvers) (s.find('/') == std::string::npos ? ours : theirs).push_back(s);
-  if (theirs.empty()) return;
-  f << "\n### Ours / fastest peer\n\nCost per step divided by the cheapest peer engine's at the same N (below 1: "
-       "ours is cheaper).\n\n| N | fastest peer | us/step |";
-  for (const auto& s : ours) f << ' ' << s << " / fastest |";
-  f << "\n|---|---|---|";
-  for (size_t i = 0; i < ours.size(); ++i) f << "---|";
-  f << '\n';
-  const auto cost = [&](const std::string& solver, int n) {
-    for (const auto& r : scaling) {
-      if (r.solver == solver && r.links == n && r.r.status == "ok") return r.r.us_per_step;
-    }
-    return -1.0;
-  };
-  for (int n : cfg.scaling_links) {
-    std::string best;
-    double best_cost = -1.0;
-    for (const auto& s : theirs) {
-      const double c = cost(s, n);
-      if (c > 0.0 && (best_cost < 0.0 || c < best_cost)) {
-        best = s;
-        best_cost = c;
-      }
-    }
-    if (best_cost <= 0.0) continue;
-    f << "| " << n << " | " << best << " | " << fmt(best_cost) << " |";
-    for (const auto& s : ours) {
-      const double c = cost(s, n);
-      f << ' ' << (c > 0.0 ? fmt(c / best_cost, "%.2f") : "") << " |";
-    }
-    f << '\n';
-  }
+  f << scaling_section;
 }
 
 // The cost of the ponytail's collisions: the demo scene (ponytail.json: the head collider, a swing
@@ -504,12 +456,6 @@ void runCollisionRound(const std::string& scene_path, double seconds, CollisionC
 }
 
 // "median (smallest-largest)" of the values, each with `format`.
-std::string spreadOf(const std::vector<double>& v, const char* format) {
-  if (v.empty()) return "";
-  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
-  return fmt(median(v), format) + " (" + fmt(*lo, format) + "-" + fmt(*hi, format) + ")";
-}
-
 }  // namespace
 
 std::vector<CollisionCostRow> benchCollisionCost(const std::string& scene_path, double seconds, int rounds) {
@@ -599,6 +545,33 @@ void appendCollisionCost(const std::string& path, const std::string& scene, doub
   }
 }
 
+// Replaces the level-2 section of the README at `path` that `section` starts with (its first
+// "## " line; up to the next level-2 title) by `section`, the rest kept; a section not there yet
+// goes before the title `insert_before` (or at the end). A --scaling-only or --equal-accuracy-only
+// run rewrites only its own.
+void replaceSection(const std::string& path, const std::string& section, const std::string& insert_before) {
+  std::string text;
+  {
+    std::ifstream in(path);
+    std::stringstream b;
+    b << in.rdbuf();
+    text = b.str();
+  }
+  const size_t title_at = section.find("\n## ");
+  const std::string title = section.substr(title_at, section.find('\n', title_at + 1) - title_at + 1);
+  size_t from = text.find(title), to = std::string::npos;
+  if (from != std::string::npos) {
+    to = text.find("\n## ", from + 1);
+  } else {
+    from = to = text.find(insert_before);
+  }
+  if (from == std::string::npos) from = to = text.size();
+  text = text.substr(0, from) + section + (to == std::string::npos ? "" : text.substr(to));
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path + ": cannot write the file");
+  out << text;
+}
+
 int runBench(BenchArgs& args) {
   const auto start = Clock::now();
   const std::string load_before = loadAverage();
@@ -616,6 +589,8 @@ int runBench(BenchArgs& args) {
   if (!args.dts.empty()) cfg.dt_denominators = args.dts;
   if (!args.scaling_links.empty()) cfg.scaling_links = args.scaling_links;
   if (args.scaling_budget >= 0.0) cfg.scaling_budget = args.scaling_budget;
+  if (args.scaling_rounds > 0) cfg.scaling_rounds = args.scaling_rounds;
+  if (args.scaling_seconds > 0.0) cfg.scaling_seconds = args.scaling_seconds;
   if (!args.scaling) cfg.scaling_links.clear();
   std::filesystem::create_directories(args.out);
   const double collision_seconds = args.quick ? 0.5 : 10.0;
@@ -625,6 +600,15 @@ int runBench(BenchArgs& args) {
     appendCollisionCost(args.out + "/README.md", args.ponytail_scene, collision_seconds, cfg.repeats, rows, load_before,
                         loadAverage());
     std::fprintf(stderr, "bench: collision cost -> %s/README.md\n", args.out.c_str());
+    return 0;
+  }
+  if (args.equal_accuracy_only) {
+    // Only the headline, from the bench.csv in the output folder: its section of the README.
+    std::ostringstream section;
+    writeEqualAccuracySection(section, readCostPoints(args.out + "/bench.csv"),
+                              "the bench.csv beside this README (the run named at the top)");
+    replaceSection(args.out + "/README.md", section.str(), kHowTitle);
+    std::fprintf(stderr, "bench: cost at equal accuracy -> %s/README.md\n", args.out.c_str());
     return 0;
   }
   std::vector<std::string> notes;
@@ -682,25 +666,33 @@ int runBench(BenchArgs& args) {
 
   // Scaling first (short), then the cases; the files are rewritten after each case so that a
   // long run that is stopped early still leaves what it measured.
+  // The sweep in motion, ours and the peers interleaved; one N at a time.
   std::vector<ScalingRow> scaling;
-  for (auto s : EnumNames<SolverKind>::names) {
-    const auto& only = args.scaling_solvers;
-    if (!only.empty() && std::find(only.begin(), only.end(), std::string(s)) == only.end()) continue;
+  std::string scaling_section;
+  if (!cfg.scaling_links.empty()) {
+    std::vector<ScalingConfig> configs = ourScalingConfigs(args.chain_scene, args.scaling_solvers);
+    for (const Peer& peer : peers) configs.push_back(peerScalingConfig(peer, args.chain_scene));
+    const std::string scaling_load = loadAverage();
     for (int n : cfg.scaling_links) {
-      ScalingRow r{std::string(s), n, benchScaling(args.chain_scene, std::string(s), n, cfg.scaling_budget)};
-      std::fprintf(stderr, "bench: scaling %-14s N = %-5d %10.1f us/step %s\n", r.solver.c_str(), n, r.r.us_per_step,
-                   r.r.status.c_str());
-      scaling.push_back(std::move(r));
+      for (ScalingRow& r : runScalingSweep(configs, n, cfg.scaling_rounds, cfg.scaling_seconds, cfg.scaling_budget)) {
+        std::fprintf(stderr, "bench: scaling %-34s N = %-5d %-28s us/step  joint error %.2g m  %s %s\n",
+                     r.config.c_str(), n, spreadOf(r.us_per_step, "%.3g").c_str(), r.joint_error, r.status.c_str(),
+                     r.reason.c_str());
+        scaling.push_back(std::move(r));
+      }
     }
+    std::ostringstream section;
+    writeScalingSection(section, scaling, buildFlagNotes(), cfg.scaling_rounds, cfg.scaling_seconds, args.command_line,
+                        scaling_load, loadAverage());
+    scaling_section = section.str();
   }
-  for (const Peer& peer : peers) {
-    for (int n : cfg.scaling_links) {
-      const PeerChain chain = peerChainOf(args.chain_scene, scalingOverrides(n));
-      ScalingRow r{peer.name, n, benchPeerScaling(peer, chain, kBenchGrid, cfg.scaling_budget)};
-      std::fprintf(stderr, "bench: scaling %-14s N = %-5d %10.1f us/step %s\n", r.solver.c_str(), n, r.r.us_per_step,
-                   r.r.status.c_str());
-      scaling.push_back(std::move(r));
-    }
+  if (args.scaling_only) {
+    // Only the sweep: its files and its section of the README (the rest kept).
+    writeScalingCsv(args.out + "/scaling.csv", scaling);
+    if (std::string e = plotScaling(args.out, scaling); !e.empty()) std::fprintf(stderr, "bench: %s\n", e.c_str());
+    replaceSection(args.out + "/README.md", scaling_section, "\n## Collision cost");
+    std::fprintf(stderr, "bench: scaling -> %s/README.md\n", args.out.c_str());
+    return 0;
   }
 
   std::vector<CollisionCostRow> collision_rows;
@@ -735,8 +727,8 @@ int runBench(BenchArgs& args) {
       if (n.rfind("plot", 0) == 0 || n.rfind("scaling plot", 0) == 0) std::fprintf(stderr, "bench: %s\n", n.c_str());
     }
     const double wall = std::chrono::duration<double>(Clock::now() - start).count();
-    writeMarkdown(args.out + "/README.md", args, cfg, cases, rows, refs, checks, scaling, out_notes, load_before,
-                  loadAverage(), wall);
+    writeMarkdown(args.out + "/README.md", args, cfg, cases, rows, refs, checks, scaling_section, out_notes,
+                  load_before, loadAverage(), wall);
     if (!collision_rows.empty()) {
       appendCollisionCost(args.out + "/README.md", args.ponytail_scene, collision_seconds, cfg.repeats, collision_rows,
                           collision_load_before, collision_load_after);
@@ -837,8 +829,17 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
                   "Our solvers in the sweep, e.g. tree,featherstone (default all; for profiling one)")
       ->delimiter(',');
   cmd->add_option("--scaling-budget", args->scaling_budget,
-                  "Seconds of stepping per solver and N in the sweep (default 0.5; quick 0.02; longer for perf)")
+                  "CPU seconds a configuration's round of the sweep may take, else it is skipped at that N (default 3; "
+                  "quick 0.2)")
       ->check(CLI::Range(0.0, 3600.0));
+  cmd->add_option("--scaling-rounds", args->scaling_rounds,
+                  "Interleaved rounds of the sweep, median and spread kept (default 5; quick 2)")
+      ->check(CLI::Range(1, 100));
+  cmd->add_option("--scaling-seconds", args->scaling_seconds,
+                  "Seconds of the swing timed per round of the sweep (default 0.25; quick 1/60)")
+      ->check(CLI::Range(1e-3, 60.0));
+  cmd->add_flag("--equal-accuracy-only", args->equal_accuracy_only,
+                "Only the headline, cost at equal accuracy, from OUT/bench.csv: rewrites its section of OUT/README.md");
   cmd->add_flag("--adaptive-only", args->adaptive_only,
                 "Only adaptive dynamics against the full step on long chains: writes OUT/adaptive.md");
   cmd->add_option("--adaptive-links", args->adaptive.links, "Chain lengths of --adaptive-only (default 64,256,1024)")
@@ -884,6 +885,10 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
     if (args->ponytail_scene != BenchArgs{}.ponytail_scene)
       args->command_line += " --ponytail-scene " + args->ponytail_scene;
     if (!args->scaling_links.empty()) args->command_line += " --scaling-links " + list(args->scaling_links);
+    if (!args->scaling_solvers.empty()) args->command_line += " --scaling-solvers " + list(args->scaling_solvers);
+    if (args->scaling_budget >= 0.0) args->command_line += " --scaling-budget " + fmt(args->scaling_budget, "%g");
+    if (args->scaling_rounds > 0) args->command_line += " --scaling-rounds " + std::to_string(args->scaling_rounds);
+    if (args->scaling_seconds > 0.0) args->command_line += " --scaling-seconds " + fmt(args->scaling_seconds, "%g");
     try {
       if (args->adaptive_only) {
         AdaptiveBenchOptions& a = args->adaptive;

@@ -112,8 +112,15 @@ class MujocoSim final : public PeerSim {
   MujocoSim(const PeerChain& chain, std::unique_ptr<Model> model) : PeerSim(chain), s_(std::move(model)) {
     mj_forward(s_->m, s_->d);
   }
-  void step() override { mj_step(s_->m, s_->d); }
-  double time() const override { return s_->d->time; }
+  void step() override {
+    const double t = s_->d->time;
+    mj_step(s_->m, s_->d);
+    // When an acceleration goes bad (non-finite or above 1e10), mj_step warns (mjWARN_BADQACC) and
+    // resets the state to the model's start, time 0, and goes on from there: the run ended at this
+    // step (finite() says so), not at the time the reset state shows.
+    if (stopped_ < 0.0 && s_->d->warning[mjWARN_BADQACC].number > 0) stopped_ = t + s_->m->opt.timestep;
+  }
+  double time() const override { return stopped_ >= 0.0 ? stopped_ : s_->d->time; }
   // Body i + 1 is link i (body 0 is the world); its inertial frame is the link's centre.
   void links(std::vector<PeerLink>& out) override {
     mj_forward(s_->m, s_->d);  // kinematics, velocities and energy at the new state
@@ -138,6 +145,7 @@ class MujocoSim final : public PeerSim {
 
  private:
   std::unique_ptr<Model> s_;
+  double stopped_ = -1.0;  // s, when MuJoCo reset the state after a bad acceleration
 };
 
 Peer mujocoPeer(const std::string& integrator) {

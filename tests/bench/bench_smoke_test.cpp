@@ -14,35 +14,11 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_report.h"
+
 namespace {
 
 namespace fs = std::filesystem;
-
-// RFC 4180 fields: quoted fields may hold commas and doubled quotes.
-std::vector<std::string> splitCsv(const std::string& line) {
-  std::vector<std::string> out(1);
-  bool quoted = false;
-  for (size_t i = 0; i < line.size(); ++i) {
-    const char c = line[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
-        out.back() += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        out.back() += c;
-      }
-    } else if (c == '"') {
-      quoted = true;
-    } else if (c == ',') {
-      out.emplace_back();
-    } else {
-      out.back() += c;
-    }
-  }
-  return out;
-}
 
 struct Csv {
   std::vector<std::string> header;
@@ -59,9 +35,9 @@ Csv readCsv(const fs::path& p) {
   Csv csv;
   std::ifstream f(p);
   std::string line;
-  if (std::getline(f, line)) csv.header = splitCsv(line);
+  if (std::getline(f, line)) csv.header = ponyhop::splitCsvLine(line);
   while (std::getline(f, line)) {
-    if (!line.empty()) csv.rows.push_back(splitCsv(line));
+    if (!line.empty()) csv.rows.push_back(ponyhop::splitCsvLine(line));
   }
   return csv;
 }
@@ -76,8 +52,9 @@ bool finiteOrEmpty(const std::string& s) {
 
 bool isNumber(const std::string& s) { return !s.empty() && finiteOrEmpty(s); }
 
-const std::set<std::string> kText{"case", "anchor", "method", "solver",      "integrator",  "stabilization",
-                                  "step", "status", "reason", "long_status", "long_reason", "reference"};
+const std::set<std::string> kText{"case",          "anchor",    "method", "solver", "integrator",
+                                  "stabilization", "step",      "status", "reason", "long_status",
+                                  "long_reason",   "reference", "config", "drift"};
 
 class BenchSmoke : public ::testing::Test {
  protected:
