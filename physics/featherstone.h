@@ -118,9 +118,9 @@ class ArticulatedSystem {
   // articulated inertia D = S^T I^A S it drives (a rigid joint scores the acceleration it would
   // have if it alone were freed). At most `budget` joints (0 = no cap) whose score is above
   // `tolerance` (J; 0 = only the round-off floor) move; every other joint is rigid for the step:
-  // u = 0, u' = 0, its subtree carried whole by the ABA. A joint that turns rigid is locked by an
-  // internal impulse (momentum kept, kinetic energy never rises: lock()). Off (every joint moves,
-  // the plain ABA step to the bit) when tolerance = 0 and budget is 0 or at least jointCount().
+  // u = 0, u' = 0; each rigid stretch is stepped as one composite body (formComposites()). A joint that turns rigid is
+  // locked by an internal impulse (momentum kept, kinetic energy never rises: lock()). Off (every joint moves, the
+  // plain ABA step to the bit) when tolerance = 0 and budget is 0 or at least jointCount().
   void setAdaptive(int budget, double tolerance);
   bool adaptive() const { return adaptive_; }
   int jointCount() const { return joint_count_; }  // spherical and prismatic joints (a free root is none)
