@@ -25,7 +25,8 @@ struct AdaptiveRun {
   double cpu = std::numeric_limits<double>::infinity();  // s of CPU per simulated s, least of the repeats
   double active_mean = 0.0;
   int active_max = 0;
-  std::string stopped;  // the world's message when it stopped
+  double substeps = 0.0;  // mean substeps per dt (max_step_rotation splits a dt when the joints turn fast)
+  std::string stopped;    // the world's message when it stopped
 };
 
 // A chain of N links, 1 m long in all (hair to the waist), 0.2 kg; fixed: released from
@@ -56,7 +57,7 @@ void runOnce(int links, const std::string& anchor, const AdaptiveBenchOptions& o
   const long steps = std::lround(o.seconds * o.dt_denominator);
   const double e0 = cw.world.energy();
   std::vector<Eigen::Vector3d> tip;
-  double drift = 0.0, active_sum = 0.0;
+  double drift = 0.0, active_sum = 0.0, substeps = 0.0;
   int active_max = 0;
   if (record) tip.reserve(steps);
   double cpu = 0.0;
@@ -67,6 +68,7 @@ void runOnce(int links, const std::string& anchor, const AdaptiveBenchOptions& o
     cpu += threadCpuSeconds() - c0;
     if (!record) continue;
     tip.push_back(cw.chain.tip(cw.world));
+    substeps += cw.world.lastSubsteps();
     drift = std::max(drift, std::abs(cw.world.energy() - e0));
     const int active = cw.world.reduced() ? cw.world.reduced()->activeJoints() : 0;
     active_sum += active;
@@ -79,6 +81,7 @@ void runOnce(int links, const std::string& anchor, const AdaptiveBenchOptions& o
     run.drift = drift;
     run.active_mean = done > 0 ? active_sum / static_cast<double>(done) : 0.0;
     run.active_max = active_max;
+    run.substeps = done > 0 ? substeps / static_cast<double>(done) : 0.0;
   }
 }
 
@@ -99,10 +102,11 @@ int runAdaptiveBench(const AdaptiveBenchOptions& o) {
         "shaking anchor. Error: the tip's distance from the full run's tip at the same time (every dt) (RMS and max "
         "over the "
         "run; % of the chain's 1 m length). Cost: CPU seconds of World::step per simulated second, the least of "
-     << o.repeats << " runs, the variants of a case interleaved. Active joints: per step, mean and max.\n\n"
+     << o.repeats
+     << " runs, the variants of a case interleaved. Active joints: per step, mean and max. Substeps: per dt, mean.\n\n"
      << "Load average before: " << load_before << ".\n\n"
      << "| N | anchor | variant | tip RMS err (m) | max err (m) | RMS / length | energy drift (J) | CPU s per sim. s "
-        "| full / this | active mean | active max |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "| full / this | active mean | active max | substeps |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   int status = 0;
   for (int n : o.links) {
     for (const std::string& anchor : o.anchors) {
@@ -134,15 +138,17 @@ int runAdaptiveBench(const AdaptiveBenchOptions& o) {
         md << "| " << n << " | " << anchor << " | " << run.variant << " | " << fmt(rms) << " | " << fmt(worst) << " | "
            << fmt(100.0 * rms, "%.2g") << " % | " << (anchor == "fixed" ? fmt(run.drift) : std::string("-")) << " | "
            << fmt(run.cpu) << " | " << fmt(full.cpu / run.cpu, "%.2f") << " | " << fmt(run.active_mean, "%.1f") << " | "
-           << run.active_max << " |";
+           << run.active_max << " | " << fmt(run.substeps, "%.2f") << " |";
         if (!run.stopped.empty()) {
           md << " stopped: " << run.stopped;
           status = 1;
         }
         md << "\n";
-        std::fprintf(stderr, "bench adaptive: N=%d %s %-14s rms %.3g m, max %.3g m, %.3g cpu s/s, active %.1f/%d%s\n",
-                     n, anchor.c_str(), run.variant.c_str(), rms, worst, run.cpu, run.active_mean, run.active_max,
-                     run.stopped.empty() ? "" : " (stopped)");
+        std::fprintf(
+            stderr,
+            "bench adaptive: N=%d %s %-14s rms %.3g m, max %.3g m, %.3g cpu s/s, active %.1f/%d, substeps %.2f%s\n", n,
+            anchor.c_str(), run.variant.c_str(), rms, worst, run.cpu, run.active_mean, run.active_max, run.substeps,
+            run.stopped.empty() ? "" : " (stopped)");
       }
       md.flush();
     }

@@ -1,9 +1,11 @@
 #include "physics/featherstone.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <tuple>
 #include <type_traits>
 
@@ -187,6 +189,7 @@ Status ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Cons
   nodes_.clear();
   dofs_ = 0;
   have_state_ = false;
+  composites_formed_ = false;
   const auto fail = [&](std::string e) {
     nodes_.clear();
     built_ =
@@ -344,6 +347,13 @@ Status ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Cons
     loop_rows_ += l.rows;
     loops_.push_back(l);
   }
+  allocate();
+  built_ = {};
+  return built_;
+}
+
+// The work space of the nodes, the loops and the adaptive choice (a step allocates nothing).
+void ArticulatedSystem::allocate() {
   for (std::vector<LoopBlock>* v : {&loop_pa_, &loop_u_, &loop_acc_})
     v->assign(nodes_.size(), LoopBlock(6, loop_rows_));
   loop_y_.resize(dofs_, loop_rows_);
@@ -367,8 +377,6 @@ Status ArticulatedSystem::build(const std::vector<RigidBody>& bodies, const Cons
   score_.assign(nodes_.size(), 0.0);
   order_.reserve(nodes_.size());
   setAdaptive(budget_, tolerance_);
-  built_ = {};
-  return built_;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1043,7 +1051,17 @@ void ArticulatedSystem::setAdaptive(int budget, double tolerance) {
   tolerance_ = tolerance;
   const bool on = tolerance > 0.0 || (budget > 0 && budget < joint_count_);
   if (!on) std::fill(rigid_.begin(), rigid_.end(), 0);  // every joint moves (rigid ones at rest relative)
+  if (on != adaptive_) composites_formed_ = false;
   adaptive_ = on;
+}
+
+// The choice costs an ABA over all n nodes; the step over the composites costs about 4 (k + 1)
+// node passes (RK4). Choosing every n / (4 k) steps keeps the choice's share of a step's cost
+// at most about the composites' (so the cost per step is O(k) amortized), capped at 16 steps
+// so that a joint that starts to matter waits at most that long.
+int ArticulatedSystem::choicePeriod() const {
+  const int k = budget_ > 0 ? budget_ : std::max(activeJoints(), 1);
+  return std::clamp(joint_count_ / (4 * k), 1, 16);
 }
 
 int ArticulatedSystem::activeJoints() const {
@@ -1179,6 +1197,271 @@ Status ArticulatedSystem::chooseActive(double t, double h, std::vector<RigidBody
 }
 
 // ---------------------------------------------------------------------------------------------
+// Adaptive dynamics over composite bodies (docs/SOLVERS.md, "Adaptive dynamics", "Cost")
+
+// The stretches of the active set: a composite starts at every node whose joint is active, at a
+// free root and at a root held rigid to a prescribed parent (welded: it moves with that parent);
+// every other node joins its parent's composite. Each composite is one rigid body: its mass, its
+// centre and its inertia about the centre are constant in its root link's frame while the
+// stretch stays rigid, so they are summed once here (O(n), only when the active set changed) and
+// its frame is the principal axes of that inertia, so that it is an ordinary RigidBody. The
+// composites' tree is an ArticulatedSystem of its own (sub_) whose joints are the active joints
+// with their geometry carried into the composites' frames: the ABA and the integrator then run
+// over k + 1 bodies. The bodies must hold the current state (writeState()).
+void ArticulatedSystem::formComposites(const std::vector<RigidBody>& bodies) {
+  const size_t n = nodes_.size();
+  composites_.clear();
+  composite_of_.assign(n, -1);
+  for (size_t i = 0; i < n; ++i) {
+    const Node& nd = nodes_[i];
+    if (nd.type != Type::Free && rigid_[i] && nd.parent_node >= 0) {
+      composite_of_[i] = composite_of_[nd.parent_node];
+      continue;
+    }
+    Composite c;
+    c.node = static_cast<int>(i);
+    c.welded = nd.type != Type::Free && rigid_[i];
+    composite_of_[i] = static_cast<int>(composites_.size());
+    composites_.push_back(c);
+  }
+  // Members, composite by composite (nodes are parents first, so each list is too).
+  composite_nodes_.resize(n);
+  std::vector<int>& count = composite_count_;
+  count.assign(composites_.size() + 1, 0);
+  for (size_t i = 0; i < n; ++i) ++count[composite_of_[i] + 1];
+  for (size_t c = 0; c < composites_.size(); ++c) {
+    composites_[c].first = count[c];
+    count[c + 1] += count[c];
+  }
+  for (size_t i = 0; i < n; ++i) composite_nodes_[count[composite_of_[i]]++] = static_cast<int>(i);
+
+  if (!sub_) sub_ = std::make_unique<ArticulatedSystem>();
+  ArticulatedSystem& sub = *sub_;
+  sub.nodes_.clear();
+  sub.dofs_ = 0;
+  sub_bodies_.clear();
+  sub_prescribed_.clear();
+  sub_composite_.clear();
+  for (Composite& c : composites_) {
+    c.count = (&c == &composites_.back() ? static_cast<int>(n) : (&c + 1)->first) - c.first;
+    const RigidBody& root = bodies[nodes_[c.node].body];
+    RigidBody cb;
+    cb.kind = c.welded ? RigidBody::Kind::Kinematic : RigidBody::Kind::Dynamic;
+    cb.name = root.name;
+    if (c.count == 1) {
+      // One link: its own frame and centre (no rounding from an eigen decomposition).
+      c.frame.setIdentity();
+      c.com.setZero();
+      cb.mass = root.mass;
+      cb.inertia = root.inertia;
+    } else {
+      // m, centre and inertia about it in the root's frame: I = sum R_m I_m R_m^T + m (|r|^2 1 - r r^T).
+      const Eigen::Quaterniond q_root_inv = root.q.conjugate();
+      const Eigen::Matrix3d rt = root.rotation().transpose();
+      double mass = 0.0;
+      Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+      for (int k = 0; k < c.count; ++k) {
+        const RigidBody& b = bodies[nodes_[composite_nodes_[c.first + k]].body];
+        mass += b.mass;
+        moment += b.mass * (rt * (b.x - root.x));
+      }
+      c.com = moment / mass;
+      Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+      for (int k = 0; k < c.count; ++k) {
+        const RigidBody& b = bodies[nodes_[composite_nodes_[c.first + k]].body];
+        const Eigen::Vector3d r = rt * (b.x - root.x) - c.com;
+        inertia += rotateDiagonal((q_root_inv * b.q).normalized().toRotationMatrix(), b.inertia);
+        inertia += b.mass * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
+      }
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(inertia);
+      Eigen::Matrix3d axes = eig.eigenvectors();
+      if (axes.determinant() < 0.0) axes.col(2) = -axes.col(2);
+      c.frame = Eigen::Quaterniond(axes).normalized();
+      cb.mass = mass;
+      cb.inertia = eig.eigenvalues();
+    }
+    cb.q = renormalized(root.q * c.frame);
+    cb.x = root.x + root.q * c.com;
+    cb.w = root.w;
+    cb.v = root.v + root.w.cross(cb.x - root.x);
+    c.sub_body = static_cast<int>(sub_bodies_.size());
+    sub_bodies_.push_back(std::move(cb));
+  }
+  // The prescribed parents (the anchor, the head) as kinematic bodies of the composites' tree.
+  const auto prescribed = [&](int body) {
+    if (body == kWorldBody) return kWorldBody;
+    for (const auto& [real, in_sub] : sub_prescribed_)
+      if (real == body) return in_sub;
+    RigidBody copy = bodies[body];
+    sub_bodies_.push_back(std::move(copy));
+    sub_prescribed_.push_back({body, static_cast<int>(sub_bodies_.size()) - 1});
+    return static_cast<int>(sub_bodies_.size()) - 1;
+  };
+  std::vector<int>& sub_node = composite_count_;  // reused: the composite's node in sub (-1: welded)
+  sub_node.assign(composites_.size(), -1);
+  for (size_t ci = 0; ci < composites_.size(); ++ci) {
+    Composite& c = composites_[ci];
+    const Node& nd = nodes_[c.node];
+    if (c.welded) {
+      // Welded to its prescribed parent B: its pose in B's frame, constant while welded.
+      c.base = prescribed(nd.parent);
+      const RigidBody& base = bodyOf(sub_bodies_, c.base);
+      const RigidBody& cb = sub_bodies_[c.sub_body];
+      c.q_parent = (base.q.conjugate() * cb.q).normalized();
+      c.x_parent = base.q.conjugate() * (cb.x - base.x);
+      continue;
+    }
+    Node sn;
+    sn.type = nd.type;
+    sn.dofs = nd.dofs;
+    sn.dof = sub.dofs_;
+    sn.body = c.sub_body;
+    // The parent body's frame in its composite's frame (q', x'; identity for a prescribed parent).
+    c.q_parent.setIdentity();
+    c.x_parent.setZero();
+    if (nd.parent_node >= 0) {
+      const Composite& pc = composites_[composite_of_[nd.parent_node]];
+      sn.parent = pc.sub_body;
+      sn.parent_node = sub_node[composite_of_[nd.parent_node]];
+      const RigidBody& pb = bodies[nd.parent];
+      const RigidBody& pcb = sub_bodies_[pc.sub_body];
+      c.q_parent = (pcb.q.conjugate() * pb.q).normalized();
+      c.x_parent = pcb.q.conjugate() * (pb.x - pcb.x);
+    } else if (nd.type != Type::Free) {
+      sn.parent = prescribed(nd.parent);
+    }
+    switch (nd.type) {
+      case Type::Free:
+        break;
+      case Type::Spherical:
+        sn.point_parent = c.x_parent + c.q_parent * nd.point_parent;
+        sn.point_child = c.frame.conjugate() * (nd.point_child - c.com);
+        break;
+      case Type::Prismatic:
+        sn.rest = (c.q_parent * nd.rest * c.frame).normalized();
+        sn.axis = c.q_parent * nd.axis;
+        sn.offset = c.x_parent + c.q_parent * (nd.offset + nd.rest * c.com);
+        break;
+    }
+    sub.dofs_ += sn.dofs;
+    sub_node[ci] = static_cast<int>(sub.nodes_.size());
+    sub_composite_.push_back(static_cast<int>(ci));
+    if (sn.parent_node >= 0) sub.nodes_[sn.parent_node].children.push_back(sub_node[ci]);
+    sub.nodes_.push_back(sn);
+  }
+  sub.allocate();
+  placeWelded(bodies);
+  sub.readState(sub_bodies_);
+  sub.written_time_ = std::numeric_limits<double>::quiet_NaN();
+  composites_formed_ = true;
+}
+
+// The composites' tree's kinematic bodies at the time the real prescribed bodies are at: the
+// prescribed parents copied, a welded composite carried by its base (x = x_B + R_B x',
+// v = v_B + w_B x r, a = a_B + alpha_B x r + w_B x (w_B x r), r = R_B x').
+void ArticulatedSystem::placeWelded(const std::vector<RigidBody>& bodies) {
+  for (const auto& [real, in_sub] : sub_prescribed_) {
+    RigidBody& copy = sub_bodies_[in_sub];
+    const RigidBody& b = bodies[real];
+    copy.x = b.x;
+    copy.q = b.q;
+    copy.v = b.v;
+    copy.w = b.w;
+    copy.a = b.a;
+    copy.alpha = b.alpha;
+  }
+  for (const Composite& c : composites_) {
+    if (!c.welded) continue;
+    const RigidBody& base = bodyOf(sub_bodies_, c.base);
+    RigidBody& cb = sub_bodies_[c.sub_body];
+    const Eigen::Vector3d r = base.q * c.x_parent;
+    cb.x = base.x + r;
+    cb.q = renormalized(base.q * c.q_parent);
+    cb.w = base.w;
+    cb.v = base.v + base.w.cross(r);
+    cb.alpha = base.alpha;
+    cb.a = base.a + base.alpha.cross(r) + base.w.cross(base.w.cross(r));
+  }
+}
+
+// The forces on each composite, sampled once per step at its start (the bodies at t): the sum of
+// its links' forces (world) and their torque about its centre, kept in its frame. Held so over
+// the step's stages: gravity (m g at the centre, no torque) is exact; a force that depends on
+// the state (damping, drag, a spring to a link) is taken at the step's start (first order).
+Status ArticulatedSystem::sampleCompositeForces(std::vector<RigidBody>& bodies, const ReducedHooks& hooks) {
+  stopped_ = !hooks.forces();
+  if (stopped_) return {};
+  for (Composite& c : composites_) {
+    if (c.welded) continue;
+    const RigidBody& cb = sub_bodies_[c.sub_body];
+    Eigen::Vector3d f = Eigen::Vector3d::Zero(), t = Eigen::Vector3d::Zero();
+    for (int k = 0; k < c.count; ++k) {
+      const RigidBody& b = bodies[nodes_[composite_nodes_[c.first + k]].body];
+      f += b.force;
+      t += b.torque + (b.x - cb.x).cross(b.force);
+    }
+    c.force = f;
+    c.torque = cb.q.conjugate() * t;
+  }
+  return {};
+}
+
+// One step over the composites: the composites' tree steps (its ABA over k + 1 bodies per
+// stage), then its state goes back to the active joints' coordinates (the rigid ones have not
+// moved relative to their parents) and the links are written from the joint coordinates.
+Status ArticulatedSystem::compositeStep(double t, double h, Integrator integrator, std::vector<RigidBody>& bodies,
+                                        const ReducedHooks& hooks) {
+  if (Status st = sampleCompositeForces(bodies, hooks); !st.ok() || stopped_) return st;
+  const ReducedHooks sub_hooks{[&](double time) {
+                                 hooks.kinematics(time);
+                                 placeWelded(bodies);
+                               },
+                               [&] {
+                                 for (const Composite& c : composites_) {
+                                   if (c.welded) continue;
+                                   RigidBody& cb = sub_bodies_[c.sub_body];
+                                   cb.force = c.force;
+                                   cb.torque = cb.q * c.torque;
+                                 }
+                                 return true;
+                               }};
+  if (Status st = sub_->step(t, h, integrator, sub_bodies_, sub_hooks); !st.ok()) return st;
+  // Back to joint coordinates (the inverse of formComposites()'s carrying of the geometry):
+  //   free root:  q_r = q_C F^-1, x_r = x_C - R_r c, v_r = v_C + w x (x_r - x_C);
+  //   spherical:  Q = q'^-1 Q_C F^-1, omega = R'^T omega_C;  prismatic: s, s' as they are.
+  const ArticulatedSystem& sub = *sub_;
+  for (size_t k = 0; k < sub.nodes_.size(); ++k) {
+    const Node& sn = sub.nodes_[k];
+    const Composite& c = composites_[sub_composite_[k]];
+    const Node& nd = nodes_[c.node];
+    switch (nd.type) {
+      case Type::Free: {
+        const RigidBody& cb = sub_bodies_[c.sub_body];
+        const Eigen::Quaterniond q = renormalized(cb.q * c.frame.conjugate());
+        const Eigen::Vector3d x = cb.x - q * c.com;
+        coords_.q[c.node] = q;
+        coords_.x[c.node] = x;
+        u_.segment<3>(nd.dof) = cb.v + cb.w.cross(x - cb.x);
+        u_.segment<3>(nd.dof + 3) = cb.w;
+        break;
+      }
+      case Type::Spherical:
+        coords_.q[c.node] = (c.q_parent.conjugate() * sub.coords_.q[k] * c.frame.conjugate()).normalized();
+        u_.segment<3>(nd.dof) = c.q_parent.conjugate() * sub.u_.segment<3>(sn.dof);
+        break;
+      case Type::Prismatic:
+        coords_.s[c.node] = sub.coords_.s[k];
+        u_(nd.dof) = sub.u_(sn.dof);
+        break;
+    }
+  }
+  writeState(bodies);  // the kinematic bodies are at t + h (the composites' step left them there)
+  remember(bodies);
+  written_time_ = t + h;
+  return {};
+}
+
+// ---------------------------------------------------------------------------------------------
 // Time stepping in joint space
 
 Status ArticulatedSystem::derivative(double t, const Coordinates& c, const Eigen::VectorXd& u,
@@ -1233,7 +1516,15 @@ Status ArticulatedSystem::step(double t, double h, Integrator integrator, std::v
   if (!written) readState(bodies);
   bool fresh = false;  // k_[0] already holds u'(t, y) (adaptive: the choice ran the ABA)
   if (adaptive_) {
-    if (Status st = chooseActive(t, h, bodies, hooks, written, fresh); !st.ok() || stopped_) return st;
+    // The choice every choicePeriod() steps (and whenever the bodies were set from outside);
+    // the composites re-formed when the active set changed. The step itself is the composites'.
+    const bool outside = !written;
+    if (outside || !composites_formed_ || --until_choice_ <= 0) {
+      if (Status st = chooseActive(t, h, bodies, hooks, written, fresh); !st.ok() || stopped_) return st;
+      if (outside || !fresh || !composites_formed_) formComposites(bodies);
+      until_choice_ = choicePeriod();
+    }
+    return compositeStep(t, h, integrator, bodies, hooks);
   }
   const auto axpy = [&](const Coordinates& base, double s, const Coordinates& rate, Coordinates& out) {
     out = base;

@@ -56,6 +56,8 @@
 #include <Eigen/Geometry>
 #include <functional>
 #include <limits>
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include "physics/constraint.h"
@@ -116,13 +118,16 @@ class ArticulatedSystem {
   // articulated inertia D = S^T I^A S it drives (a rigid joint scores the acceleration it would
   // have if it alone were freed). At most `budget` joints (0 = no cap) whose score is above
   // `tolerance` (J; 0 = only the round-off floor) move; every other joint is rigid for the step:
-  // u = 0, u' = 0, its subtree carried whole by the ABA. A joint that turns rigid is locked by an
-  // internal impulse (momentum kept, kinetic energy never rises: lock()). Off (every joint moves,
-  // the plain ABA step to the bit) when tolerance = 0 and budget is 0 or at least jointCount().
+  // u = 0, u' = 0; each rigid stretch is stepped as one composite body (formComposites()). A joint that turns rigid is
+  // locked by an internal impulse (momentum kept, kinetic energy never rises: lock()). Off (every joint moves, the
+  // plain ABA step to the bit) when tolerance = 0 and budget is 0 or at least jointCount().
   void setAdaptive(int budget, double tolerance);
   bool adaptive() const { return adaptive_; }
   int jointCount() const { return joint_count_; }  // spherical and prismatic joints (a free root is none)
   int activeJoints() const;                        // joints that moved in the last step
+  // Bodies the last adaptive step's ABA and integrator ran over: the composites of its tree (one
+  // per active joint and per free root; a stretch welded to a prescribed parent is not stepped).
+  int steppedBodies() const { return adaptive_ && sub_ ? sub_->nodeCount() : nodeCount(); }
   // Per node: 1 when its joint moved in the last step (a free root always does).
   std::vector<char> activeNodes() const;
   // The switch: the joints of the nodes with active[i] = 0 become rigid. Their relative speeds are
@@ -225,6 +230,16 @@ class ArticulatedSystem {
   Status chooseActive(double t, double h, std::vector<RigidBody>& bodies, const ReducedHooks& hooks, bool& written,
                       bool& fresh);
 
+  // Adaptive: the composites' tree (formComposites(), compositeStep(); docs/SOLVERS.md, "Adaptive
+  // dynamics").
+  void allocate();
+  int choicePeriod() const;
+  void formComposites(const std::vector<RigidBody>& bodies);
+  void placeWelded(const std::vector<RigidBody>& bodies);
+  Status sampleCompositeForces(std::vector<RigidBody>& bodies, const ReducedHooks& hooks);
+  Status compositeStep(double t, double h, Integrator integrator, std::vector<RigidBody>& bodies,
+                       const ReducedHooks& hooks);
+
   std::vector<int> signature_;
   Status built_;             // what build() could not express (ok when fine)
   std::vector<Node> nodes_;  // parents before children
@@ -260,6 +275,33 @@ class ArticulatedSystem {
   std::vector<char> active_;                                        // work space of the choice: the set chosen
   Eigen::VectorXd lock_tau_;                                        // work space of lock(): H w, then the speed change
   double written_time_ = std::numeric_limits<double>::quiet_NaN();  // time of the bodies step() wrote last
+  // A rigid stretch as one body: the stretch's root node, its body in sub_bodies_, its frame
+  // (principal axes) and centre in the root link's frame; for the joint above it, the parent
+  // link's frame in the parent composite's frame (q', x'; a welded composite: its own pose in
+  // its prescribed base's frame); its nodes composite_nodes_[first, first + count); the forces
+  // of the step (world force, torque about the centre in its frame).
+  struct Composite {
+    int node = -1;
+    int sub_body = -1;
+    bool welded = false;    // the root's joint is rigid on a prescribed parent: moves with it
+    int base = kWorldBody;  // welded: the base in sub_bodies_
+    Eigen::Quaterniond frame = Eigen::Quaterniond::Identity();
+    Eigen::Vector3d com = Eigen::Vector3d::Zero();
+    Eigen::Quaterniond q_parent = Eigen::Quaterniond::Identity();
+    Eigen::Vector3d x_parent = Eigen::Vector3d::Zero();
+    int first = 0, count = 0;
+    Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
+  };
+  std::vector<Composite> composites_;
+  std::vector<int> composite_of_;                    // per node: its composite
+  std::vector<int> composite_nodes_;                 // the composites' nodes, composite by composite
+  std::vector<int> composite_count_;                 // work space of formComposites()
+  std::vector<int> sub_composite_;                   // per node of sub_: its composite
+  std::unique_ptr<ArticulatedSystem> sub_;           // the composites' tree (active joints only)
+  std::vector<RigidBody> sub_bodies_;                // its bodies: the composites, then prescribed copies
+  std::vector<std::pair<int, int>> sub_prescribed_;  // (real body, its copy in sub_bodies_)
+  bool composites_formed_ = false;
+  int until_choice_ = 0;  // steps until the next choice
   // Closed loops (sized by build()).
   std::vector<LoopJoint> loops_;
   int loop_rows_ = 0;
