@@ -82,8 +82,12 @@ void addSolveCommand(CLI::App& app, int& exit_code) {
   cmd->add_flag("--check", args->check, "Solve nothing: the goals' errors as the scene stands (its guide applied)");
   cmd->add_flag("--spring", args->spring,
                 "Solve nothing: the weakest goal spring that meets the goals, and the energy it injects");
-  cmd->add_option("--knots", args->options.knots, "Knot times per joint over [0, last goal time]")
-      ->check(CLI::Range(2, 64));
+  cmd->add_option("--knots", args->options.knots,
+                  "Knot times per joint over [0, last goal time] (0: four knot intervals per window)")
+      ->check(CLI::Range(0, 1024));
+  cmd->add_option("--window", args->options.window,
+                  "Seconds before each goal whose torques meet it, the earlier goals' frozen (0: all goals at once)")
+      ->check(CLI::Range(0.0, 1e6));
   cmd->add_option("--joints", args->options.joints, "Guide only the root-most N joints (0: every joint)")
       ->check(CLI::Range(0, 4096));
   cmd->add_flag("--no-broyden", args->no_broyden, "Differences for the Jacobian at every iteration (no updates)");

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <limits>
 
 #include "sim/input_error.h"
 #include "sim/sim.h"
@@ -91,6 +92,7 @@ class Shooter {
                 double* abs_energy = nullptr) {
     sim_.restore(start_);
     if (sim_.guide()) sim_.guide()->set(guide);
+    knot_times_ = knot_times;
     snapshots_.assign(knot_times.size(), {});
     recorded_at_.assign(goal_times_.size(), 0.0);
     anchors_.assign(goal_times_.size(), Eigen::Vector3d::Zero());
@@ -115,23 +117,35 @@ class Shooter {
       if (targets) (*targets)[g] = target(g);
     }
     while (next_knot < knot_times.size()) snapshots_[next_knot++] = sim_.snapshot();
+    valid_ = knot_times.size();
     ++runs_;
   }
 
-  // Runs with `guide` from knot `from`'s snapshot: the goals recorded at or after it are run
-  // again, the earlier ones keep `points`' values.
-  void runFrom(size_t from, const GuideParams& guide, std::vector<Eigen::Vector3d>& points) {
+  // Runs with `guide` from knot `from`'s snapshot up to `until` (s): the goals recorded at or after
+  // the snapshot and due by `until` are run again, the others keep `points`' values. record: the
+  // knot snapshots passed on the way are taken again (a run of the control that the next
+  // differences start from); those after `until` are then stale (validSnapshots()).
+  void runFrom(size_t from, double until, const GuideParams& guide, std::vector<Eigen::Vector3d>& points, bool record) {
     sim_.restore(snapshots_[from]);
     sim_.guide()->set(guide);
     const double start = sim_.time();
     const double dt = sim_.scene().physics.dt;
+    size_t next_knot = from;
     for (size_t g : order_) {
+      if (goal_times_[g] > until) break;
       if (recorded_at_[g] < start) continue;
-      while (sim_.ok() && sim_.time() + 0.5 * dt <= goal_times_[g]) sim_.step();
+      while (sim_.ok() && sim_.time() + 0.5 * dt <= goal_times_[g]) {
+        while (record && next_knot < knot_times_.size() && knot_times_[next_knot] < sim_.time() + dt)
+          snapshots_[next_knot++] = sim_.snapshot();
+        sim_.step();
+      }
       points[g] = point(g);
     }
+    if (record) valid_ = next_knot;
     ++runs_;
   }
+  // The knot snapshots [0, validSnapshots()) are of the last recorded run.
+  size_t validSnapshots() const { return valid_; }
 
   void setGoals(std::vector<GoalPoint> points, std::vector<Goal> goals) {
     points_ = std::move(points);
@@ -182,7 +196,9 @@ class Shooter {
   SimSnapshot start_;
   std::vector<double> goal_times_;
   std::vector<size_t> order_;
+  std::vector<double> knot_times_;
   std::vector<SimSnapshot> snapshots_;
+  size_t valid_ = 0;
   std::vector<double> recorded_at_;
   std::vector<Eigen::Vector3d> anchors_;
   std::vector<GoalPoint> points_;
@@ -217,26 +233,29 @@ void fillOutcomes(const Scene& scene, const std::vector<Eigen::Vector3d>& points
   }
 }
 
-// d(goal points)/dc by differences: column i from a run with c_i + step, from the snapshot of the
-// knot two before c_i's (where its torque starts to act); central: also c_i - step. `points`:
-// the points at c from a whole run that took the knot snapshots. Rows 3g..3g+2: goal g.
+// d(goal points)/dc_i for the unknowns `columns` (indices into c) by differences: column i from a
+// run with c_i + step, from the snapshot of the knot two before c_i's (where its torque starts to
+// act) up to `until`; central: also c_i - step. `points`: the points at c from a run that took the
+// knot snapshots. Rows 3g..3g+2: goal g (zero for the goals after `until`).
 Eigen::MatrixXd differences(Shooter& shooter, const Layout& layout, const Eigen::VectorXd& c,
-                            const std::vector<Eigen::Vector3d>& points, double step, bool central) {
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(Eigen::Index(points.size()) * 3, layout.size());
+                            const std::vector<Eigen::Vector3d>& points, double step, bool central,
+                            const std::vector<Eigen::Index>& columns, double until) {
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(Eigen::Index(points.size()) * 3, Eigen::Index(columns.size()));
   std::vector<Eigen::Vector3d> plus, minus;
-  for (Eigen::Index i = 0; i < layout.size(); ++i) {
+  for (size_t col = 0; col < columns.size(); ++col) {
+    const Eigen::Index i = columns[col];
     const size_t from = size_t(std::max(int((i / 3) % layout.knots) - 2, 0));
     Eigen::VectorXd cp = c;
     cp[i] += step;
     plus = points;
-    shooter.runFrom(from, layout.guide(cp), plus);
+    shooter.runFrom(from, until, layout.guide(cp), plus, false);
     if (central) {
       cp[i] = c[i] - step;
       minus = points;
-      shooter.runFrom(from, layout.guide(cp), minus);
+      shooter.runFrom(from, until, layout.guide(cp), minus, false);
     }
     for (size_t g = 0; g < points.size(); ++g)
-      J.block<3, 1>(Eigen::Index(g) * 3, i) =
+      J.block<3, 1>(Eigen::Index(g) * 3, Eigen::Index(col)) =
           central ? Eigen::Vector3d((plus[g] - minus[g]) / (2 * step)) : Eigen::Vector3d((plus[g] - points[g]) / step);
   }
   return J;
@@ -268,7 +287,9 @@ Eigen::MatrixXd goalJacobian(const Scene& scene_in, const AssetLoader* assets, i
   shooter.setGoals(goalPoints(scene), scene.goals);
   std::vector<Eigen::Vector3d> points;
   shooter.runWhole(*scene.guide, std::vector<double>(layout.times.begin(), layout.times.end() - 1), points);
-  return differences(shooter, layout, c, points, step, central);
+  std::vector<Eigen::Index> all(size_t(layout.size()));
+  for (size_t i = 0; i < all.size(); ++i) all[i] = Eigen::Index(i);
+  return differences(shooter, layout, c, points, step, central, all, std::numeric_limits<double>::infinity());
 }
 
 GoalSolveReport evaluateGoals(const Scene& scene, const AssetLoader* assets) {
@@ -299,9 +320,15 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
   const std::string& src = scene_in.path;
   if (scene_in.goals.empty()) throw InputError(src + ": goals: the scene has no goals to solve for");
   if (!scene_in.chain) throw InputError(src + ": the goal solve guides a chain, and the scene has none");
-  if (opt.knots < 2) throw InputError(src + ": the goal solve needs at least 2 knots per joint");
+  if (opt.knots == 1 || opt.knots < 0) throw InputError(src + ": the goal solve needs at least 2 knots per joint");
 
-  const Layout layout = makeLayout(scene_in, opt.knots, opt.joints);
+  // Automatic knots: four knot intervals per window (six knots over [0, T] without windows).
+  double T = 0.0;
+  for (const Goal& g : scene_in.goals) T = std::max(T, g.t);
+  const int knots = opt.knots > 0    ? opt.knots
+                    : opt.window > 0 ? std::max(int(std::ceil(4.0 * T / opt.window)) + 1, 2)
+                                     : 6;
+  const Layout layout = makeLayout(scene_in, knots, opt.joints);
   const std::vector<double> knot_times(layout.times.begin(), layout.times.end() - 1);
 
   Scene scene = scene_in;
@@ -343,25 +370,26 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
     active.push_back(g);
   }
   char line[256];
-  const auto errorsText = [&](const std::vector<GoalOutcome>& o) {
+  // The goals due by `until` (s), their errors in the last run.
+  const auto errorsText = [&](const std::vector<GoalOutcome>& o, double until) {
     std::string s;
     for (size_t g = 0; g < o.size(); ++g) {
-      if (g > 0) s += ' ';
+      if (scene.goals[g].t > until) continue;
+      if (!s.empty()) s += ' ';
       s += mm(o[g].error);
     }
     return s;
   };
-  const auto allMet = [&](const std::vector<GoalOutcome>& o) {
-    return std::all_of(active.begin(), active.end(), [&](size_t g) { return o[g].met; });
+  const auto allMet = [&](const std::vector<size_t>& goals) {
+    return std::all_of(goals.begin(), goals.end(), [&](size_t g) { return report.goals[g].met; });
   };
-  const auto weightedError = [&](const std::vector<Eigen::Vector3d>& p) {
+  const auto weightedError = [&](const std::vector<Eigen::Vector3d>& p, const std::vector<size_t>& goals) {
     double e = 0.0;
-    for (size_t g : active) e += scene.goals[g].weight * (p[g] - targets[g]).squaredNorm();
+    for (size_t g : goals) e += scene.goals[g].weight * (p[g] - targets[g]).squaredNorm();
     return e;
   };
 
   const Eigen::MatrixXd Gk = layout.gram();
-  const Eigen::LLT<Eigen::MatrixXd> Gllt(Gk);
   const auto effort = [&](const Eigen::VectorXd& x) {
     double e = 0.0;
     for (int j = 0; j < layout.joints; ++j)
@@ -373,97 +401,200 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
     return e;
   };
 
-  std::snprintf(line, sizeof(line), "iteration 0: goal errors %s, effort 0", errorsText(report.goals).c_str());
-  report.log.push_back(line);
-  const Eigen::Index m = Eigen::Index(active.size()) * 3;
-  bool stalled = false;
-  Eigen::MatrixXd Jall;      // d(points)/dc, all goals
-  bool differenced = false;  // Jall is from differences at the current c (not a Broyden update)
-  while (!active.empty() && !allMet(report.goals) && report.iterations < opt.max_iterations) {
-    ++report.iterations;
-    // The Jacobian: forward differences, one partial run per unknown, the first time and after
-    // a Broyden-updated one failed to give a step; otherwise the rank-one update below.
-    if (Jall.size() == 0) {
-      Jall = differences(shooter, layout, c, points, opt.fd_step, false);
-      differenced = true;
+  // The stages. Goal g's point depends only on the torques before its time t_g, so the goals are
+  // met in time order, each by the knots whose torque acts within its window
+  // [max(t_prev + dt, t_g - window), t_g) (t_prev: the previous goal's time), the earlier knots
+  // frozen: a stage's runs start from the snapshot where its first knot starts to act, and no
+  // stage moves an earlier goal. window 0: one stage, every knot and goal (single shooting). Goals
+  // at the same time share a stage.
+  struct GoalWindow {
+    double until = 0.0;         // s, the stage's goal time
+    std::vector<size_t> goals;  // active goals due at `until`
+    std::vector<int> knots;     // the free knots (indices into layout.times)
+  };
+  std::vector<GoalWindow> stages;
+  {
+    std::vector<size_t> by_time = active;
+    std::stable_sort(by_time.begin(), by_time.end(),
+                     [&](size_t a, size_t b) { return scene.goals[a].t < scene.goals[b].t; });
+    const double dt = scene.physics.dt;
+    for (size_t g : by_time) {
+      const double t = scene.goals[g].t;
+      if (!stages.empty() && (opt.window <= 0.0 || t - stages.back().until < 0.5 * dt)) {
+        stages.back().goals.push_back(g);
+        stages.back().until = std::max(stages.back().until, t);
+        continue;
+      }
+      GoalWindow s;
+      s.until = t;
+      s.goals = {g};
+      const double lower = opt.window <= 0.0 ? -std::numeric_limits<double>::infinity()
+                           : stages.empty()  ? t - opt.window
+                                             : std::max(stages.back().until + dt, t - opt.window);
+      for (int k = 0; k < layout.knots; ++k) {
+        const double acts_from = layout.times[size_t(std::max(k - 2, 0))];
+        if (acts_from >= lower && acts_from < t) s.knots.push_back(k);
+      }
+      stages.push_back(s);
     }
-    Eigen::VectorXd r(m);
-    for (size_t a = 0; a < active.size(); ++a)
-      r.segment<3>(Eigen::Index(a) * 3) =
-          std::sqrt(scene.goals[active[a]].weight) * (points[active[a]] - targets[active[a]]);
-    Eigen::MatrixXd J(m, layout.size());
-    for (size_t a = 0; a < active.size(); ++a)
-      J.middleRows<3>(Eigen::Index(a) * 3) =
-          std::sqrt(scene.goals[active[a]].weight) * Jall.middleRows<3>(Eigen::Index(active[a]) * 3);
-    // Least effort meeting the linearized goals r + J (c' - c) = 0:
-    //   c' = G^-1 J^T lambda,  (J G^-1 J^T + mu I) lambda = J c - r,
-    // with a small mu (a penalty 1/mu on the goal error) so that goals no torque moves leave the
-    // system solvable.
-    Eigen::MatrixXd Y(layout.size(), m);  // G^-1 J^T, per joint and component
+    if (opt.window <= 0.0 && !stages.empty()) {
+      stages.front().knots.clear();
+      for (int k = 0; k < layout.knots; ++k) stages.front().knots.push_back(k);
+    }
+  }
+
+  // One stage by Gauss-Newton SQP over its free knots; true when it stalled (no step lowers its
+  // goals' error).
+  const auto solveStage = [&](const GoalWindow& st) {
+    const Eigen::Index nf = Eigen::Index(st.knots.size());
+    std::vector<Eigen::Index> columns;  // the free unknowns' indices in c, (j nf + f) 3 + d
     for (int j = 0; j < layout.joints; ++j)
-      for (int d = 0; d < 3; ++d) {
-        Eigen::MatrixXd block(layout.knots, m);
-        for (int k = 0; k < layout.knots; ++k) block.row(k) = J.col(layout.index(j, k, d)).transpose();
-        block = Gllt.solve(block);
-        for (int k = 0; k < layout.knots; ++k) Y.row(layout.index(j, k, d)) = block.row(k);
+      for (int k : st.knots)
+        for (int d = 0; d < 3; ++d) columns.push_back(layout.index(j, k, d));
+    const Eigen::Index n = Eigen::Index(columns.size());
+    const size_t from = size_t(std::max(st.knots.front() - 2, 0));
+    // The current control run up to the stage's goals from the last snapshot still valid, taking
+    // the snapshots its differences and trials start from.
+    shooter.runFrom(std::min(from, shooter.validSnapshots() - 1), st.until, layout.guide(c), points, true);
+    fillOutcomes(scene, points, targets, report.goals);
+    Eigen::MatrixXd Gf(nf, nf);  // the Gram matrix of the free knots
+    for (Eigen::Index a = 0; a < nf; ++a)
+      for (Eigen::Index b = 0; b < nf; ++b) Gf(a, b) = Gk(st.knots[size_t(a)], st.knots[size_t(b)]);
+    const Eigen::LLT<Eigen::MatrixXd> Gllt(Gf);
+    const Eigen::Index m = Eigen::Index(st.goals.size()) * 3;
+    Eigen::MatrixXd Jall;      // d(points)/dx, all goals' rows, the free unknowns' columns
+    bool differenced = false;  // Jall is from differences at the current c (not a Broyden update)
+    int iterations = 0;
+    while (!allMet(st.goals) && iterations < opt.max_iterations) {
+      ++iterations;
+      ++report.iterations;
+      // The Jacobian: forward differences, one partial run per unknown, the first time and after
+      // a Broyden-updated one failed to give a step; otherwise the rank-one update below.
+      if (Jall.size() == 0) {
+        Jall = differences(shooter, layout, c, points, opt.fd_step, false, columns, st.until);
+        differenced = true;
       }
-    Eigen::MatrixXd A = J * Y;
-    const double mu = 1e-10 * std::max(A.trace() / double(m), 1e-300);
-    A.diagonal().array() += mu;
-    const Eigen::VectorXd lambda = A.ldlt().solve(J * c - r);
-    const Eigen::VectorXd target_c = Y * lambda;
-    // Backtracking on the goal error.
-    const double e0 = weightedError(points);
-    double alpha = 1.0;
-    bool accepted = false;
-    std::vector<Eigen::Vector3d> trial;
-    for (int half = 0; half <= opt.max_line_halvings; ++half, alpha *= 0.5) {
-      const Eigen::VectorXd ct = c + alpha * (target_c - c);
-      shooter.runWhole(layout.guide(ct), knot_times, trial);
-      if (shooter.sim().ok() && weightedError(trial) < e0) {
-        if (opt.broyden) {
-          // Broyden's update: J += (dx - J dc) dc^T / (dc^T dc), the secant through the step taken.
-          const Eigen::VectorXd dc = ct - c;
-          Eigen::VectorXd dx(Jall.rows());
-          for (size_t g = 0; g < points.size(); ++g) dx.segment<3>(Eigen::Index(g) * 3) = trial[g] - points[g];
-          Jall += (dx - Jall * dc) * dc.transpose() / dc.squaredNorm();
-          differenced = false;
-        } else {
-          Jall.resize(0, 0);
+      Eigen::VectorXd r(m);
+      Eigen::MatrixXd J(m, n);
+      for (size_t a = 0; a < st.goals.size(); ++a) {
+        const double w = std::sqrt(scene.goals[st.goals[a]].weight);
+        r.segment<3>(Eigen::Index(a) * 3) = w * (points[st.goals[a]] - targets[st.goals[a]]);
+        J.middleRows<3>(Eigen::Index(a) * 3) = w * Jall.middleRows<3>(Eigen::Index(st.goals[a]) * 3);
+      }
+      // Least effort meeting the linearized goals r + J (x' - x) = 0, x the free knots, the others
+      // (x_F) frozen: with the effort x'^T G_ff x' + 2 x'^T b, b = G_fF x_F (the free knots'
+      // coupling to the frozen ones through the curve),
+      //   x' = G_ff^-1 (J^T lambda - b),  (J G_ff^-1 J^T + mu I) lambda = J x - r + J G_ff^-1 b,
+      // with a small mu (a penalty 1/mu on the goal error) so that goals no torque moves leave the
+      // system solvable. G_ff is applied per joint and component.
+      Eigen::MatrixXd Y(n, m);  // G_ff^-1 J^T
+      Eigen::VectorXd z(n), x(n);
+      for (int j = 0; j < layout.joints; ++j)
+        for (int d = 0; d < 3; ++d) {
+          Eigen::VectorXd v(layout.knots), vf(nf);
+          for (int k = 0; k < layout.knots; ++k) v[k] = c[layout.index(j, k, d)];
+          const Eigen::VectorXd Gv = Gk * v;
+          Eigen::MatrixXd block(nf, m);
+          Eigen::VectorXd b(nf);
+          for (Eigen::Index f = 0; f < nf; ++f) {
+            const Eigen::Index idx = (j * nf + f) * 3 + d;
+            block.row(f) = J.col(idx).transpose();
+            vf[f] = v[st.knots[size_t(f)]];
+            b[f] = Gv[st.knots[size_t(f)]];
+          }
+          b -= Gf * vf;
+          block = Gllt.solve(block);
+          const Eigen::VectorXd zf = Gllt.solve(b);
+          for (Eigen::Index f = 0; f < nf; ++f) {
+            const Eigen::Index idx = (j * nf + f) * 3 + d;
+            Y.row(idx) = block.row(f);
+            z[idx] = zf[f];
+            x[idx] = vf[f];
+          }
         }
-        c = ct;
-        points = trial;
-        accepted = true;
-        break;
+      Eigen::MatrixXd A = J * Y;
+      const double mu = 1e-10 * std::max(A.trace() / double(m), 1e-300);
+      A.diagonal().array() += mu;
+      const Eigen::VectorXd lambda = A.ldlt().solve(J * x - r + J * z);
+      const Eigen::VectorXd x_target = Y * lambda - z;
+      // Backtracking on the stage's goal error.
+      const double e0 = weightedError(points, st.goals);
+      double alpha = 1.0;
+      bool accepted = false;
+      std::vector<Eigen::Vector3d> trial = points;
+      for (int half = 0; half <= opt.max_line_halvings; ++half, alpha *= 0.5) {
+        const Eigen::VectorXd xt = x + alpha * (x_target - x);
+        Eigen::VectorXd ct = c;
+        for (Eigen::Index i = 0; i < n; ++i) ct[columns[size_t(i)]] = xt[i];
+        shooter.runFrom(from, st.until, layout.guide(ct), trial, true);
+        if (shooter.sim().ok() && weightedError(trial, st.goals) < e0) {
+          if (opt.broyden) {
+            // Broyden's update: J += (dp - J dx) dx^T / (dx^T dx), the secant through the step taken.
+            const Eigen::VectorXd dx = xt - x;
+            Eigen::VectorXd dp(Jall.rows());
+            for (size_t g = 0; g < points.size(); ++g) dp.segment<3>(Eigen::Index(g) * 3) = trial[g] - points[g];
+            Jall += (dp - Jall * dx) * dx.transpose() / dx.squaredNorm();
+            differenced = false;
+          } else {
+            Jall.resize(0, 0);
+          }
+          c = ct;
+          points = trial;
+          accepted = true;
+          break;
+        }
       }
+      if (!accepted) {
+        // The last trial moved the snapshots: run the accepted control again.
+        shooter.runFrom(from, st.until, layout.guide(c), points, true);
+        if (!differenced) {
+          // An updated Jacobian that gives no step: differences again before giving up.
+          Jall.resize(0, 0);
+          report.log.push_back("iteration " + std::to_string(report.iterations) +
+                               ": the updated Jacobian gives no step; differences again");
+          continue;
+        }
+      }
+      fillOutcomes(scene, points, targets, report.goals);
+      std::snprintf(line, sizeof(line), "iteration %d: goal errors %s, effort %.4g N^2 m^2 s, step %g%s",
+                    report.iterations, errorsText(report.goals, st.until).c_str(), effort(c), accepted ? alpha : 0.0,
+                    accepted ? "" : " (no step lowers the goal error: stopped)");
+      report.log.push_back(line);
+      if (!accepted) return true;
     }
-    if (!accepted && !differenced) {
-      // An updated Jacobian that gives no step: differences again before giving up.
-      shooter.runWhole(layout.guide(c), knot_times, points);
-      Jall.resize(0, 0);
-      report.log.push_back("iteration " + std::to_string(report.iterations) +
-                           ": the updated Jacobian gives no step; differences again");
+    return false;
+  };
+
+  std::snprintf(line, sizeof(line), "iteration 0: goal errors %s, effort 0",
+                errorsText(report.goals, std::numeric_limits<double>::infinity()).c_str());
+  report.log.push_back(line);
+  std::vector<bool> stalled(scene.goals.size(), false);
+  for (const GoalWindow& st : stages) {
+    if (st.knots.empty()) {
+      // A window shorter than the knot spacing: no torque acts in it.
+      for (size_t g : st.goals) stalled[g] = true;
+      report.log.push_back("stage t = " + std::to_string(st.until) + " s: no knot acts within the window");
       continue;
     }
-    if (!accepted) {
-      // The last trial moved the snapshots: run the accepted control again.
-      shooter.runWhole(layout.guide(c), knot_times, points);
-      stalled = true;
+    if (opt.window > 0.0) {
+      std::snprintf(line, sizeof(line), "stage t = %g s: %zu goal(s), %zu knots per joint from t = %g s, %d unknowns",
+                    st.until, st.goals.size(), st.knots.size(), layout.times[size_t(std::max(st.knots.front() - 2, 0))],
+                    int(st.knots.size()) * layout.joints * 3);
+      report.log.push_back(line);
     }
-    fillOutcomes(scene, points, targets, report.goals);
-    std::snprintf(line, sizeof(line), "iteration %d: goal errors %s, effort %.4g N^2 m^2 s, step %g%s",
-                  report.iterations, errorsText(report.goals).c_str(), effort(c), accepted ? alpha : 0.0,
-                  accepted ? "" : " (no step lowers the goal error: stopped)");
-    report.log.push_back(line);
-    if (stalled) break;
+    if (solveStage(st))
+      for (size_t g : st.goals) stalled[g] = true;
   }
+  // Every goal in one run of the final control (the stages ran each only up to its own goals).
+  shooter.runWhole(layout.guide(c), knot_times, points);
+  fillOutcomes(scene, points, targets, report.goals);
   for (size_t g : active) {
     GoalOutcome& o = report.goals[g];
     if (o.met) continue;
-    o.why = stalled ? "the solve stalled at " + mm(o.error) +
-                          ": no step lowers the goal error (a collision or joint limit in the way, or too little "
-                          "time to get there)"
-                    : "not met after " + std::to_string(report.iterations) + " iterations: closest " + mm(o.error);
+    o.why = stalled[g] ? "the solve stalled at " + mm(o.error) +
+                             ": no step lowers the goal error (a collision or joint limit in the way, or too little "
+                             "time to get there)"
+                       : "not met after " + std::to_string(opt.max_iterations) + " iterations: closest " + mm(o.error);
   }
   report.guide = layout.guide(c);
   report.effort = effort(c);

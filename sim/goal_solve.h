@@ -1,4 +1,5 @@
-// The goal solve (docs/GOALS.md): spacetime constraints (Witkin & Kass 1988) by single shooting.
+// The goal solve (docs/GOALS.md): spacetime constraints (Witkin & Kass 1988) by shooting, the goals
+// met in time order over short windows before each (sequential shooting) or all at once (single).
 // The unknowns are the chain's guide torques (physics/models/guide.h) at K knot times per joint,
 // uniform over [0, T] (T: the last goal's time; one more knot, fixed at zero, ends the curve a
 // knot interval later). The solve minimizes the effort E = integral of sum_j |tau_j(t)|^2 dt, a
@@ -18,8 +19,13 @@
 namespace ponyhop {
 
 struct GoalSolveOptions {
-  int knots = 6;              // knot times per joint over [0, T]
-  int max_iterations = 12;    // Gauss-Newton iterations
+  // Knot times per joint over [0, T]; 0: four knot intervals per window (6 knots with no windows).
+  int knots = 0;
+  // s: each goal is met in time order by the torques within this long a time before it, the
+  // earlier ones frozen (sequential shooting, docs/GOALS.md); 0: every knot for every goal at once
+  // (single shooting).
+  double window = 0.5;
+  int max_iterations = 12;    // Gauss-Newton iterations (per window)
   double fd_step = 1e-7;      // N m, the forward-difference step of a knot torque component
   int max_line_halvings = 5;  // a step that does not lower the goal error is halved this often, then the solve stops
   // After the first Jacobian by differences, Broyden's rank-one updates along the steps taken

@@ -136,6 +136,22 @@ TEST(Goals, UnreachableGoalIsReported) {
   EXPECT_NE(r.goals[0].why.find("the closest any control gets is 350.00 mm"), std::string::npos) << r.goals[0].why;
 }
 
+// Sequential windows: two goals met in time order, each by the torques within `window` before
+// it; no torque acts before the first window.
+TEST(Goals, WindowsMeetGoalsInTimeOrder) {
+  Scene s = chainScene();
+  s.goals = {Goal{.t = 0.35, .point = "tip", .position = tipAt(s, 0.35) + Eigen::Vector3d(0.0, -0.01, 0.005)},
+             Goal{.t = 0.25, .point = "tip", .position = tipAt(s, 0.25) + Eigen::Vector3d(0.0, 0.01, 0.0)}};
+  // Knots every 0.025 s; windows [0.05, 0.25) and, as 0.35 - 0.2 is before the first goal,
+  // [0.25 + dt, 0.35).
+  const GoalSolveReport r = solveGoals(s, nullptr, {.knots = 15, .window = 0.2});
+  ASSERT_TRUE(r.all_met) << r.goals[0].error << " " << r.goals[1].error;
+  s.guide = r.guide;
+  Sim guided(s);
+  for (double t = 0.0; t < 0.05 - 1e-9; t += 0.01) EXPECT_EQ(guided.guide()->torque(0, t).norm(), 0.0) << t;
+  EXPECT_GT(guided.guide()->torque(0, 0.2).norm(), 0.0);
+}
+
 TEST(Goals, SolvedSceneMeetsItsGoalAndReplaysFromTheFile) {
   Scene s = chainScene();
   const Eigen::Vector3d free_tip = tipAt(s, 0.25);
