@@ -37,33 +37,17 @@ std::string lowerExtension(const std::string& path) {
   return ext;
 }
 
-// Vertices of a body's own pieces that are no part of its outline: those whose every triangle has
-// an edge longer than a quarter of the mesh's height. Low-poly characters (Quake's MD2) model
-// wings, capes and flags as a few large flat polygons; taken as slices of the body they widen the
-// head, and above the neck they join its piece.
-std::vector<bool> outlineVertices(const MeshData& m, float height) {
-  std::vector<bool> kept(m.positions.size(), false);
-  const float limit2 = (0.25f * height) * (0.25f * height);
-  for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
-    const Eigen::Vector3f& a = m.positions[m.indices[t]];
-    const Eigen::Vector3f& b = m.positions[m.indices[t + 1]];
-    const Eigen::Vector3f& c = m.positions[m.indices[t + 2]];
-    if (std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()}) > limit2) continue;
-    kept[m.indices[t]] = kept[m.indices[t + 1]] = kept[m.indices[t + 2]] = true;
-  }
-  return kept;
-}
-
 // The head of a whole-body mesh: walking down from the top, the head widens, narrows at the neck
-// and widens again at the shoulders; the neck is the narrowest slice between. Returns the neck's
-// height, or nothing when no neck shows between 8 % and 25 % from its top.
-std::optional<float> findNeck(const MeshData& m, const std::vector<bool>& kept, int up, float top, float height) {
+// and widens again at the shoulders; the neck is the narrowest slice between. The slices are of
+// the vertices `among` marks, walked down from `top` over `height`. Returns the neck's height, or
+// nothing when no neck shows between 8 % and 25 % from the top.
+std::optional<float> findNeck(const MeshData& m, const std::vector<bool>& among, int up, float top, float height) {
   constexpr int kBins = 64;
   const int a1 = (up + 1) % 3, a2 = (up + 2) % 3;
   std::vector<Eigen::Vector2f> lo(kBins, Eigen::Vector2f::Constant(std::numeric_limits<float>::max()));
   std::vector<Eigen::Vector2f> hi(kBins, Eigen::Vector2f::Constant(std::numeric_limits<float>::lowest()));
   for (size_t i = 0; i < m.positions.size(); ++i) {
-    if (!kept[i]) continue;
+    if (!among[i]) continue;
     const Eigen::Vector3f& p = m.positions[i];
     const int b = std::clamp(int((top - p[up]) / height * kBins), 0, kBins - 1);
     const Eigen::Vector2f q(p[a1], p[a2]);
@@ -126,11 +110,11 @@ std::vector<uint32_t> pieceRoots(const MeshData& m, int up, float above) {
 
 // The head's bounds above the neck: the largest connected piece there (by vertex count) and the
 // pieces that touch its bounds (horns, eyes, a hat), not a hand raised beside it.
-Eigen::AlignedBox3f headAboveNeck(const MeshData& m, const std::vector<bool>& kept, int up, float neck) {
+Eigen::AlignedBox3f headAboveNeck(const MeshData& m, int up, float neck) {
   const std::vector<uint32_t> root = pieceRoots(m, up, neck);
   std::map<uint32_t, std::pair<size_t, Eigen::AlignedBox3f>> pieces;
   for (uint32_t i = 0; i < m.positions.size(); ++i) {
-    if (m.positions[i][up] < neck || !kept[i]) continue;
+    if (m.positions[i][up] < neck) continue;
     auto& piece = pieces[root[i]];
     if (piece.first == 0) piece.second.setEmpty();
     ++piece.first;
@@ -205,13 +189,7 @@ HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData&
     if (f.head_bounds.isEmpty()) f.head_bounds = box;
     f.neck = f.head_bounds.min()[up];
   } else {
-    // The body's outline, without its large flat polygons.
-    const std::vector<bool> kept = outlineVertices(mesh, mesh.bbox.sizes()[up]);
-    Eigen::AlignedBox3f outline;
-    for (size_t i = 0; i < kept.size(); ++i)
-      if (kept[i]) outline.extend(mesh.positions[i]);
-    if (outline.isEmpty()) outline = mesh.bbox;
-    const Eigen::Vector3f size = outline.sizes();
+    const Eigen::Vector3f size = mesh.bbox.sizes();
     const float height = size[up];
     const float wide = std::max(size[(up + 1) % 3], size[(up + 2) % 3]);
     const float deep = std::min(size[(up + 1) % 3], size[(up + 2) % 3]);
@@ -219,10 +197,10 @@ HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData&
     // the part above the neck.
     if (height > 1.6f * wide || height > 2.2f * deep) {
       f.whole_body = true;
-      const float top = outline.max()[up];
-      const std::optional<float> neck = findNeck(mesh, kept, up, top, height);
+      const float top = mesh.bbox.max()[up];
+      const std::optional<float> neck = findNeck(mesh, std::vector<bool>(mesh.positions.size(), true), up, top, height);
       f.neck = neck.value_or(top - height / 7.0f);
-      f.head_bounds = headAboveNeck(mesh, kept, up, f.neck);
+      f.head_bounds = headAboveNeck(mesh, up, f.neck);
       // A head is about as tall as it is wide or deep (0.9 to 1.4 for people; hair, horns, ears
       // and the top seventh of a body without a neck move it): far outside, the part taken is not
       // a head (a wing or a shoulder beside it, or the feet of a body upside down). The top seventh
@@ -240,19 +218,19 @@ HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData&
       if (!head_like(ratio)) {
         const std::vector<uint32_t> root = pieceRoots(mesh, up, std::numeric_limits<float>::lowest());
         std::map<uint32_t, size_t> count;
-        for (size_t i = 0; i < root.size(); ++i) count[root[i]] += kept[i] ? 1 : 0;
+        for (const uint32_t r : root) ++count[r];
         const uint32_t largest = std::max_element(count.begin(), count.end(), [](const auto& a, const auto& b) {
                                    return a.second < b.second;
                                  })->first;
-        std::vector<bool> body = kept;
+        std::vector<bool> body(root.size());
         Eigen::AlignedBox3f body_box;
         for (size_t i = 0; i < body.size(); ++i) {
-          body[i] = kept[i] && root[i] == largest;
+          body[i] = root[i] == largest;
           if (body[i]) body_box.extend(mesh.positions[i]);
         }
         const std::optional<float> body_neck = findNeck(mesh, body, up, body_box.max()[up], body_box.sizes()[up]);
         if (body_neck) {
-          const Eigen::AlignedBox3f again = headAboveNeck(mesh, kept, up, *body_neck);
+          const Eigen::AlignedBox3f again = headAboveNeck(mesh, up, *body_neck);
           if (head_like(ratio_of(again))) {
             f.neck = *body_neck;
             f.head_bounds = again;
