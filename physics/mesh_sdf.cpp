@@ -26,15 +26,14 @@ bool lineCrossesTriangle(int a, const Eigen::Vector3d& p0, const Eigen::Vector3d
   return true;
 }
 
-Status SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices,
-                                 double cell, double padding, long max_nodes, const Eigen::AlignedBox3d* region) {
-  const size_t tris = indices.size() / 3;
-  if (tris == 0) return Status::error("collider mesh has no triangles");
-  if (!(cell > 0.0) || !std::isfinite(cell)) return Status::error("collider cell must be positive (m)");
-  for (uint32_t i : indices)
-    if (i >= vertices.size()) return Status::error("collider mesh: a triangle index is out of range");
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector3d hi = -lo;
+namespace {
+
+// The grid's box: the mesh's bounds (indices checked in range) plus the padding, cut to the region;
+// false when the region leaves less than a cell on some side.
+bool gridBox(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices, double cell,
+             double padding, const Eigen::AlignedBox3d* region, Eigen::Vector3d& lo, Eigen::Vector3d& hi) {
+  lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  hi = -lo;
   for (uint32_t i : indices) {
     lo = lo.cwiseMin(vertices[i]);
     hi = hi.cwiseMax(vertices[i]);
@@ -45,11 +44,40 @@ Status SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, c
     lo = lo.cwiseMax(region->min());
     hi = hi.cwiseMin(region->max());
     // At least two nodes a side (trilinear interpolation needs a cell).
-    if (((hi - lo).array() < cell).any()) return Status::error("collider region does not meet the mesh");
+    if (((hi - lo).array() < cell).any()) return false;
   }
+  return true;
+}
+
+Eigen::Vector3i gridDims(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double cell) {
+  Eigen::Vector3i dims;
+  for (int a = 0; a < 3; ++a) dims(a) = static_cast<int>(std::ceil((hi(a) - lo(a)) / cell)) + 1;
+  return dims;
+}
+
+}  // namespace
+
+long SignedDistanceGrid::nodes(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices,
+                               double cell, double padding, const Eigen::AlignedBox3d* region) {
+  Eigen::Vector3d lo, hi;
+  if (indices.empty() || !gridBox(vertices, indices, cell, padding, region, lo, hi)) return 0;
+  const Eigen::Vector3i dims = gridDims(lo, hi, cell);
+  return static_cast<long>(dims.x()) * dims.y() * dims.z();
+}
+
+Status SignedDistanceGrid::build(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices,
+                                 double cell, double padding, long max_nodes, const Eigen::AlignedBox3d* region) {
+  const size_t tris = indices.size() / 3;
+  if (tris == 0) return Status::error("collider mesh has no triangles");
+  if (!(cell > 0.0) || !std::isfinite(cell)) return Status::error("collider cell must be positive (m)");
+  for (uint32_t i : indices)
+    if (i >= vertices.size()) return Status::error("collider mesh: a triangle index is out of range");
+  Eigen::Vector3d lo, hi;
+  if (!gridBox(vertices, indices, cell, padding, region, lo, hi))
+    return Status::error("collider region does not meet the mesh");
   cell_ = cell;
   origin_ = lo;
-  for (int a = 0; a < 3; ++a) dims_(a) = static_cast<int>(std::ceil((hi(a) - lo(a)) / cell)) + 1;
+  dims_ = gridDims(lo, hi, cell);
   const long nodes = static_cast<long>(dims_.x()) * dims_.y() * dims_.z();
   if (nodes > max_nodes) {
     return Status::error("collider grid of " + std::to_string(nodes) + " nodes is larger than " +

@@ -40,6 +40,9 @@ class SignedDistanceGrid {
   // misses the mesh, more than max_nodes nodes).
   Status build(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices, double cell,
                double padding, long max_nodes = 8'000'000, const Eigen::AlignedBox3d* region = nullptr);
+  // The number of nodes build() would make with these inputs (0 when the region misses the mesh).
+  static long nodes(const std::vector<Eigen::Vector3d>& vertices, const std::vector<uint32_t>& indices, double cell,
+                    double padding, const Eigen::AlignedBox3d* region = nullptr);
 
   // Signed distance (m, negative inside) and its gradient (of the interpolant, normalized).
   double distance(const Eigen::Vector3d& p) const;

@@ -25,33 +25,29 @@ Eigen::Matrix3d upFix(UpAxis a) {
   return Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
 }
 
-// Vertices of a body's own pieces that are no part of its outline: those whose every triangle has
-// an edge longer than a quarter of the mesh's height. Low-poly characters (Quake's MD2) model
-// wings, capes and flags as a few large flat polygons; taken as slices of the body they widen the
-// head, and above the neck they join its piece.
-std::vector<bool> outlineVertices(const MeshData& m, float height) {
-  std::vector<bool> kept(m.positions.size(), false);
-  const float limit2 = (0.25f * height) * (0.25f * height);
-  for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
-    const Eigen::Vector3f& a = m.positions[m.indices[t]];
-    const Eigen::Vector3f& b = m.positions[m.indices[t + 1]];
-    const Eigen::Vector3f& c = m.positions[m.indices[t + 2]];
-    if (std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()}) > limit2) continue;
-    kept[m.indices[t]] = kept[m.indices[t + 1]] = kept[m.indices[t + 2]] = true;
-  }
-  return kept;
+// F * U of the formula in head_fit.h: the mesh's up to body +z, its face to body -y.
+Eigen::Matrix3d upright(const HeadFit& f) {
+  if (f.face_turn == 0.0) return upFix(f.up);
+  return Eigen::AngleAxisd(f.face_turn * std::numbers::pi / 180.0, Eigen::Vector3d::UnitZ()) * upFix(f.up);
+}
+
+std::string lowerExtension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
 }
 
 // The head of a whole-body mesh: walking down from the top, the head widens, narrows at the neck
-// and widens again at the shoulders; the neck is the narrowest slice between. Returns the neck's
-// height, or nothing when no neck shows between 8 % and 25 % from its top.
-std::optional<float> findNeck(const MeshData& m, const std::vector<bool>& kept, int up, float top, float height) {
+// and widens again at the shoulders; the neck is the narrowest slice between. The slices are of
+// the vertices `among` marks, walked down from `top` over `height`. Returns the neck's height, or
+// nothing when no neck shows between 8 % and 25 % from the top.
+std::optional<float> findNeck(const MeshData& m, const std::vector<bool>& among, int up, float top, float height) {
   constexpr int kBins = 64;
   const int a1 = (up + 1) % 3, a2 = (up + 2) % 3;
   std::vector<Eigen::Vector2f> lo(kBins, Eigen::Vector2f::Constant(std::numeric_limits<float>::max()));
   std::vector<Eigen::Vector2f> hi(kBins, Eigen::Vector2f::Constant(std::numeric_limits<float>::lowest()));
   for (size_t i = 0; i < m.positions.size(); ++i) {
-    if (!kept[i]) continue;
+    if (!among[i]) continue;
     const Eigen::Vector3f& p = m.positions[i];
     const int b = std::clamp(int((top - p[up]) / height * kBins), 0, kBins - 1);
     const Eigen::Vector2f q(p[a1], p[a2]);
@@ -85,10 +81,10 @@ std::optional<float> findNeck(const MeshData& m, const std::vector<bool>& kept, 
   return top - from_top * height;
 }
 
-// The head's bounds above the neck: the largest connected piece there (by vertex count) and the
-// pieces that touch its bounds (horns, eyes, a hat), not a hand raised beside it. Vertices are
-// joined by position, so texture seams do not split a piece.
-Eigen::AlignedBox3f headAboveNeck(const MeshData& m, const std::vector<bool>& kept, int up, float neck) {
+// The connected pieces of a mesh, as the root vertex of each vertex's piece: vertices are joined
+// by position (texture seams do not split a piece) and by the triangles whose three corners are at
+// or above `above` along the up axis.
+std::vector<uint32_t> pieceRoots(const MeshData& m, int up, float above) {
   std::vector<uint32_t> parent(m.positions.size());
   for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
   const auto find = [&parent](uint32_t i) {
@@ -104,14 +100,22 @@ Eigen::AlignedBox3f headAboveNeck(const MeshData& m, const std::vector<bool>& ke
   }
   for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
     const uint32_t a = m.indices[t], b = m.indices[t + 1], c = m.indices[t + 2];
-    if (m.positions[a][up] < neck || m.positions[b][up] < neck || m.positions[c][up] < neck) continue;
+    if (m.positions[a][up] < above || m.positions[b][up] < above || m.positions[c][up] < above) continue;
     join(a, b);
     join(b, c);
   }
+  for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = find(i);
+  return parent;
+}
+
+// The head's bounds above the neck: the largest connected piece there (by vertex count) and the
+// pieces that touch its bounds (horns, eyes, a hat), not a hand raised beside it.
+Eigen::AlignedBox3f headAboveNeck(const MeshData& m, int up, float neck) {
+  const std::vector<uint32_t> root = pieceRoots(m, up, neck);
   std::map<uint32_t, std::pair<size_t, Eigen::AlignedBox3f>> pieces;
   for (uint32_t i = 0; i < m.positions.size(); ++i) {
-    if (m.positions[i][up] < neck || !kept[i]) continue;
-    auto& piece = pieces[find(i)];
+    if (m.positions[i][up] < neck) continue;
+    auto& piece = pieces[root[i]];
     if (piece.first == 0) piece.second.setEmpty();
     ++piece.first;
     piece.second.extend(m.positions[i]);
@@ -119,14 +123,14 @@ Eigen::AlignedBox3f headAboveNeck(const MeshData& m, const std::vector<bool>& ke
   Eigen::AlignedBox3f head;
   head.setEmpty();
   size_t most = 0;
-  for (const auto& [root, piece] : pieces) {
+  for (const auto& [r, piece] : pieces) {
     if (piece.first > most) {
       most = piece.first;
       head = piece.second;
     }
   }
   Eigen::AlignedBox3f all = head;
-  for (const auto& [root, piece] : pieces)
+  for (const auto& [r, piece] : pieces)
     if (piece.second.intersects(head)) all.extend(piece.second);
   return all;
 }
@@ -141,8 +145,7 @@ UpAxis detectUpAxis(const std::string& path, const MeshData& mesh, std::string* 
   // What the file states, as the importer left it.
   if (mesh.file_up == 'y') return say(UpAxis::Y, "the importer made the file y up");
   if (mesh.file_up == 'z') return say(UpAxis::Z, "the file says z up");
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = lowerExtension(path);
   // glTF is y up by its specification; assimp turns Collada's Z_UP and the Quake family's z up
   // (MD2, MD3, MDL, MDC, IQM, HMP) and 3DS into y up. Said here for callers without the mesh.
   static const std::set<std::string> y_up{".gltf", ".glb", ".dae", ".zae", ".md2", ".md3",
@@ -169,6 +172,10 @@ HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData&
   f.up = head.up_axis;
   f.up_reason = "head.up_axis";
   if (f.up == UpAxis::Auto) f.up = detectUpAxis(path, mesh, &f.up_reason);
+  // Quake II's models (MD2) look along +x, z up; assimp turns them y up about x, so they still
+  // look along +x, which U takes to body +x: a quarter turn back brings the face to -y and the
+  // ponytail to the back of the skull, not its side.
+  if (lowerExtension(path) == ".md2" && f.up == UpAxis::Y) f.face_turn = -90.0;
   f.head_bounds = mesh.bbox;
   if (mesh.bbox.isEmpty()) return f;
   const int up = upIndex(f.up);
@@ -182,13 +189,7 @@ HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData&
     if (f.head_bounds.isEmpty()) f.head_bounds = box;
     f.neck = f.head_bounds.min()[up];
   } else {
-    // The body's outline, without its large flat polygons.
-    const std::vector<bool> kept = outlineVertices(mesh, mesh.bbox.sizes()[up]);
-    Eigen::AlignedBox3f outline;
-    for (size_t i = 0; i < kept.size(); ++i)
-      if (kept[i]) outline.extend(mesh.positions[i]);
-    if (outline.isEmpty()) outline = mesh.bbox;
-    const Eigen::Vector3f size = outline.sizes();
+    const Eigen::Vector3f size = mesh.bbox.sizes();
     const float height = size[up];
     const float wide = std::max(size[(up + 1) % 3], size[(up + 2) % 3]);
     const float deep = std::min(size[(up + 1) % 3], size[(up + 2) % 3]);
@@ -196,17 +197,48 @@ HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData&
     // the part above the neck.
     if (height > 1.6f * wide || height > 2.2f * deep) {
       f.whole_body = true;
-      const float top = outline.max()[up];
-      const std::optional<float> neck = findNeck(mesh, kept, up, top, height);
+      const float top = mesh.bbox.max()[up];
+      const std::optional<float> neck = findNeck(mesh, std::vector<bool>(mesh.positions.size(), true), up, top, height);
       f.neck = neck.value_or(top - height / 7.0f);
-      f.head_bounds = headAboveNeck(mesh, kept, up, f.neck);
+      f.head_bounds = headAboveNeck(mesh, up, f.neck);
       // A head is about as tall as it is wide or deep (0.9 to 1.4 for people; hair, horns, ears
       // and the top seventh of a body without a neck move it): far outside, the part taken is not
       // a head (a wing or a shoulder beside it, or the feet of a body upside down). The top seventh
       // alone is no reason: it holds the head of most figures whose neck is as wide as the head.
-      const Eigen::Vector3f h = f.head_bounds.sizes();
-      const float ratio = h[up] / std::max({h[(up + 1) % 3], h[(up + 2) % 3], 1e-12f});
-      if (ratio < 0.6f || ratio > 2.0f) {
+      const auto ratio_of = [up](const Eigen::AlignedBox3f& b) {
+        const Eigen::Vector3f h = b.sizes();
+        return h[up] / std::max({h[(up + 1) % 3], h[(up + 2) % 3], 1e-12f});
+      };
+      const auto head_like = [](float r) { return r >= 0.6f && r <= 2.0f; };
+      float ratio = ratio_of(f.head_bounds);
+      // Far from a head: look again at the body alone, its largest connected piece. Wings, a
+      // weapon or a flag held up are pieces of their own that rise above the head or widen its
+      // slices, and hide its neck (the Quake II faerie's wings). Only a neck found on the body and
+      // a head-like part above it replace the first guess.
+      if (!head_like(ratio)) {
+        const std::vector<uint32_t> root = pieceRoots(mesh, up, std::numeric_limits<float>::lowest());
+        std::map<uint32_t, size_t> count;
+        for (const uint32_t r : root) ++count[r];
+        const uint32_t largest = std::max_element(count.begin(), count.end(), [](const auto& a, const auto& b) {
+                                   return a.second < b.second;
+                                 })->first;
+        std::vector<bool> body(root.size());
+        Eigen::AlignedBox3f body_box;
+        for (size_t i = 0; i < body.size(); ++i) {
+          body[i] = root[i] == largest;
+          if (body[i]) body_box.extend(mesh.positions[i]);
+        }
+        const std::optional<float> body_neck = findNeck(mesh, body, up, body_box.max()[up], body_box.sizes()[up]);
+        if (body_neck) {
+          const Eigen::AlignedBox3f again = headAboveNeck(mesh, up, *body_neck);
+          if (head_like(ratio_of(again))) {
+            f.neck = *body_neck;
+            f.head_bounds = again;
+            ratio = ratio_of(again);
+          }
+        }
+      }
+      if (!head_like(ratio)) {
         char buf[256];
         std::snprintf(
             buf, sizeof(buf), "%s; the part taken is %.2g times as tall as it is wide or deep, a head about 1",
@@ -240,7 +272,7 @@ std::string unsureFitMessage(const HeadFit& fit, const MeshData& mesh) {
 }
 
 Eigen::Affine3d headMeshToBody(const HeadParams& head, const HeadFit& fit) {
-  const Eigen::Matrix3d U = upFix(fit.up);
+  const Eigen::Matrix3d U = upright(fit);
   const int up = upIndex(fit.up);
   double s = head.scale;
   if (head.height > 0.0 && !fit.head_bounds.isEmpty()) {
@@ -262,7 +294,7 @@ Eigen::Affine3d headMeshToBody(const HeadParams& head, const HeadFit& fit) {
 Eigen::Vector3d headAnchorInMesh(const HeadParams& head, const HeadFit& fit, const MeshData& mesh) {
   if (head.anchor_space == AnchorSpace::Mesh || fit.head_bounds.isEmpty()) return head.anchor;
   // The bounds point in upright coordinates (x, y toward the back, z up), back in mesh coordinates.
-  const Eigen::Matrix3d U = upFix(fit.up);
+  const Eigen::Matrix3d U = upright(fit);
   Eigen::AlignedBox3d upright;
   for (int i = 0; i < 8; ++i) {
     upright.extend(U * fit.head_bounds.corner(Eigen::AlignedBox3f::CornerType(i)).cast<double>());

@@ -1,9 +1,10 @@
 // Placement of any head mesh from the mesh itself (HeadParams): its up axis, the head's part of a
 // whole-body mesh, the head's bounds, the pivot (the head body's origin) and the ponytail anchor.
 //
-//   p_body = offset + R * s * U * (p_mesh - pivot)
+//   p_body = offset + R * s * F * U * (p_mesh - pivot)
 //
 // U turns the mesh's up axis into the body's +z (a y-up mesh's face, +z, looks toward body -y);
+// F turns it about z when its format faces elsewhere (Quake's models look along +x);
 // s makes the head's bounds `height` tall; R is head.rotation. GL-free.
 #pragma once
 
@@ -20,6 +21,7 @@ namespace ponyhop {
 struct HeadFit {
   UpAxis up = UpAxis::Y;                            // resolved (never Auto)
   std::string up_reason;                            // how it was chosen, for messages
+  double face_turn = 0.0;                           // degrees about the body's z, after U: the face to -y
   Eigen::AlignedBox3f head_bounds;                  // mesh coordinates: the whole mesh, or above the neck
   bool whole_body = false;                          // the mesh is taller than a head: its top part was taken
   float neck = 0.0f;                                // mesh units along the up axis, whole_body only

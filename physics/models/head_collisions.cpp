@@ -16,6 +16,9 @@ namespace ponyhop {
 
 namespace {
 
+// The most nodes a head's collider grid may have (its build holds a distance and a triangle per node).
+constexpr long kGridMaxNodes = 8'000'000;
+
 // The last grid built, and what it was built from; the store outside the process.
 struct GridCache {
   std::mutex mutex;
@@ -68,7 +71,7 @@ Status cachedGrid(const std::vector<Eigen::Vector3d>& vertices, const std::vecto
   }
   auto grid = std::make_shared<SignedDistanceGrid>();
   if (!store || !store->load(key, *grid)) {
-    if (Status s = grid->build(vertices, indices, cell, pad, 8'000'000, &region); !s.ok()) return s;
+    if (Status s = grid->build(vertices, indices, cell, pad, kGridMaxNodes, &region); !s.ok()) return s;
     if (store) store->save(key, *grid);
   }
   std::lock_guard<std::mutex> lock(cache.mutex);
@@ -190,19 +193,29 @@ Status makeHeadCollisions(World& world, const std::vector<const Chain*>& chains,
   double thickest = 0.0;
   for (const Chain* chain : chains)
     for (double r : chain->radii) thickest = std::max(thickest, r);
-  const double pad = thickest + params.margin + 3.0 * params.cell;
   // Only the part of the head the hair can reach: the links hang from their anchors (fixed in the
   // head's frame), so they stay within a chain's length of its anchor (a whole-body mesh's legs are
   // left out). Several chains: the box around every chain's reach.
   const RigidBody& hb = world.body(head_body);
+  double cell = params.cell, pad = 0.0;
   Eigen::AlignedBox3d region;
-  for (const Chain* chain : chains) {
-    const Eigen::Vector3d anchor = hb.q.conjugate() * (chain->anchor(world) - hb.x);
-    const double reach = chain->length * static_cast<double>(chain->links.size()) + pad;
-    region.extend(Eigen::AlignedBox3d(anchor.array() - reach, anchor.array() + reach));
-  }
+  const auto reachOf = [&](double c) {
+    pad = thickest + params.margin + 3.0 * c;
+    region.setEmpty();
+    for (const Chain* chain : chains) {
+      const Eigen::Vector3d anchor = hb.q.conjugate() * (chain->anchor(world) - hb.x);
+      const double reach = chain->length * static_cast<double>(chain->links.size()) + pad;
+      region.extend(Eigen::AlignedBox3d(anchor.array() - reach, anchor.array() + reach));
+    }
+  };
+  reachOf(cell);
+  // A whole body whose wings or arms fill the hair's reach on every side (the Quake II faerie's)
+  // can pass the grid's node limit at the scene's cell: the cell grows by a tenth at a time until
+  // the grid fits, a coarser collider rather than none. A grid within the limit keeps its cell.
+  for (int i = 0; i < 10 && SignedDistanceGrid::nodes(vertices, indices, cell, pad, &region) > kGridMaxNodes; ++i)
+    reachOf(cell *= 1.1);
   std::shared_ptr<const SignedDistanceGrid> grid;
-  if (Status s = cachedGrid(vertices, indices, params.cell, pad, region, grid); !s.ok()) return s;
+  if (Status s = cachedGrid(vertices, indices, cell, pad, region, grid); !s.ok()) return s;
   CollisionParams cp;
   cp.friction = params.friction;
   cp.restitution = params.restitution;

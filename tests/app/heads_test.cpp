@@ -228,7 +228,6 @@ struct CharacterCase {
 };
 void PrintTo(const CharacterCase& c, std::ostream* os) { *os << c.name; }
 const CharacterCase kUnsure[] = {
-    {"faerie", "MD2/faerie.md2"},            // Quake II: wings above and beside the head
     {"bcn_epileptic", "X/BCN_Epileptic.X"},  // modelled head down along -z: the feet come out on top
 };
 class UnsureCharacters : public ::testing::TestWithParam<CharacterCase> {};
@@ -261,6 +260,57 @@ TEST_P(UnsureCharacters, SaySoAndTellHowToPickTheHeadByHand) {
 
 INSTANTIATE_TEST_SUITE_P(ThirdParty, UnsureCharacters, ::testing::ValuesIn(kUnsure),
                          [](const ::testing::TestParamInfo<CharacterCase>& i) { return std::string(i.param.name); });
+
+// Whole characters beyond the heads above, fitted automatically (fit only, no simulation): the
+// head found at the top of the body, upright, head.height tall, facing body -y, with the anchor on
+// the back of the skull. `up` and `face` are the mesh's own directions, read off renders of each.
+struct WholeCase {
+  const char* name;
+  const char* path;  // under kModels
+  Eigen::Vector3d up, face;
+};
+void PrintTo(const WholeCase& c, std::ostream* os) { *os << c.name; }
+const WholeCase kWhole[] = {
+    // Quake II: wings behind her, a stick above her head; looks along +x as Quake's models do.
+    {"faerie", "MD2/faerie.md2", Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitX()},
+    // 3ds Max (ASE): a mannequin in a T pose, y up after import, looking along +z.
+    {"mocap_rom", "ASE/MotionCaptureROM.ase", Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()},
+};
+class WholeCharacters : public ::testing::TestWithParam<WholeCase> {};
+
+TEST_P(WholeCharacters, LandUprightWithThePonytailOnTheBackOfTheSkull) {
+  const WholeCase& c = GetParam();
+  const std::string mesh = kModels + c.path;
+  ASSERT_TRUE(fs::exists(mesh)) << mesh << " is missing: scripts/setup.sh installs assimp-testmodels";
+  MeshData m;
+  std::string err;
+  ASSERT_TRUE(loadMesh(mesh, m, &err)) << err;
+  const Scene scene = loadScene("assets/scenes/ponytail.json", headOverrides(mesh));
+  const HeadFit fit = fitHead(*scene.head, mesh, m);
+  EXPECT_TRUE(fit.whole_body);
+  EXPECT_EQ(fit.unsure, "");
+  const Eigen::Matrix3d L = headMeshToBody(*scene.head, fit).linear();
+  // Upright and facing body -y.
+  EXPECT_GT((L * c.up).normalized().z(), 0.999) << "the mesh's up is the body's +z";
+  EXPECT_LT((L * c.face).normalized().y(), -0.999) << "the face looks along the body's -y";
+  // The head: at the top of the body, a head's share of its height, head.height tall.
+  const Eigen::Vector3d lo = fit.head_bounds.min().cast<double>(), hi = fit.head_bounds.max().cast<double>();
+  const Eigen::Vector3d all_lo = m.bbox.min().cast<double>(), all_hi = m.bbox.max().cast<double>();
+  const double body = c.up.dot(all_hi - all_lo), head = c.up.dot(hi - lo);
+  std::printf("%s: head %.3g of the body's height, its top %.3g below the mesh's\n", c.name, head / body,
+              c.up.dot(all_hi - hi) / body);
+  EXPECT_LT(c.up.dot(all_hi - hi), 0.1 * body) << "the head is at the top";
+  EXPECT_GT(head, 0.08 * body);
+  EXPECT_LT(head, 0.25 * body);
+  EXPECT_NEAR((L * (hi - lo)).z(), scene.head->height, 1e-6) << "head.height tall";
+  // The anchor: behind the head's centre (away from the face) and above it.
+  const Eigen::Vector3d anchor = headAnchorInMesh(*scene.head, fit, m), centre = 0.5 * (lo + hi);
+  EXPECT_LT((anchor - centre).dot(c.face), 0.0) << "the anchor is on the back of the skull";
+  EXPECT_GT((anchor - centre).dot(c.up), 0.0) << "the anchor is on the upper half";
+}
+
+INSTANTIATE_TEST_SUITE_P(ThirdParty, WholeCharacters, ::testing::ValuesIn(kWhole),
+                         [](const ::testing::TestParamInfo<WholeCase>& i) { return std::string(i.param.name); });
 
 // The heads that land well say nothing.
 TEST_P(Heads, AGoodFitSaysNothing) {
