@@ -24,7 +24,8 @@ struct LoopBenchOptions {
   std::string command_line;
 };
 
-// Runs the section and writes OUT/loops.md; 0 when every run finished.
+// Runs the section and writes OUT/loops.md; 0 when the cost and agreement runs finished (a closure
+// row that stops is written with its reason: a finding, not a failure).
 int runLoopBench(const LoopBenchOptions& options);
 
 }  // namespace ponyhop
