@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -499,12 +500,18 @@ std::string plotScaling(const std::string& dir, const std::vector<ScalingRow>& r
   }
   double y0 = 0.0;  // guide lines through the cheapest configuration's cost at the smallest N
   int n0 = 0;
+  // The axes span the measured points (the n^3 guide would otherwise stretch them to 1e8 us).
+  double y_lo = std::numeric_limits<double>::infinity(), y_hi = 0.0;
+  int n_hi = 0;
   for (const ScalingRow* s : series) {
     d << "# " << s->config << '\n';
     for (const auto& r : rows) {
       if (r.config != s->config || r.status != "ok" || r.us_per_step.empty()) continue;
       const auto [lo, hi] = std::minmax_element(r.us_per_step.begin(), r.us_per_step.end());
       d << r.links << ' ' << r.us() << ' ' << *lo << ' ' << *hi << '\n';
+      y_lo = std::min(y_lo, *lo);
+      y_hi = std::max(y_hi, *hi);
+      n_hi = std::max(n_hi, r.links);
       if (n0 == 0 || r.links < n0 || (r.links == n0 && r.us() < y0)) {
         n0 = r.links;
         y0 = r.us();
@@ -518,21 +525,27 @@ std::string plotScaling(const std::string& dir, const std::vector<ScalingRow>& r
   std::ofstream g = open(script);
   g << "set terminal pngcairo size 1100,750 font ',10'\n"
     << "set output '" << dir << "/scaling.png'\n"
-    << "set title 'Cost per step against chain length, in motion (chain released horizontally, dt = 1/1920 s; "
-       "median and range of interleaved rounds, thread CPU)'\n"
-    << "set logscale xy\nset xlabel 'links N'\nset ylabel 'CPU microseconds per step'\nset key left top font ',9'\n"
-    << "set grid\nplot ";
+    << "set title \"Cost per step against chain length, in motion\\n(chain released horizontally, dt = 1/1920 s; "
+       "median and range of interleaved rounds, thread CPU)\"\n"
+    << "set logscale xy\nset xlabel 'links N'\nset ylabel 'CPU microseconds per step'\n"
+    << "set xrange [" << fmt(n0 / 1.5, "%.6g") << ":" << fmt(n_hi * 1.5, "%.6g") << "]\nset yrange ["
+    << fmt(y_lo / 2.0, "%.6g") << ":" << fmt(y_hi * 2.0, "%.6g") << "]\n"
+    << "set key below font ',9' maxcols 3 width -8\nset grid\nplot ";
   // A colour per series (gnuplot's own cycle has eight); ours solid and thick, the peers
   // (engine/method) thin, dashed, each with its own marker; error bars: the rounds' range.
-  static const char* kColors[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b",
-                                  "#e377c2", "#17becf", "#bcbd22", "#7f7f7f", "#393b79", "#637939"};
+  static const char* kColors[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
+                                  "#17becf", "#bcbd22", "#7f7f7f", "#393b79", "#637939", "#ad494a"};
+  constexpr size_t kColorCount = sizeof(kColors) / sizeof(kColors[0]);
   for (size_t i = 0; i < series.size(); ++i) {
     const ScalingRow& s = *series[i];
     const std::string style = s.peer ? "lw 1.5 dt 2 pt " + std::to_string(4 + i % 8)
                                      : std::string(s.drift.rfind("none", 0) == 0 ? "lw 2 dt 3 pt 7" : "lw 3 pt 7");
-    const std::string title = gnuplotQuote(s.peer ? s.config : s.config + " (" + s.drift + ")");
-    g << "'" << data << "' index " << i << " using 1:2:3:4 with yerrorlines lc rgb '" << kColors[i % 12] << "' "
-      << style << " title \"" << title << "\", ";
+    // The drift control in brackets where the configuration's name does not already end with it.
+    const bool named = s.config.size() >= s.drift.size() &&
+                       s.config.compare(s.config.size() - s.drift.size(), s.drift.size(), s.drift) == 0;
+    const std::string title = gnuplotQuote(s.peer || named ? s.config : s.config + " (" + s.drift + ")");
+    g << "'" << data << "' index " << i << " using 1:2:3:4 with yerrorlines lc rgb '" << kColors[i % kColorCount]
+      << "' " << style << " title \"" << title << "\", ";
   }
   g << fmt(y0, "%.6g") << "*(x/" << n0 << ".0) with lines dt 2 lc rgb 'gray40' title 'guide: n', " << fmt(y0, "%.6g")
     << "*(x/" << n0 << ".0)**3 with lines dt 3 lc rgb 'gray20' title 'guide: n^3'\n";
