@@ -4,7 +4,9 @@
 // a goal is not met, and writes the scene with its `guide` section (guide.enabled false replays
 // the unguided motion). `--check`: no solve, the goals as the scene stands (its guide applied).
 // `--spring`: no solve, the weakest goal spring that meets the goals (what film tools do), its
-// stiffness and the energy it injects, for comparison (docs/GOALS.md).
+// stiffness and the energy it injects, for comparison (docs/GOALS.md); `--stiffness K` that
+// spring instead, `--frames DIR` its motion drawn at the scene's frame rate (the springs are not a
+// scene field, so `render` cannot replay them).
 // Exit code 0 when every goal is met, 1 when one is not (the scene is still written: the closest
 // control found), 2 for bad input.
 #include <cstdio>
@@ -139,7 +141,8 @@ void addSolveCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--damping", args->options.initial_damping,
                   "The trust region's first damping, in units of the mean of diag(J G^-1 J^T)")
       ->check(CLI::Range(0.0, 1e12));
-  cmd->add_option("--iterations", args->options.max_iterations, "Most Gauss-Newton iterations")
+  cmd->add_option("--iterations", args->options.max_iterations,
+                  "Most iterations per window (a trust-region iteration is one trial run)")
       ->check(CLI::Range(1, 1000));
   cmd->callback([args, &exit_code] { exit_code = runCommand("solve", [&] { return runSolve(*args); }); });
 }
