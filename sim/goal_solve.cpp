@@ -577,7 +577,7 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
         }
       Eigen::MatrixXd A = J * Y;
       const double e0 = weightedError(points, st.goals);
-      // The trial step: x_target - x.
+      // The trial step from the free knots x.
       Eigen::VectorXd step;
       if (opt.trust_region) {
         // Levenberg-Marquardt: the step that minimizes |r + J dx|^2 + damping dx^T G_ff dx,
@@ -604,7 +604,6 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
         const Eigen::VectorXd xt = x + alpha * step;
         Eigen::VectorXd ct = c;
         for (Eigen::Index i = 0; i < n; ++i) ct[columns[size_t(i)]] = xt[i];
-        shooter.resetEvents();
         shooter.runFrom(from, st.until, layout.guide(ct), trial, true);
         const double et = weightedError(trial, st.goals);
         const double predicted = (r + alpha * J * step).squaredNorm();

@@ -39,8 +39,8 @@ struct GoalSolveOptions {
   // well the linearization predicted the last; false: the Gauss-Newton step with backtracking.
   bool trust_region = true;
   double initial_damping = 0.1;  // the first damping, in units of the mean of diag(J G^-1 J^T)
-  int max_line_halvings =
-      5;  // line search: a step that does not lower the goal error is halved this often, then the solve stops
+  // Line search: a step that does not lower the goal error is halved this often, then the solve stops.
+  int max_line_halvings = 5;
   // After the first Jacobian by differences, Broyden's rank-one updates along the steps taken
   // (differences again when an updated one gives no step); false: differences every iteration.
   bool broyden = true;

@@ -3,6 +3,8 @@
 // a goal the unguided motion meets, an unreachable goal said so, and a solved scene's replay.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "sim/goal_solve.h"
 #include "sim/scene_io.h"
 #include "sim/sim.h"
@@ -214,6 +216,23 @@ TEST(Goals, WindowsMeetGoalsInTimeOrder) {
   Sim guided(s);
   for (double t = 0.0; t < 0.05 - 1e-9; t += 0.01) EXPECT_EQ(guided.guide()->torque(0, t).norm(), 0.0) << t;
   EXPECT_GT(guided.guide()->torque(0, 0.2).norm(), 0.0);
+}
+
+// The adaptive window: a goal 3 cm off the unguided tip is out of reach of the torques of the
+// last 0.05 s before it (the solve stops short of it with --fixed-window), and met once the window
+// has doubled toward the start.
+TEST(Goals, AdaptiveWindowWidensUntilTheGoalIsMet) {
+  Scene s = chainScene();
+  s.goals = {Goal{.t = 0.3, .point = "tip", .position = tipAt(s, 0.3) + Eigen::Vector3d(0.0, 0.03, 0.0)}};
+  GoalSolveOptions o{.knots = 13, .window = 0.05, .adaptive_window = false};
+  const GoalSolveReport fixed = solveGoals(s, nullptr, o);
+  EXPECT_FALSE(fixed.all_met) << fixed.goals[0].error;
+  o.adaptive_window = true;
+  const GoalSolveReport adaptive = solveGoals(s, nullptr, o);
+  EXPECT_TRUE(adaptive.all_met) << adaptive.goals[0].error;
+  const bool widened = std::any_of(adaptive.log.begin(), adaptive.log.end(),
+                                   [](const std::string& l) { return l.find("window widened") != std::string::npos; });
+  EXPECT_TRUE(widened);
 }
 
 TEST(Goals, SolvedSceneMeetsItsGoalAndReplaysFromTheFile) {
