@@ -668,7 +668,23 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
                 errorsText(report.goals, std::numeric_limits<double>::infinity()).c_str());
   report.log.push_back(line);
   std::vector<bool> stalled(scene.goals.size(), false);
+  // The adaptive window: a goal its window did not meet (or a window without a knot) gets twice
+  // the time before it (up to the previous goal), the progress kept: a goal far from where the
+  // motion goes needs a longer lever than a near one, and the longer window is paid only where it
+  // is needed. False when the window cannot grow.
+  const auto widen = [&](GoalWindow& st) {
+    if (!opt.adaptive_window || opt.window <= 0.0 || st.lower <= st.earliest) return false;
+    st.lower = std::max(st.earliest, st.until - 2.0 * (st.until - st.lower));
+    st.pickKnots(layout);
+    std::snprintf(line, sizeof(line), "stage t = %g s: the window widened to %zu knots per joint from t = %g s",
+                  st.until, st.knots.size(),
+                  st.knots.empty() ? st.lower : layout.times[size_t(std::max(st.knots.front() - 2, 0))]);
+    report.log.push_back(line);
+    return true;
+  };
   for (GoalWindow& st : stages) {
+    while (st.knots.empty() && widen(st)) {
+    }
     if (st.knots.empty()) {
       // A window shorter than the knot spacing: no torque acts in it.
       for (size_t g : st.goals) stalled[g] = true;
@@ -682,18 +698,7 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
       report.log.push_back(line);
     }
     bool stuck = solveStage(st);
-    // The adaptive window: a goal its window did not meet gets twice the time before it (up to
-    // the previous goal), the progress kept: a goal far from where the motion goes needs a longer
-    // lever than a near one, and the longer window is paid only where it is needed.
-    while (!allMet(st.goals) && opt.adaptive_window && opt.window > 0.0 && st.lower > st.earliest) {
-      st.lower = std::max(st.earliest, st.until - 2.0 * (st.until - st.lower));
-      st.pickKnots(layout);
-      std::snprintf(line, sizeof(line),
-                    "stage t = %g s not met: the window widened to %zu knots per joint from t = %g s", st.until,
-                    st.knots.size(), layout.times[size_t(std::max(st.knots.front() - 2, 0))]);
-      report.log.push_back(line);
-      stuck = solveStage(st);
-    }
+    while (!allMet(st.goals) && widen(st)) stuck = solveStage(st);
     if (stuck)
       for (size_t g : st.goals) stalled[g] = true;
   }

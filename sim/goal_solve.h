@@ -38,7 +38,7 @@ struct GoalSolveOptions {
   // Levenberg-Marquardt per window (docs/GOALS.md): each iteration one trial step, damped by how
   // well the linearization predicted the last; false: the Gauss-Newton step with backtracking.
   bool trust_region = true;
-  double initial_damping = 0.1;  // the first damping, in units of the mean of diag(J G^-1 J^T)
+  double initial_damping = 1.0;  // the first damping, in units of the mean of diag(J G^-1 J^T)
   // Line search: a step that does not lower the goal error is halved this often, then the solve stops.
   int max_line_halvings = 5;
   // After the first Jacobian by differences, Broyden's rank-one updates along the steps taken
