@@ -4,15 +4,20 @@
 // a goal is not met, and writes the scene with its `guide` section (guide.enabled false replays
 // the unguided motion). `--check`: no solve, the goals as the scene stands (its guide applied).
 // `--spring`: no solve, the weakest goal spring that meets the goals (what film tools do), its
-// stiffness and the energy it injects, for comparison (docs/GOALS.md).
+// stiffness and the energy it injects, for comparison (docs/GOALS.md); `--stiffness K` that
+// spring instead, `--frames DIR` its motion drawn at the scene's frame rate (the springs are not a
+// scene field, so `render` cannot replay them).
 // Exit code 0 when every goal is met, 1 when one is not (the scene is still written: the closest
 // control found), 2 for bad input.
 #include <cstdio>
+#include <filesystem>
 
 #include "app/commands.h"
 #include "app/output_safety.h"
 #include "app/scene_args.h"
 #include "engine/asset_loader.h"
+#include "engine/frame_writer.h"
+#include "engine/render_session.h"
 #include "sim/goal_solve.h"
 #include "sim/scene_io.h"
 
@@ -25,6 +30,10 @@ struct SolveArgs {
   bool check = false;
   bool spring = false;
   bool no_broyden = false;
+  bool line_search = false;
+  bool fixed_window = false;
+  double stiffness = 0.0;  // --spring: this stiffness instead of the weakest that meets the goals
+  std::string frames;      // --spring: the spring's motion drawn here
   GoalSolveOptions options;
 };
 
@@ -42,10 +51,36 @@ void printReport(const Scene& scene, const GoalSolveReport& r) {
       r.iterations, r.simulations, r.effort, r.energy, r.abs_energy, r.cpu_seconds);
 }
 
+// The spring's motion drawn at the scene's frame rate, frame_%05d.png in `dir` (the springs are
+// not a scene field, so `render` cannot replay them).
+void renderSpring(const Scene& scene_in, double stiffness, const std::string& dir) {
+  Scene scene = scene_in;
+  scene.guide.reset();
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw InputError("--frames " + dir + ": " + ec.message());
+  RenderSession session(scene);
+  addGoalSprings(session.sim(), stiffness);
+  FrameWriter writer(dir);
+  std::string err;
+  std::vector<uint8_t> rgba;
+  for (int i = 0; i < scene.render.frames; ++i) {
+    const double t = i / scene.render.fps;
+    session.simulateTo(t);
+    session.renderFrame(t, rgba);
+    if (!writer.push(i, session.width(), session.height(), rgba, &err))
+      throw InputError("--frames " + dir + ": " + err);
+  }
+  if (!writer.finish(&err)) throw InputError("--frames " + dir + ": " + err);
+  std::fprintf(stderr, "solve: the spring's motion, %d frames -> %s\n", scene.render.frames, dir.c_str());
+}
+
 int runSolve(const SolveArgs& args) {
   Scene scene = args.scene.load();
   if (args.spring) {
-    const SpringOutcome o = weakestGoalSpring(scene, &assimpAssets());
+    const SpringOutcome o = args.stiffness > 0.0 ? springGoals(scene, &assimpAssets(), args.stiffness)
+                                                 : weakestGoalSpring(scene, &assimpAssets());
+    if (!args.frames.empty()) renderSpring(scene, o.stiffness, args.frames);
     for (size_t g = 0; g < o.goals.size(); ++g)
       std::printf("goal %zu: %s at t = %g s: error %.2f mm %s\n", g, scene.goals[g].point.c_str(), scene.goals[g].t,
                   o.goals[g].error * 1000.0, o.goals[g].met ? "met" : "NOT MET");
@@ -62,6 +97,8 @@ int runSolve(const SolveArgs& args) {
   checkOutputFile("--out", args.out, sceneInputs(scene));
   GoalSolveOptions options = args.options;
   options.broyden = !args.no_broyden;
+  options.trust_region = !args.line_search;
+  options.adaptive_window = !args.fixed_window;
   const GoalSolveReport r = solveGoals(scene, &assimpAssets(), options);
   printReport(scene, r);
   scene.guide = r.guide;
@@ -90,8 +127,22 @@ void addSolveCommand(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(0.0, 1e6));
   cmd->add_option("--joints", args->options.joints, "Guide only the root-most N joints (0: every joint)")
       ->check(CLI::Range(0, 4096));
+  cmd->add_option("--stiffness", args->stiffness, "With --spring: this stiffness (N/m) instead of the weakest")
+      ->check(CLI::Range(0.0, 1e6));
+  cmd->add_option("--frames", args->frames, "With --spring: draw the spring's motion into this folder")
+      ->check(nonEmpty());
   cmd->add_flag("--no-broyden", args->no_broyden, "Differences for the Jacobian at every iteration (no updates)");
-  cmd->add_option("--iterations", args->options.max_iterations, "Most Gauss-Newton iterations")
+  cmd->add_flag("--fixed-window", args->fixed_window,
+                "A window that does not meet its goal stays as it is (no doubling toward the previous goal)");
+  cmd->add_flag("--line-search", args->line_search,
+                "Full Gauss-Newton steps halved until the error falls, instead of the trust region");
+  cmd->add_option("--fd-step", args->options.fd_step, "Forward-difference step of a knot torque, N m")
+      ->check(CLI::Range(1e-12, 1.0));
+  cmd->add_option("--damping", args->options.initial_damping,
+                  "The trust region's first damping, in units of the mean of diag(J G^-1 J^T)")
+      ->check(CLI::Range(0.0, 1e12));
+  cmd->add_option("--iterations", args->options.max_iterations,
+                  "Most iterations per window (a trust-region iteration is one trial run)")
       ->check(CLI::Range(1, 1000));
   cmd->callback([args, &exit_code] { exit_code = runCommand("solve", [&] { return runSolve(*args); }); });
 }

@@ -137,7 +137,9 @@ class Shooter {
       while (sim_.ok() && sim_.time() + 0.5 * dt <= goal_times_[g]) {
         while (record && next_knot < knot_times_.size() && knot_times_[next_knot] < sim_.time() + dt)
           snapshots_[next_knot++] = sim_.snapshot();
+        const size_t at = size_t(std::lround(sim_.time() / dt));
         sim_.step();
+        traceStep(at, record);
       }
       points[g] = point(g);
     }
@@ -146,6 +148,19 @@ class Shooter {
   }
   // The knot snapshots [0, validSnapshots()) are of the last recorded run.
   size_t validSnapshots() const { return valid_; }
+
+  // The events of runFrom()'s steps, to tell whether a perturbed run took other step decisions
+  // than the recorded one: per step, the substeps it took (a split at an impact or by the step
+  // control) and the contacts active after it (a contact made or broken). A recorded run keeps
+  // its steps' events; any other counts its steps whose events differ from the recorded ones
+  // (eventChanges()) and the first one's time (firstEventChange(), s; infinity when none) since
+  // the last resetEvents().
+  void resetEvents() {
+    event_changes_ = 0;
+    first_event_change_ = std::numeric_limits<double>::infinity();
+  }
+  int eventChanges() const { return event_changes_; }
+  double firstEventChange() const { return first_event_change_; }
 
   void setGoals(std::vector<GoalPoint> points, std::vector<Goal> goals) {
     points_ = std::move(points);
@@ -157,6 +172,17 @@ class Shooter {
   const std::string& failure() const { return sim_.status(); }
 
  private:
+  void traceStep(size_t at, bool record) {
+    const Collisions* contacts = sim_.collisions();
+    const long event = long(sim_.world().lastSubsteps()) * 65536 + (contacts ? contacts->stats().active : 0);
+    if (events_.size() <= at) events_.resize(at + 1, -1);
+    if (record) {
+      events_[at] = event;
+    } else if (events_[at] >= 0 && events_[at] != event) {
+      ++event_changes_;
+      first_event_change_ = std::min(first_event_change_, double(at) * sim_.scene().physics.dt);
+    }
+  }
   // The world point of goal g now.
   Eigen::Vector3d point(size_t g) const {
     const World& w = sim_.world();
@@ -204,6 +230,9 @@ class Shooter {
   std::vector<GoalPoint> points_;
   std::vector<Goal> goals_;
   int runs_ = 0;
+  std::vector<long> events_;  // per step of the recorded runs: substeps * 65536 + active contacts
+  int event_changes_ = 0;
+  double first_event_change_ = std::numeric_limits<double>::infinity();
 };
 
 std::vector<GoalPoint> goalPoints(const Scene& scene) {
@@ -237,12 +266,18 @@ void fillOutcomes(const Scene& scene, const std::vector<Eigen::Vector3d>& points
 // run with c_i + step, from the snapshot of the knot two before c_i's (where its torque starts to
 // act) up to `until`; central: also c_i - step. `points`: the points at c from a run that took the
 // knot snapshots. Rows 3g..3g+2: goal g (zero for the goals after `until`).
+// *flipped (when given): per column, whether its runs took other step decisions (substeps or
+// active contacts) than the run at c (Shooter::eventChanges()).
 Eigen::MatrixXd differences(Shooter& shooter, const Layout& layout, const Eigen::VectorXd& c,
                             const std::vector<Eigen::Vector3d>& points, double step, bool central,
-                            const std::vector<Eigen::Index>& columns, double until) {
+                            const std::vector<Eigen::Index>& columns, double until,
+                            std::vector<bool>* flipped = nullptr) {
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(Eigen::Index(points.size()) * 3, Eigen::Index(columns.size()));
   std::vector<Eigen::Vector3d> plus, minus;
+  shooter.resetEvents();
+  if (flipped) flipped->assign(columns.size(), false);
   for (size_t col = 0; col < columns.size(); ++col) {
+    const int changes = shooter.eventChanges();
     const Eigen::Index i = columns[col];
     const size_t from = size_t(std::max(int((i / 3) % layout.knots) - 2, 0));
     Eigen::VectorXd cp = c;
@@ -254,6 +289,7 @@ Eigen::MatrixXd differences(Shooter& shooter, const Layout& layout, const Eigen:
       minus = points;
       shooter.runFrom(from, until, layout.guide(cp), minus, false);
     }
+    if (flipped) (*flipped)[col] = shooter.eventChanges() > changes;
     for (size_t g = 0; g < points.size(); ++g)
       J.block<3, 1>(Eigen::Index(g) * 3, Eigen::Index(col)) =
           central ? Eigen::Vector3d((plus[g] - minus[g]) / (2 * step)) : Eigen::Vector3d((plus[g] - points[g]) / step);
@@ -409,8 +445,18 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
   // at the same time share a stage.
   struct GoalWindow {
     double until = 0.0;         // s, the stage's goal time
+    double earliest = 0.0;      // s, the previous stage's goal time + dt (where a window may start)
+    double lower = 0.0;         // s, the window's start
     std::vector<size_t> goals;  // active goals due at `until`
     std::vector<int> knots;     // the free knots (indices into layout.times)
+    // The knots whose torque acts within [lower, until).
+    void pickKnots(const Layout& layout) {
+      knots.clear();
+      for (int k = 0; k < layout.knots; ++k) {
+        const double acts_from = layout.times[size_t(std::max(k - 2, 0))];
+        if (acts_from >= lower && acts_from < until) knots.push_back(k);
+      }
+    }
   };
   std::vector<GoalWindow> stages;
   {
@@ -428,13 +474,9 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
       GoalWindow s;
       s.until = t;
       s.goals = {g};
-      const double lower = opt.window <= 0.0 ? -std::numeric_limits<double>::infinity()
-                           : stages.empty()  ? t - opt.window
-                                             : std::max(stages.back().until + dt, t - opt.window);
-      for (int k = 0; k < layout.knots; ++k) {
-        const double acts_from = layout.times[size_t(std::max(k - 2, 0))];
-        if (acts_from >= lower && acts_from < t) s.knots.push_back(k);
-      }
+      s.earliest = stages.empty() ? 0.0 : stages.back().until + dt;
+      s.lower = opt.window <= 0.0 ? -std::numeric_limits<double>::infinity() : std::max(s.earliest, t - opt.window);
+      s.pickKnots(layout);
       stages.push_back(s);
     }
     if (opt.window <= 0.0 && !stages.empty()) {
@@ -464,6 +506,8 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
     const Eigen::Index m = Eigen::Index(st.goals.size()) * 3;
     Eigen::MatrixXd Jall;      // d(points)/dx, all goals' rows, the free unknowns' columns
     bool differenced = false;  // Jall is from differences at the current c (not a Broyden update)
+    double damping = -1.0;     // the trust region's (set at the first iteration)
+    double damping_growth = 2.0;
     int iterations = 0;
     while (!allMet(st.goals) && iterations < opt.max_iterations) {
       ++iterations;
@@ -471,8 +515,27 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
       // The Jacobian: forward differences, one partial run per unknown, the first time and after
       // a Broyden-updated one failed to give a step; otherwise the rank-one update below.
       if (Jall.size() == 0) {
-        Jall = differences(shooter, layout, c, points, opt.fd_step, false, columns, st.until);
+        std::vector<bool> flipped;
+        Jall = differences(shooter, layout, c, points, opt.fd_step, false, columns, st.until, &flipped);
         differenced = true;
+        // What the step decisions do to the differences: a column whose run split a substep or
+        // made or broke a contact where the nominal run did not reads the jump as a slope.
+        int flips = 0;
+        double flipped_norm = 0.0;
+        for (size_t col = 0; col < flipped.size(); ++col) {
+          if (!flipped[col]) continue;
+          ++flips;
+          for (size_t g : st.goals)
+            flipped_norm += Jall.block<3, 1>(Eigen::Index(g) * 3, Eigen::Index(col)).squaredNorm();
+        }
+        double norm = 0.0;
+        for (size_t g : st.goals) norm += Jall.middleRows<3>(Eigen::Index(g) * 3).squaredNorm();
+        std::snprintf(line, sizeof(line),
+                      "  Jacobian by differences (step %g N m): %d of %d columns' runs took other step decisions "
+                      "(substeps or contacts) than the nominal run (from t = %.3f s), holding %.0f %% of |J|^2",
+                      opt.fd_step, flips, int(n), flips ? shooter.firstEventChange() : st.until,
+                      norm > 0.0 ? 100.0 * flipped_norm / norm : 0.0);
+        report.log.push_back(line);
       }
       Eigen::VectorXd r(m);
       Eigen::MatrixXd J(m, n);
@@ -513,21 +576,50 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
           }
         }
       Eigen::MatrixXd A = J * Y;
-      const double mu = 1e-10 * std::max(A.trace() / double(m), 1e-300);
-      A.diagonal().array() += mu;
-      const Eigen::VectorXd lambda = A.ldlt().solve(J * x - r + J * z);
-      const Eigen::VectorXd x_target = Y * lambda - z;
-      // Backtracking on the stage's goal error.
       const double e0 = weightedError(points, st.goals);
+      // The trial step from the free knots x.
+      Eigen::VectorXd step;
+      if (opt.trust_region) {
+        // Levenberg-Marquardt: the step that minimizes |r + J dx|^2 + damping dx^T G_ff dx,
+        //   dx = -G_ff^-1 J^T (J G_ff^-1 J^T + damping I)^-1 r,
+        // the Gauss-Newton step's least-effort direction cut short in proportion to how far the
+        // linearization has been trusted (damping 0: the full step to the linearized goals).
+        if (damping < 0.0) damping = opt.initial_damping * std::max(A.trace() / double(m), 1e-300);
+        Eigen::MatrixXd Ad = A;
+        Ad.diagonal().array() += damping;
+        step = -Y * Ad.ldlt().solve(r);
+      } else {
+        const double mu = 1e-10 * std::max(A.trace() / double(m), 1e-300);
+        A.diagonal().array() += mu;
+        const Eigen::VectorXd lambda = A.ldlt().solve(J * x - r + J * z);
+        step = Y * lambda - z - x;
+      }
+      // Trials: one for the trust region (a failure raises the damping for the next iteration),
+      // halvings for the line search.
       double alpha = 1.0;
       bool accepted = false;
       std::vector<Eigen::Vector3d> trial = points;
-      for (int half = 0; half <= opt.max_line_halvings; ++half, alpha *= 0.5) {
-        const Eigen::VectorXd xt = x + alpha * (x_target - x);
+      const int trials = opt.trust_region ? 1 : opt.max_line_halvings + 1;
+      for (int half = 0; half < trials; ++half, alpha *= 0.5) {
+        const Eigen::VectorXd xt = x + alpha * step;
         Eigen::VectorXd ct = c;
         for (Eigen::Index i = 0; i < n; ++i) ct[columns[size_t(i)]] = xt[i];
         shooter.runFrom(from, st.until, layout.guide(ct), trial, true);
-        if (shooter.sim().ok() && weightedError(trial, st.goals) < e0) {
+        const double et = weightedError(trial, st.goals);
+        const double predicted = (r + alpha * J * step).squaredNorm();
+        // The gain ratio: the actual reduction of the goal error over the linearization's.
+        const double rho = (e0 - et) / std::max(e0 - predicted, 1e-300);
+        std::snprintf(line, sizeof(line),
+                      "  trial step %g: goal error %.3g mm -> predicted %.3g mm, actual %.3g mm (gain ratio %.2f)%s",
+                      alpha, std::sqrt(e0) * 1e3, std::sqrt(predicted) * 1e3, std::sqrt(et) * 1e3, rho,
+                      opt.trust_region ? (", damping " + std::to_string(damping)).c_str() : "");
+        report.log.push_back(line);
+        if (shooter.sim().ok() && et < e0) {
+          if (opt.trust_region) {
+            // Nielsen's update: less damping the better the linearization predicted the step.
+            damping *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
+            damping_growth = 2.0;
+          }
           if (opt.broyden) {
             // Broyden's update: J += (dp - J dx) dx^T / (dx^T dx), the secant through the step taken.
             const Eigen::VectorXd dx = xt - x;
@@ -548,10 +640,17 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
         // The last trial moved the snapshots: run the accepted control again.
         shooter.runFrom(from, st.until, layout.guide(c), points, true);
         if (!differenced) {
-          // An updated Jacobian that gives no step: differences again before giving up.
+          // An updated Jacobian that gives no step: differences again before damping more.
           Jall.resize(0, 0);
           report.log.push_back("iteration " + std::to_string(report.iterations) +
                                ": the updated Jacobian gives no step; differences again");
+          continue;
+        }
+        if (opt.trust_region && damping < 1e8 * std::max(A.trace() / double(m), 1e-300)) {
+          damping *= damping_growth;
+          damping_growth *= 2.0;
+          report.log.push_back("iteration " + std::to_string(report.iterations) + ": no lower error; damping " +
+                               std::to_string(damping));
           continue;
         }
       }
@@ -569,7 +668,23 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
                 errorsText(report.goals, std::numeric_limits<double>::infinity()).c_str());
   report.log.push_back(line);
   std::vector<bool> stalled(scene.goals.size(), false);
-  for (const GoalWindow& st : stages) {
+  // The adaptive window: a goal its window did not meet (or a window without a knot) gets twice
+  // the time before it (up to the previous goal), the progress kept: a goal far from where the
+  // motion goes needs a longer lever than a near one, and the longer window is paid only where it
+  // is needed. False when the window cannot grow.
+  const auto widen = [&](GoalWindow& st) {
+    if (!opt.adaptive_window || opt.window <= 0.0 || st.lower <= st.earliest) return false;
+    st.lower = std::max(st.earliest, st.until - 2.0 * (st.until - st.lower));
+    st.pickKnots(layout);
+    std::snprintf(line, sizeof(line), "stage t = %g s: the window widened to %zu knots per joint from t = %g s",
+                  st.until, st.knots.size(),
+                  st.knots.empty() ? st.lower : layout.times[size_t(std::max(st.knots.front() - 2, 0))]);
+    report.log.push_back(line);
+    return true;
+  };
+  for (GoalWindow& st : stages) {
+    while (st.knots.empty() && widen(st)) {
+    }
     if (st.knots.empty()) {
       // A window shorter than the knot spacing: no torque acts in it.
       for (size_t g : st.goals) stalled[g] = true;
@@ -582,7 +697,9 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
                     int(st.knots.size()) * layout.joints * 3);
       report.log.push_back(line);
     }
-    if (solveStage(st))
+    bool stuck = solveStage(st);
+    while (!allMet(st.goals) && widen(st)) stuck = solveStage(st);
+    if (stuck)
       for (size_t g : st.goals) stalled[g] = true;
   }
   // Every goal in one run of the final control (the stages ran each only up to its own goals).
@@ -655,10 +772,11 @@ class GoalSprings final : public Controller {
 
 }  // namespace
 
-SpringOutcome springGoals(const Scene& scene_in, const AssetLoader* assets, double stiffness) {
-  Scene scene = scene_in;
-  scene.guide.reset();
-  Sim sim(scene, assets);
+namespace {
+
+// The springs of `sim`'s scene's goals, in time order, added to `sim`.
+std::shared_ptr<GoalSprings> attachGoalSprings(Sim& sim, double stiffness) {
+  const Scene& scene = sim.scene();
   const Chain* chain = sim.chain();
   if (!chain) throw InputError(scene.path + ": the goal springs pull a chain, and the scene has none");
   const std::vector<GoalPoint> kinds = goalPoints(scene);
@@ -677,6 +795,23 @@ SpringOutcome springGoals(const Scene& scene_in, const AssetLoader* assets, doub
   }
   auto ctl = std::make_shared<GoalSprings>(springs, stiffness, sim.headBody());
   sim.world().addController(ctl);
+  return ctl;
+}
+
+}  // namespace
+
+void addGoalSprings(Sim& sim, double stiffness) { attachGoalSprings(sim, stiffness); }
+
+SpringOutcome springGoals(const Scene& scene_in, const AssetLoader* assets, double stiffness) {
+  Scene scene = scene_in;
+  scene.guide.reset();
+  Sim sim(scene, assets);
+  const std::shared_ptr<GoalSprings> ctl = attachGoalSprings(sim, stiffness);
+  const Chain* chain = sim.chain();
+  const std::vector<GoalPoint> kinds = goalPoints(scene);
+  std::vector<size_t> order(scene.goals.size());
+  for (size_t g = 0; g < order.size(); ++g) order[g] = g;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return scene.goals[a].t < scene.goals[b].t; });
   SpringOutcome out;
   out.stiffness = stiffness;
   out.goals.resize(scene.goals.size());

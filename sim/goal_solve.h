@@ -18,16 +18,29 @@
 
 namespace ponyhop {
 
+class Sim;
+
 struct GoalSolveOptions {
   // Knot times per joint over [0, T]; 0: four knot intervals per window (6 knots with no windows).
   int knots = 0;
   // s: each goal is met in time order by the torques within this long a time before it, the
   // earlier ones frozen (sequential shooting, docs/GOALS.md); 0: every knot for every goal at once
   // (single shooting).
-  double window = 0.5;
-  int max_iterations = 12;    // Gauss-Newton iterations (per window)
-  double fd_step = 1e-7;      // N m, the forward-difference step of a knot torque component
-  int max_line_halvings = 5;  // a step that does not lower the goal error is halved this often, then the solve stops
+  double window = 0.75;
+  // A goal its window did not meet is tried again with a window twice as long (up to the
+  // previous goal), keeping what the shorter one reached.
+  bool adaptive_window = true;
+  int max_iterations = 30;  // iterations per window (a trust-region iteration is one trial run)
+  // N m, the forward-difference step of a knot torque component: large enough that the jumps of
+  // the step decisions (a substep split, a contact made a step earlier) are small beside the
+  // change it makes, a few per cent of the torques a goal needs (docs/GOALS.md).
+  double fd_step = 1e-4;
+  // Levenberg-Marquardt per window (docs/GOALS.md): each iteration one trial step, damped by how
+  // well the linearization predicted the last; false: the Gauss-Newton step with backtracking.
+  bool trust_region = true;
+  double initial_damping = 1.0;  // the first damping, in units of the mean of diag(J G^-1 J^T)
+  // Line search: a step that does not lower the goal error is halved this often, then the solve stops.
+  int max_line_halvings = 5;
   // After the first Jacobian by differences, Broyden's rank-one updates along the steps taken
   // (differences again when an updated one gives no step); false: differences every iteration.
   bool broyden = true;
@@ -76,6 +89,9 @@ struct SpringOutcome {
   bool all_met = false;
 };
 SpringOutcome springGoals(const Scene& scene, const AssetLoader* assets, double stiffness);
+// Adds the goal springs of stiffness k (N/m) to `sim` (built from a scene with goals and without
+// its guide), as springGoals runs them: for drawing the spring's motion.
+void addGoalSprings(Sim& sim, double stiffness);
 // The least stiffness (to 2 %) at which the springs meet every goal, searched by doubling from
 // 1e-3 N/m and bisecting in log; all_met false when 1e6 N/m does not.
 SpringOutcome weakestGoalSpring(const Scene& scene, const AssetLoader* assets);

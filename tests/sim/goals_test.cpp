@@ -3,6 +3,8 @@
 // a goal the unguided motion meets, an unreachable goal said so, and a solved scene's replay.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "sim/goal_solve.h"
 #include "sim/scene_io.h"
 #include "sim/sim.h"
@@ -112,10 +114,74 @@ TEST(Goals, GradientMatchesExtrapolatedDifferences) {
   const double scale = richardson.norm();
   ASSERT_GT(scale, 1.0);  // m per N m: the torques move the chain
   EXPECT_LT((central - richardson).norm() / scale, 1e-6);
-  const Eigen::MatrixXd forward = goalJacobian(s, nullptr, knots, c, GoalSolveOptions{}.fd_step, false);
-  EXPECT_LT((forward - richardson).norm() / scale, 1e-4);  // the solve's O(h) differences
+  const Eigen::MatrixXd forward = goalJacobian(s, nullptr, knots, c, 1e-7, false);
+  EXPECT_LT((forward - richardson).norm() / scale, 1e-4);  // forward differences, O(h)
   // The root joint's first knot moves the root link's goal.
   EXPECT_GT(richardson.block(3, 0, 3, 3).norm(), 0.0);
+}
+
+// An independent derivation: a straight 3-link chain at rest without gravity, springs, damping or
+// drag. To first order in the torques (the velocity terms are quadratic) the links' small rotation
+// vectors phi_i obey M phi'' = P tau(t), with the mass matrix M = sum_i m_i C_i^T C_i + diag(I_i)
+// from the kinetic energy (C_i: the centre of link i moved by phi, sum_{j<i} L phi_j x d +
+// L/2 phi_i x d) and P the joint pairs (tau_j on link j, -tau_j on link j - 1: Q_i = tau_i -
+// tau_{i+1}). From rest, phi(T) = M^-1 P integral_0^T (T - s) tau(s) ds, and with
+// tau_j(s) = sum_k B_k(s) c_jk the tip's Jacobian is C_tip M^-1 P_(j) integral_0^T (T - s) B_k(s) ds,
+// the integral exact by Gauss-Legendre (a quartic per knot interval). The differences through the
+// whole simulation (RK4, the joints as constraints) must agree with it to 1e-6 relative.
+TEST(Goals, GradientMatchesLinearizedDynamicsDerivedByHand) {
+  Scene s = parseSceneText(R"({"anchor": {}, "chain": {"links": 3, "direction": [1, 0, 0]},
+      "physics": {"gravity": [0, 0, 0], "integrator": "rk4", "substeps": 2}})",
+                           "still.json");
+  const double T = 0.25;
+  s.goals = {Goal{.t = T, .point = "tip"}};
+  const int knots = 3, n = 3;
+  const double L = s.chain->length;
+  const Eigen::MatrixXd fd = goalJacobian(s, nullptr, knots, Eigen::VectorXd::Zero(3 * knots * n), 1e-9, true);
+
+  Sim sim(s);
+  const Eigen::Vector3d d(1.0, 0.0, 0.0);
+  Eigen::Matrix3d S;  // S phi = phi x d
+  S << 0, d.z(), -d.y(), -d.z(), 0, d.x(), d.y(), -d.x(), 0;
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(3 * n, 3 * n), P = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  Eigen::MatrixXd tip = Eigen::MatrixXd::Zero(3, 3 * n);
+  for (int i = 0; i < n; ++i) {
+    const RigidBody& b = sim.world().body(sim.chain()->links[size_t(i)]);
+    Eigen::MatrixXd C = Eigen::MatrixXd::Zero(3, 3 * n);
+    for (int j = 0; j < i; ++j) C.middleCols<3>(3 * j) = L * S;
+    C.middleCols<3>(3 * i) = 0.5 * L * S;
+    M += b.mass * C.transpose() * C;
+    M.block<3, 3>(3 * i, 3 * i) += b.worldInertia();
+    tip.middleCols<3>(3 * i) = L * S;
+    P.block<3, 3>(3 * i, 3 * i) = Eigen::Matrix3d::Identity();
+    if (i + 1 < n) P.block<3, 3>(3 * i, 3 * (i + 1)) = -Eigen::Matrix3d::Identity();
+  }
+  const Eigen::MatrixXd response = tip * M.inverse() * P;  // tip displacement per unit of integral (T-s) tau
+  // The knots of goalJacobian's layout: t_k = k T / (K - 1), one more (zero) at K T / (K - 1).
+  std::vector<double> times;
+  for (int k = 0; k <= knots; ++k) times.push_back(k * T / (knots - 1));
+  static const double xs[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526};
+  static const double ws[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538};
+  Eigen::VectorXd moment = Eigen::VectorXd::Zero(knots);  // integral_0^T (T - s) B_k(s) ds
+  for (int i = 0; i + 1 < knots; ++i) {
+    const double a = times[size_t(i)], b = times[size_t(i + 1)];
+    for (int q = 0; q < 4; ++q) {
+      const double t = 0.5 * (a + b) + 0.5 * (b - a) * xs[q];
+      std::array<double, 4> w;
+      const int interval = guideWeights(times, t, w);
+      for (int p = 0; p < 4; ++p) {
+        const int k = interval - 1 + p;
+        if (k >= 0 && k < knots) moment[k] += 0.5 * (b - a) * ws[q] * (T - t) * w[size_t(p)];
+      }
+    }
+  }
+  Eigen::MatrixXd analytic(3, 3 * knots * n);
+  for (int j = 0; j < n; ++j)
+    for (int k = 0; k < knots; ++k)
+      analytic.middleCols<3>((j * knots + k) * 3) = response.middleCols<3>(3 * j) * moment[k];
+  ASSERT_GT(analytic.norm(), 1.0);
+  const double relative = (fd - analytic).norm() / analytic.norm();
+  EXPECT_LT(relative, 1e-6) << "relative " << relative << "\ndifferences\n" << fd << "\nderived\n" << analytic;
 }
 
 TEST(Goals, GoalMetUnguidedNeedsZeroEffort) {
@@ -150,6 +216,23 @@ TEST(Goals, WindowsMeetGoalsInTimeOrder) {
   Sim guided(s);
   for (double t = 0.0; t < 0.05 - 1e-9; t += 0.01) EXPECT_EQ(guided.guide()->torque(0, t).norm(), 0.0) << t;
   EXPECT_GT(guided.guide()->torque(0, 0.2).norm(), 0.0);
+}
+
+// The adaptive window: a goal 3 cm off the unguided tip is out of reach of the torques of the
+// last 0.05 s before it (the solve stops short of it with --fixed-window), and met once the window
+// has doubled toward the start.
+TEST(Goals, AdaptiveWindowWidensUntilTheGoalIsMet) {
+  Scene s = chainScene();
+  s.goals = {Goal{.t = 0.3, .point = "tip", .position = tipAt(s, 0.3) + Eigen::Vector3d(0.0, 0.03, 0.0)}};
+  GoalSolveOptions o{.knots = 13, .window = 0.07, .adaptive_window = false, .max_iterations = 6};
+  const GoalSolveReport fixed = solveGoals(s, nullptr, o);
+  EXPECT_FALSE(fixed.all_met) << fixed.goals[0].error;
+  o.adaptive_window = true;
+  const GoalSolveReport adaptive = solveGoals(s, nullptr, o);
+  EXPECT_TRUE(adaptive.all_met) << adaptive.goals[0].error << " " << adaptive.goals[0].why;
+  const bool widened = std::any_of(adaptive.log.begin(), adaptive.log.end(),
+                                   [](const std::string& l) { return l.find("window widened") != std::string::npos; });
+  EXPECT_TRUE(widened);
 }
 
 TEST(Goals, SolvedSceneMeetsItsGoalAndReplaysFromTheFile) {
