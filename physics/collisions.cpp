@@ -33,6 +33,19 @@ PgsSettings pgsSettings(const std::vector<Collisions::Row>& rows, bool warm_star
   return {1e-13, 5000, warm_start, true};
 }
 
+// The dynamic bodies' kinetic energy, 1/2 m v^2 + 1/2 w_b . (I w_b) with w_b = R^T w the angular
+// velocity in the body's frame, where the inertia is diagonal: RigidBody::kineticEnergy's value
+// without building R I R^T (two 3 x 3 products a body). The impulses' energy readout.
+double kineticEnergyOf(const std::vector<RigidBody>& bodies) {
+  double e = 0.0;
+  for (const RigidBody& b : bodies) {
+    if (!b.isDynamic()) continue;
+    const Eigen::Vector3d wb = renormalized(b.q).conjugate() * b.w;
+    e += 0.5 * b.mass * b.v.squaredNorm() + 0.5 * wb.dot(b.inertia.cwiseProduct(wb));
+  }
+  return e;
+}
+
 Vector6d velocityOf(const RigidBody& b) {
   Vector6d v;
   v << b.v, b.w;
@@ -78,7 +91,7 @@ void Collisions::attach(World& world) {
     return;
   }
   world.addContactSet(shared_from_this());
-  memory_.cores = coresInGrids(world.bodies());  // the first substep's moves count from here
+  coresInGrids(world.bodies(), memory_.cores);  // the first substep's moves count from here
 }
 
 void Collisions::update(World& world) {
@@ -187,7 +200,7 @@ const std::vector<Collisions::Row>& Collisions::touching(const std::vector<Rigid
 const std::vector<Eigen::Vector3d>& Collisions::coresAt(const std::vector<RigidBody>& bodies) const {
   AtState& s = at(bodies);
   if (!s.cored) {
-    s.cores = coresInGrids(bodies);
+    coresInGrids(bodies, s.cores);
     s.cored = true;
   }
   return s.cores;
@@ -231,33 +244,34 @@ bool Collisions::roundedAndGrid(const Pair& pair, int& ri, int& gi) const {
   return shapes_[gi].type == ShapeType::Sdf && shapes_[ri].rounded();
 }
 
-bool Collisions::coreInGrid(const std::vector<RigidBody>& bodies, const Pair& pair, Eigen::Vector3d ends[2]) const {
-  int ri = 0, gi = 0;
-  if (!roundedAndGrid(pair, ri, gi)) return false;
-  const Shape& r = shapes_[ri];
-  const Shape& g = shapes_[gi];
-  const RigidBody& R = bodyOf(bodies, owners_[ri]);
-  const RigidBody& G = bodyOf(bodies, owners_[gi]);
-  // World to the grid's frame: the inverse of its body's pose times its local pose.
-  const Eigen::Quaterniond to_grid = (G.q * g.rotation).conjugate();
-  const Eigen::Vector3d grid_origin = G.x + G.q * g.offset;
-  const double half = r.type == ShapeType::Capsule ? r.half_length : 0.0;
-  for (int k = 0; k < 2; ++k) {
-    const Eigen::Vector3d local = r.offset + r.rotation * Eigen::Vector3d(0.0, 0.0, k == 0 ? half : -half);
-    ends[k] = to_grid * (R.x + R.q * local - grid_origin);
-  }
-  return true;
-}
-
-std::vector<Eigen::Vector3d> Collisions::coresInGrids(const std::vector<RigidBody>& bodies) const {
-  std::vector<Eigen::Vector3d> cores;
+void Collisions::coresInGrids(const std::vector<RigidBody>& bodies, std::vector<Eigen::Vector3d>& cores) const {
+  cores.clear();
+  // World to a grid's frame (the inverse of its body's pose times its local pose) as a matrix and
+  // an origin, made once for the pairs that share the grid (every pair of the ponytail: one head);
+  // each core end is then two matrix products (quaternion rotations cost about twice as much,
+  // and this runs twice per substep).
+  int grid = -1;
+  Eigen::Matrix3d to_grid = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d grid_origin = Eigen::Vector3d::Zero();
   for (const Pair& pr : pairs_) {
-    Eigen::Vector3d ends[2];
-    if (!coreInGrid(bodies, pr, ends)) continue;
-    cores.push_back(ends[0]);
-    cores.push_back(ends[1]);
+    int ri = 0, gi = 0;
+    if (!roundedAndGrid(pr, ri, gi)) continue;
+    if (gi != grid) {
+      const Shape& g = shapes_[gi];
+      const RigidBody& G = bodyOf(bodies, owners_[gi]);
+      to_grid = (G.q * g.rotation).conjugate().toRotationMatrix();
+      grid_origin = G.x + G.q * g.offset;
+      grid = gi;
+    }
+    const Shape& r = shapes_[ri];
+    const RigidBody& R = bodyOf(bodies, owners_[ri]);
+    const Eigen::Matrix3d body = R.q.toRotationMatrix();
+    // The core's ends in its body's frame: the shape's offset -+ half its length along its z.
+    const Eigen::Vector3d axis =
+        (r.type == ShapeType::Capsule ? r.half_length : 0.0) * (r.rotation * Eigen::Vector3d::UnitZ());
+    for (const Eigen::Vector3d& local : {Eigen::Vector3d(r.offset + axis), Eigen::Vector3d(r.offset - axis)})
+      cores.push_back(to_grid * (R.x + body * local - grid_origin));
   }
-  return cores;
 }
 
 // Why this bounds what passes between two stages: docs/PHYSICS.md, "No pass-through". Every core
@@ -421,12 +435,7 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
         if (key == std::make_pair(r.key0, r.key1)) p.segment(i, count) = last.head(count);
     }
   }
-  const double energy_before = [&] {
-    double e = 0.0;
-    for (const RigidBody& b : bodies)
-      if (b.isDynamic()) e += b.kineticEnergy();
-    return e;
-  }();
+  const double energy_before = kineticEnergyOf(bodies);
   const PgsResult solved = projectedGaussSeidel(delassus_, u0, target, blocks, mu, p, pgsSettings(rows, true));
   stats_.iterations = solved.sweeps;
   stats_.sweeps += solved.sweeps;
@@ -446,10 +455,7 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
       bodies[i].w += p(k) * w_[k][i].tail<3>();
     }
   }
-  double energy_after = 0.0;
-  for (const RigidBody& b : bodies)
-    if (b.isDynamic()) energy_after += b.kineticEnergy();
-  stats_.max_energy_gain = std::max(stats_.max_energy_gain, energy_after - energy_before);
+  stats_.max_energy_gain = std::max(stats_.max_energy_gain, kineticEnergyOf(bodies) - energy_before);
 
   // 2. Positions: push out what overlaps, keep the joints. The impulses moved no body: the first
   // pass's rows are the impulses' own.

@@ -180,10 +180,9 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
   // A pair of a rounded shape and a distance grid (either order): the rounded shape's and the
   // grid's indices. False for any other pair.
   bool roundedAndGrid(const Pair& pair, int& ri, int& gi) const;
-  // A pair of a rounded shape and a distance grid (either order): its core's ends in the grid's
-  // frame. False for any other pair.
-  bool coreInGrid(const std::vector<RigidBody>& bodies, const Pair& pair, Eigen::Vector3d ends[2]) const;
-  std::vector<Eigen::Vector3d> coresInGrids(const std::vector<RigidBody>& bodies) const;
+  // Per pair of a rounded shape and a distance grid (either order), in the pairs' order: its
+  // core's two ends in the grid's frame, into `cores` (its storage kept).
+  void coresInGrids(const std::vector<RigidBody>& bodies, std::vector<Eigen::Vector3d>& cores) const;
   // The limit k's row at the given state when its gap is below reach.
   bool limitRow(const std::vector<RigidBody>& bodies, size_t k, double reach, Row& row) const;
   // The state cache: the poses (and margin) below were computed at, reset when they change.
