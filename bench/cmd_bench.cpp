@@ -485,22 +485,17 @@ std::vector<CollisionCostRow> benchCollisionCost(const std::string& scene_path, 
   return rows;
 }
 
-// The section "Collision cost" at the end of the README at `path` (its own, from the row before
-// it on: a --collision-only run replaces only this section), and collision.csv beside it.
+void replaceSection(const std::string& path, const std::string& section, const std::string& insert_before);
+
+// The section "Collision cost" of the README at `path` (at its end when new; a --collision-only run
+// replaces only this section, up to the next level-2 title, and keeps the sections after it), and
+// collision.csv beside it.
 void appendCollisionCost(const std::string& path, const std::string& scene, double seconds, int rounds,
                          const std::vector<CollisionCostRow>& rows, const std::string& load_before,
                          const std::string& load_after) {
   constexpr const char* kTitle = "\n## Collision cost: the ponytail against its head\n";
-  std::string before;
-  {
-    std::ifstream in(path);
-    std::stringstream text;
-    text << in.rdbuf();
-    before = text.str();
-    if (const size_t at = before.find(kTitle); at != std::string::npos) before.resize(at);
-  }
-  std::ofstream f(path);
-  f << before << kTitle << "\n"
+  std::ostringstream f;
+  f << kTitle << "\n"
     << "`" << scene << "` stepped for " << fmt(seconds, "%g")
     << " s of each clip with its `collision` section (on) and without it (off), the scene's own method, in "
     << std::max(1, rounds)
@@ -529,6 +524,7 @@ void appendCollisionCost(const std::string& path, const std::string& scene, doub
       << " | " << (r.on ? std::to_string(r.capped) : "") << " | " << r.max_contacts << " | "
       << fmt(1e3 * r.deepest, "%.2f") << " | " << fmt(1e3 * r.overshoot, "%.2f") << " | " << r.status << " |\n";
   }
+  replaceSection(path, f.str(), kTitle);
   std::ofstream csv(std::filesystem::path(path).parent_path() / "collision.csv");
   csv << "clip,collision,cpu_us_per_step,cpu_us_per_step_min,cpu_us_per_step_max,contact_us_per_step,on_off,"
          "on_off_min,on_off_max,build_s,steps,queries_per_step,sweeps_per_step,capped,max_contacts,deepest_m,"
