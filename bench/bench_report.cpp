@@ -8,6 +8,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 
 namespace ponyhop {
@@ -70,6 +71,10 @@ std::string csvField(const std::string& s) {
 
 void writeBenchCsv(const std::string& path, const std::vector<BenchRow>& rows) {
   std::ofstream f = open(path);
+  writeBenchCsv(f, rows);
+}
+
+void writeBenchCsv(std::ostream& f, const std::vector<BenchRow>& rows) {
   f << "case,links,anchor,method,solver,integrator,stabilization,step,dt,status,reason,steps,us_per_step,"
        "us_per_sim_second,horizon,err_rms,err_max,substeps";
   for (auto n : StageTimes::names) f << ",us_" << n;
@@ -92,6 +97,45 @@ void writeBenchCsv(const std::string& path, const std::vector<BenchRow>& rows) {
       << (ok ? num(r.energy_rel) : "") << ',' << (ok ? num(r.joint_drift) : "") << ',' << (ok ? num(r.max_speed) : "")
       << ',' << (ok ? std::to_string(r.tolerance_misses) : "") << '\n';
   }
+}
+
+size_t mergeBenchCsv(const std::string& path, const std::vector<BenchRow>& rows) {
+  std::ostringstream fresh;
+  writeBenchCsv(fresh, rows);
+  std::istringstream in_fresh(fresh.str());
+  std::string header, line;
+  std::getline(in_fresh, header);
+  // A row is (case, method, dt): columns 0, 3 and 8, dt as written (%.9g) on both sides.
+  const auto key = [](const std::string& l) {
+    const std::vector<std::string> v = splitCsvLine(l);
+    return v.size() > 8 ? v[0] + ',' + v[3] + ',' + v[8] : l;
+  };
+  std::vector<std::string> added;
+  std::set<std::string> keys;
+  while (std::getline(in_fresh, line)) {
+    added.push_back(line);
+    keys.insert(key(line));
+  }
+  std::vector<std::string> kept;
+  size_t replaced = 0;
+  {
+    std::ifstream old(path);
+    std::string old_header;
+    if (old && std::getline(old, old_header) && old_header != header) {
+      throw std::runtime_error(path + ": its columns differ from this bench's; run the whole bench instead of --merge");
+    }
+    while (std::getline(old, line)) {
+      if (keys.count(key(line)))
+        ++replaced;
+      else
+        kept.push_back(line);
+    }
+  }
+  std::ofstream f = open(path);
+  f << header << '\n';
+  for (const auto& l : kept) f << l << '\n';
+  for (const auto& l : added) f << l << '\n';
+  return replaced;
 }
 
 void writeReferenceCsv(const std::string& path, const std::vector<ReferenceCheck>& checks) {
@@ -294,6 +338,8 @@ std::vector<EqualAccuracyTable> equalAccuracyTables(const std::vector<CostPoint>
       t.engines.push_back(p.engine());
   }
   for (EqualAccuracyTable& t : tables) {
+    // By name: the columns do not move when a --merge run puts an engine's rows at the end.
+    std::sort(t.engines.begin(), t.engines.end());
     for (double level : kAccuracyLevels) {
       EqualAccuracyTable::Level row;
       row.level = level;

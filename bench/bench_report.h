@@ -42,6 +42,11 @@ struct ReferenceCheck {
 std::string csvField(const std::string& s);
 
 void writeBenchCsv(const std::string& path, const std::vector<BenchRow>& rows);
+void writeBenchCsv(std::ostream& f, const std::vector<BenchRow>& rows);
+// `ponyhop bench --merge`: the rows replace those of the bench.csv at `path` with the same case,
+// method and dt (the other rows kept, the new ones at the end); a missing file is created.
+// Returns how many rows were replaced. Throws when the file's columns differ.
+size_t mergeBenchCsv(const std::string& path, const std::vector<BenchRow>& rows);
 void writeReferenceCsv(const std::string& path, const std::vector<ReferenceCheck>& checks);
 void writeScalingCsv(const std::string& path, const std::vector<ScalingRow>& rows);
 
@@ -82,7 +87,7 @@ inline constexpr double kAccuracyLevels[] = {1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6}
 // into the points, -1 when none reaches the level.
 struct EqualAccuracyTable {
   std::string case_id, case_title;
-  std::vector<std::string> engines;  // the peer engines with runs in this case, in first-seen order
+  std::vector<std::string> engines;  // the peer engines with runs in this case, by name
   struct Level {
     double level = 0.0;
     int ours = -1;

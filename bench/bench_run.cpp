@@ -34,18 +34,31 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+std::string Method::name() const {
+  std::string n = solver + "/" + integrator + "/" + stabilization;
+  if (step == StepControl::Fixed) return n;
+  n += "+" + stepName();
+  if (step == StepControl::Auto && rotation != kDefaultStepRotation) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", rotation);
+    n += b;
+  }
+  return n;
+}
+
 std::vector<Override> methodOverrides(const Method& m, double dt, double control_period) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.17g", control_period > 0.0 ? control_period : dt);
   const long substeps = control_period > 0.0 ? std::max(1L, std::lround(control_period / dt)) : 1L;
-  char tol[32];
+  char tol[32], rotation[32];
   std::snprintf(tol, sizeof tol, "%.17g", kBenchTolerance);
+  std::snprintf(rotation, sizeof rotation, "%.17g", m.step == StepControl::Auto ? m.rotation : 0.0);
   return {{"physics.solver", m.solver},
           {"physics.integrator", m.integrator},
           {"physics.stabilization", m.stabilization},
           {"physics.dt", buf},
           {"physics.substeps", std::to_string(substeps)},
-          {"physics.max_step_rotation", m.step == StepControl::Auto ? "2" : "0"},
+          {"physics.max_step_rotation", rotation},
           {"physics.tolerance", m.step == StepControl::Tol ? tol : "0"}};
 }
 
@@ -168,15 +181,37 @@ RunResult benchRun(const BenchCase& c, const Method& m, double dt, double horizo
     if (c.conservative) drift = std::max(drift, std::abs(sim.chainEnergy() - e_start));
   };
   observe();
+  // A long run may cost at most kLongRunBudget times what its timed horizon's steps predict (plus
+  // a few seconds): the tolerance mode's step doubling once split every substep of the whipping
+  // chain to its deepest level (1/1024 of dt) and held the whole bench for many minutes in one row.
+  const double budget = kLongRunBudget * med * static_cast<double>(total_steps - n) + kLongRunSlack;
+  const double cpu0 = threadCpuSeconds();
+  bool over_budget = false;
   for (long i = n + 1; i <= total_steps; ++i) {
     if (!sim.step()) break;
-    if (i % sample == 0) observe();
+    if (i % sample == 0) {
+      observe();
+      if (threadCpuSeconds() - cpu0 > budget) {
+        over_budget = true;
+        break;
+      }
+    }
   }
   observe();
   r.long_reached = sim.time();
   if (c.conservative) {
     r.energy_drift = drift;
     r.energy_rel = std::abs(e_start) > 0.0 ? drift / std::abs(e_start) : drift;
+  }
+  if (over_budget) {
+    char why[200];
+    std::snprintf(why, sizeof why,
+                  "%.3g s of CPU by t = %.3g s, over %g x what the timed horizon's steps predict for the whole long "
+                  "run (%.3g s): its steps grew dearer as it went",
+                  threadCpuSeconds() - cpu0, r.long_reached, kLongRunBudget, budget - kLongRunSlack);
+    r.long_status = "over_budget";
+    r.long_reason = why;
+    return r;
   }
   if (!sim.ok()) {
     r.long_status = "stopped";

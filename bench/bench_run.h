@@ -63,14 +63,18 @@ struct EnumNames<StepControl> {
   static constexpr std::array<std::string_view, 3> names{"fixed", "auto", "tol"};
 };
 
+// The rotation limit of StepControl::Auto unless a method names its own: ponyhop's default.
+constexpr double kDefaultStepRotation = 2.0;  // deg
+
 // A scene's physics settings for one run.
 struct Method {
   std::string solver, integrator, stabilization;
   StepControl step = StepControl::Fixed;
+  // deg per substep (StepControl::Auto): a coarser limit than the default is part of the name
+  // ("+auto10"), the choice of a user who wants a cheap, coarse and still bounded run.
+  double rotation = kDefaultStepRotation;
   std::string stepName() const { return std::string(enumName(step)); }
-  std::string name() const {
-    return solver + "/" + integrator + "/" + stabilization + (step == StepControl::Fixed ? "" : "+" + stepName());
-  }
+  std::string name() const;
 };
 
 // The overrides that make a run use `method` at step dt: fixed steps (dt means dt), or dt split
@@ -85,6 +89,11 @@ Trajectory simulateTrajectory(const BenchCase& c, const Method& method, double d
 // in [0, horizon]. Returns {rms, max}.
 std::array<double, 2> trajectoryError(const Trajectory& run, const Trajectory& reference, double horizon);
 
+// The long run stops when its CPU time passes kLongRunBudget x the timed horizon's cost per step
+// x its steps + kLongRunSlack (long_status "over_budget").
+constexpr double kLongRunBudget = 10.0;
+constexpr double kLongRunSlack = 5.0;  // s
+
 struct RunResult {
   std::string status = "ok";  // ok | failed | cannot_run
   std::string reason;         // the World's status message or why it cannot run
@@ -97,7 +106,7 @@ struct RunResult {
   int tolerance_misses = 0;             // +tol: substeps still above the tolerance at the deepest split (timed run)
   double err_rms = 0.0, err_max = 0.0;  // m, against the reference over the horizon
   // Long run (continues the first repeat to BenchCase::long_duration).
-  std::string long_status = "ok";  // ok | stopped | unbounded | skipped
+  std::string long_status = "ok";  // ok | stopped | unbounded | over_budget | skipped
   std::string long_reason;
   double long_reached = 0.0;   // s, simulated before it stopped
   double energy_drift = -1.0;  // J, max |E - E0| (conservative cases), -1: not applicable

@@ -59,6 +59,8 @@ struct BenchArgs {
   int repeats = -1;
   std::vector<int> links, dts;       // empty: the mode's set
   std::vector<std::string> anchors;  // empty: fixed and shake
+  std::vector<std::string> methods;  // empty: every method and peer; else only these names (bench.csv's)
+  bool merge = false;                // the rows replace their own in OUT/bench.csv; the headline is rebuilt
   bool scaling = true;
   bool scaling_only = false;
   std::vector<int> scaling_links;            // empty: the mode's set
@@ -139,6 +141,14 @@ std::vector<Method> allMethods() {
   m.push_back({"tree", "rattle", "none", StepControl::Auto});
   m.push_back({"featherstone", "rk4", "none", StepControl::Auto});
   m.push_back({"tree", "rattle", "none", StepControl::Tol});
+  // Coarse accuracy, cheaply (what a user after 1-10 cm would pick): a looser rotation limit on
+  // the methods that blow up at coarse fixed steps (the whipping tip), so that only the whip is
+  // substepped.
+  for (double deg : {5.0, 10.0, 20.0}) {
+    m.push_back({"featherstone", "symplectic_euler", "none", StepControl::Auto, deg});
+    m.push_back({"featherstone", "rk4", "none", StepControl::Auto, deg});
+    m.push_back({"tree", "rattle", "none", StepControl::Auto, deg});
+  }
   return m;
 }
 
@@ -279,6 +289,18 @@ void writeSummary(std::ofstream& f, const std::vector<std::unique_ptr<BenchCase>
 
 // The README's section after the headline (cost at equal accuracy): how the bench measures.
 constexpr const char* kHowTitle = "\n## How the bench measures\n";
+// The headline's source when rebuilt from bench.csv (--equal-accuracy-only, --merge).
+constexpr const char* kMergedSource =
+    "the bench.csv beside this README: the run named at the top, with the rows of the runs listed in merges.md "
+    "(`--merge`, when there is one) in place of its own";
+
+// "2026-11-28 17:40 UTC": when a merged run was made.
+std::string utcNow() {
+  const std::time_t t = std::time(nullptr);
+  char b[32];
+  std::strftime(b, sizeof b, "%Y-%m-%d %H:%M UTC", std::gmtime(&t));
+  return b;
+}
 
 // Markdown: one table of methods at a dt, the Pareto front, per-stage costs.
 void writeMarkdown(const std::string& path, const BenchArgs& args, const Config& cfg,
@@ -300,8 +322,9 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
     << "Files: `bench.csv` (every run, failed ones with the World's message), `reference.csv` (the "
        "reference's convergence check), `scaling.csv`, `error_vs_cost_*.png`, `scaling.png`.\n\n"
     << "Every run uses fixed steps (`physics.substeps = 1`, `max_step_rotation = 0`, `tolerance = 0`): dt "
-       "means dt; except the rows marked `+auto` (`max_step_rotation = 2` deg: ponyhop's default step control) and "
-       "`+tol` (`tolerance = "
+       "means dt; except the rows marked `+auto` (`max_step_rotation = 2` deg: ponyhop's default step control), "
+       "`+auto5`, `+auto10`, `+auto20` (the same control with a coarser limit, 5, 10 or 20 deg per substep: coarse "
+       "accuracy cheaply, only the whip substepped) and `+tol` (`tolerance = "
     << fmt(kBenchTolerance, "%g")
     << "` m, step doubling), whose cost per step includes "
        "their substeps (the substeps column: mean per dt). Error: RMS and max distance of the tracked point (chain: "
@@ -309,7 +332,10 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
        "centre) from the reference at the run's own steps over the converged horizon. Long runs continue the "
        "first run untimed: energy drift max|E - E0| (fixed anchor, conservative), joint drift (max |C| sampled "
        "every 1/240 s) and bounded (joints within 1 cm, speed below 100 m/s, energy drift below E0, the hopper "
-       "between 0.2 and 5 m high). The hopper's runs step the World at its controller's period (the scene's "
+       "between 0.2 and 5 m high); a long run whose CPU time passes "
+    << fmt(kLongRunBudget, "%g") << "x what its timed horizon's steps predict (plus " << fmt(kLongRunSlack, "%g")
+    << " s) is stopped there, `over_budget` (not bounded). The hopper's runs step the World at its controller's period "
+       "(the scene's "
        "dt, 1 ms: Think once per step) in 1 ms / dt fixed substeps of dt, so every run and the reference share one "
        "controller; its dt column is the substep and its costs are per substep.\n\n";
   for (const auto& n : notes) f << "- " << n << '\n';
@@ -587,7 +613,8 @@ int runBench(BenchArgs& args) {
   if (args.scaling_budget >= 0.0) cfg.scaling_budget = args.scaling_budget;
   if (args.scaling_rounds > 0) cfg.scaling_rounds = args.scaling_rounds;
   if (args.scaling_seconds > 0.0) cfg.scaling_seconds = args.scaling_seconds;
-  if (!args.scaling) cfg.scaling_links.clear();
+  if (!args.scaling || args.merge) cfg.scaling_links.clear();  // a merge adds cases' rows only
+  if (args.merge) args.collision = false;
   std::filesystem::create_directories(args.out);
   const double collision_seconds = args.quick ? 0.5 : 10.0;
   if (args.collision_only) {
@@ -601,8 +628,7 @@ int runBench(BenchArgs& args) {
   if (args.equal_accuracy_only) {
     // Only the headline, from the bench.csv in the output folder: its section of the README.
     std::ostringstream section;
-    writeEqualAccuracySection(section, readCostPoints(args.out + "/bench.csv"),
-                              "the bench.csv beside this README (the run named at the top)");
+    writeEqualAccuracySection(section, readCostPoints(args.out + "/bench.csv"), kMergedSource);
     replaceSection(args.out + "/README.md", section.str(), kHowTitle);
     std::fprintf(stderr, "bench: cost at equal accuracy -> %s/README.md\n", args.out.c_str());
     return 0;
@@ -703,7 +729,26 @@ int runBench(BenchArgs& args) {
   std::vector<Reference> refs;
   std::vector<ReferenceCheck> checks;
   const std::vector<Method> methods = allMethods();
+  const auto wanted = [&](const std::string& name) {
+    return args.methods.empty() || std::find(args.methods.begin(), args.methods.end(), name) != args.methods.end();
+  };
   const auto writeAll = [&](size_t done) {
+    if (args.merge) {
+      // Only this run's rows into OUT/bench.csv and the headline rebuilt from it; the rest of the
+      // README (the full run's tables) is left as that run wrote it. The run is logged beside it.
+      const size_t replaced = mergeBenchCsv(args.out + "/bench.csv", rows);
+      std::ostringstream section;
+      writeEqualAccuracySection(section, readCostPoints(args.out + "/bench.csv"), kMergedSource);
+      replaceSection(args.out + "/README.md", section.str(), kHowTitle);
+      if (done == cases.size()) {
+        std::ofstream log(args.out + "/merges.md", std::ios::app);
+        log << "- `" << args.command_line << "`: " << rows.size() << " rows (" << replaced << " replaced), " << utcNow()
+            << ", load average before " << load_before << ", after " << loadAverage() << "\n";
+      }
+      std::fprintf(stderr, "bench: %zu rows merged (%zu replaced) -> %s/bench.csv, README.md\n", rows.size(), replaced,
+                   args.out.c_str());
+      return;
+    }
     std::vector<std::string> out_notes = notes;
     if (done < cases.size())
       out_notes.push_back("Partial: " + std::to_string(done) + " of " + std::to_string(cases.size()) +
@@ -744,6 +789,7 @@ int runBench(BenchArgs& args) {
     for (int d : c.dt_denominators.empty() ? cfg.dt_denominators : c.dt_denominators) {
       const double dt = 1.0 / d;
       for (const Method& m : methods) {
+        if (!wanted(m.name())) continue;
         BenchRow row{&c, m.name(), m.solver, m.integrator, m.stabilization, m.stepName(), dt, horizon, {}};
         if (std::string why = cannotRun(m); !why.empty()) {
           row.r.status = "cannot_run";
@@ -761,6 +807,7 @@ int runBench(BenchArgs& args) {
         const PeerChain chain = peerChainOf(c.scene, c.overrides);
         Sim sim(loadScene(c.scene, c.overrides));
         for (const Peer& peer : peers) {
+          if (!wanted(peer.name)) continue;
           const auto slash = peer.name.find('/');
           BenchRow row{&c,      peer.name, peer.name.substr(0, slash), peer.name.substr(slash + 1), "-", "fixed", dt,
                        horizon, {}};
@@ -806,6 +853,13 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--anchors", args->anchors, "Anchor modes to run (default fixed,shake)")
       ->delimiter(',')
       ->check(CLI::IsMember({"fixed", "shake"}));
+  cmd->add_option("--methods", args->methods,
+                  "Only these methods and peers, as bench.csv names them, e.g. "
+                  "featherstone/rk4/none+auto10,ode/worldstep (default all)")
+      ->delimiter(',');
+  cmd->add_flag("--merge", args->merge,
+                "Put this run's rows into OUT/bench.csv in place of the same case, method and dt (the rest kept), "
+                "rebuild the headline of OUT/README.md from it and log the run in OUT/merges.md");
   cmd->add_option("--dts", args->dts, "Steps as 1/dt, e.g. 240,960 (default 60,120,240,480,960,1920; quick 120,480)")
       ->delimiter(',')
       ->check(CLI::Range(1, 100000));
@@ -873,6 +927,8 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
     if (!args->links.empty()) args->command_line += " --links " + list(args->links);
     if (!args->anchors.empty()) args->command_line += " --anchors " + list(args->anchors);
     if (!args->dts.empty()) args->command_line += " --dts " + list(args->dts);
+    if (!args->methods.empty()) args->command_line += " --methods " + list(args->methods);
+    if (args->merge) args->command_line += " --merge";
     if (!args->scaling) args->command_line += " --no-scaling";
     if (args->scaling_only) args->command_line += " --scaling-only";
     if (!args->chains) args->command_line += " --no-chains";

@@ -237,5 +237,41 @@ TEST(BenchEqualAccuracy, ReadsTheSameRunsBackFromBenchCsv) {
   EXPECT_FALSE(read[1].bounded);
 }
 
+TEST(BenchEqualAccuracy, AMergeReplacesItsOwnRowsAndKeepsTheRest) {
+  // A coarser rotation limit is part of the method's name, the default's is not.
+  EXPECT_EQ((Method{"featherstone", "rk4", "none", StepControl::Auto}).name(), "featherstone/rk4/none+auto");
+  EXPECT_EQ((Method{"featherstone", "rk4", "none", StepControl::Auto, 10.0}).name(), "featherstone/rk4/none+auto10");
+  EXPECT_EQ(methodOverrides({"tree", "rattle", "none", StepControl::Auto, 10.0}, 1.0 / 60.0)[5].value, "10");
+  EXPECT_EQ(methodOverrides({"tree", "rattle", "none"}, 1.0 / 60.0)[5].value, "0");
+
+  BenchCase c8, c32;
+  c8.id = "chain8_fixed";
+  c32.id = "chain32_fixed";
+  const auto row = [](const BenchCase& c, const std::string& method, double dt, double cost) {
+    BenchRow r;
+    r.bench_case = &c;
+    r.method = method;
+    r.dt = dt;
+    r.r.us_per_sim_second = cost;
+    r.r.err_rms = 0.01;
+    return r;
+  };
+  const std::string path = (std::filesystem::temp_directory_path() / "ponyhop_merge_test.csv").string();
+  writeBenchCsv(path, {row(c8, "tree/rattle/none", 1.0 / 60.0, 1.0), row(c8, "tree/rattle/none", 1.0 / 120.0, 2.0),
+                       row(c32, "tree/rattle/none", 1.0 / 60.0, 3.0)});
+  // The same case, method and dt replaced; another dt, another case kept; a new method added.
+  EXPECT_EQ(mergeBenchCsv(path, {row(c8, "tree/rattle/none", 1.0 / 60.0, 10.0),
+                                 row(c8, "featherstone/rk4/none+auto10", 1.0 / 60.0, 20.0)}),
+            1u);
+  const std::vector<CostPoint> read = readCostPoints(path);
+  std::filesystem::remove(path);
+  std::vector<std::string> seen;
+  for (const CostPoint& p : read)
+    seen.push_back(p.case_id + " " + p.method + " " + fmt(1.0 / p.dt, "%.0f") + " " + fmt(p.cost));
+  EXPECT_EQ(seen, (std::vector<std::string>{
+                      "chain8_fixed tree/rattle/none 120 2", "chain32_fixed tree/rattle/none 60 3",
+                      "chain8_fixed tree/rattle/none 60 10", "chain8_fixed featherstone/rk4/none+auto10 60 20"}));
+}
+
 }  // namespace
 }  // namespace ponyhop
