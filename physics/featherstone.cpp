@@ -371,7 +371,12 @@ void ArticulatedSystem::allocate() {
   for (Coordinates* c : {&c0_, &y_, &r_[0], &r_[1], &r_[2], &r_[3]}) *c = coords_;
   for (Eigen::VectorXd* v : {&u0_, &us_, &k_[0], &k_[1], &k_[2], &k_[3], &lock_tau_}) v->setZero(dofs_);
   joint_count_ = 0;
-  for (const Node& nd : nodes_) joint_count_ += nd.type == Type::Free ? 0 : 1;
+  depth_.assign(nodes_.size(), 0);
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    const Node& nd = nodes_[i];
+    joint_count_ += nd.type == Type::Free ? 0 : 1;
+    if (nd.parent_node >= 0) depth_[i] = depth_[nd.parent_node] + 1;
+  }
   rigid_.assign(nodes_.size(), 0);
   active_.assign(nodes_.size(), 1);
   score_.assign(nodes_.size(), 0.0);
@@ -1064,6 +1069,13 @@ int ArticulatedSystem::choicePeriod() const {
   return std::clamp(joint_count_ / (4 * k), 1, 16);
 }
 
+// Candidates: the joints whose depth (joints from the root) is a multiple of n / (2 k), about 2 k
+// of them, so every rigid stretch is at least n / (2 k) links long (docs/SOLVERS.md, "Adaptive
+// dynamics", "Why the candidates are spaced"): no composite of one short link between two long
+// ones, whose fast turn set the substeps and whose stiff mode made RK4 unstable at the full
+// chain's substep.
+int ArticulatedSystem::candidateStride() const { return budget_ > 0 ? std::max(1, joint_count_ / (2 * budget_)) : 1; }
+
 int ArticulatedSystem::activeJoints() const {
   int n = 0;
   for (size_t i = 0; i < nodes_.size(); ++i) n += nodes_[i].type != Type::Free && !rigid_[i] ? 1 : 0;
@@ -1172,9 +1184,12 @@ Status ArticulatedSystem::chooseActive(double t, double h, std::vector<RigidBody
   written = true;  // the bodies hold (t, y) now
   fresh = true;
   const double floor = std::max(tolerance_, kRoundOffScore);
+  const int stride = candidateStride();
   order_.clear();
   for (size_t i = 0; i < nodes_.size(); ++i) {
-    if (nodes_[i].type != Type::Free && score_[i] > floor) order_.push_back(static_cast<int>(i));
+    if (nodes_[i].type != Type::Free && depth_[i] % stride == 0 && score_[i] > floor) {
+      order_.push_back(static_cast<int>(i));
+    }
   }
   if (budget_ > 0 && static_cast<int>(order_.size()) > budget_) {
     // Ties by node index, so the choice does not depend on the library's nth_element.

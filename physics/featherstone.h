@@ -234,6 +234,7 @@ class ArticulatedSystem {
   // dynamics").
   void allocate();
   int choicePeriod() const;
+  int candidateStride() const;
   void formComposites(const std::vector<RigidBody>& bodies);
   void placeWelded(const std::vector<RigidBody>& bodies);
   Status sampleCompositeForces(std::vector<RigidBody>& bodies, const ReducedHooks& hooks);
@@ -272,6 +273,7 @@ class ArticulatedSystem {
   std::vector<char> rigid_;                                         // per node: the joint is rigid this step
   std::vector<double> score_;                                       // per node (J), from the last ABA while adaptive
   std::vector<int> order_;                                          // work space of the choice
+  std::vector<int> depth_;                                          // per node: joints above it (0 at a root)
   std::vector<char> active_;                                        // work space of the choice: the set chosen
   Eigen::VectorXd lock_tau_;                                        // work space of lock(): H w, then the speed change
   double written_time_ = std::numeric_limits<double>::quiet_NaN();  // time of the bodies step() wrote last

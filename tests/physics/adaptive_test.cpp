@@ -218,6 +218,49 @@ TEST(PhysicsAdaptive, ACompositeSwingsWithItsLinksMassAndInertia) {
   EXPECT_LT(std::abs(cw.world.energy() - e0), 1e-9);
 }
 
+// The bench's chain (1 m, 0.2 kg, RK4 at 1/960 s with the automatic substeps of
+// max_step_rotation), 64 links released from horizontal, budget 8: only joints at depths that are
+// multiples of 64 / 16 = 4 are chosen, so no rigid stretch is shorter than 4 links; the reduced
+// chain then takes no more substeps than the full one and its energy rises no more. Choosing any
+// joint (one-link composites between long ones) took 2.4 substeps per dt against the full chain's
+// 1.7 and raised the energy 10x more than the full chain's error (docs/SOLVERS.md, "Why the
+// candidates are spaced").
+TEST(PhysicsAdaptive, SpacedCandidatesStepNoFinerThanTheFullChainAndAddNoEnergy) {
+  struct Run {
+    long substeps = 0;
+    double rise = 0.0;
+  };
+  const auto run = [](int budget) {
+    PhysicsParams pp;
+    pp.dt = 1.0 / 960.0;
+    pp.solver = SolverKind::Featherstone;
+    pp.integrator = Integrator::RK4;
+    pp.adaptive_joints = budget;
+    ChainParams cp;
+    cp.links = 64;
+    cp.length = 1.0 / 64;
+    cp.radius = 0.3 * cp.length;
+    cp.mass = 0.2 / 64;
+    cp.direction = Eigen::Vector3d::UnitX();
+    ChainWorld cw = makeChainWorld(pp, cp, AnchorParams{});
+    const double e0 = cw.world.energy();
+    Run r;
+    for (int i = 0; i < 480 && cw.world.ok(); ++i) {
+      cw.world.step();
+      r.substeps += cw.world.lastSubsteps();
+      r.rise = std::max(r.rise, cw.world.energy() - e0);
+      if (budget == 0) continue;
+      const std::vector<char> active = cw.world.reduced()->activeNodes();
+      for (int n = 0; n < static_cast<int>(active.size()); ++n) EXPECT_TRUE(!active[n] || n % 4 == 0) << n;
+    }
+    EXPECT_TRUE(cw.world.ok()) << cw.world.status();
+    return r;
+  };
+  const Run full = run(0), reduced = run(8);
+  EXPECT_LE(reduced.substeps, full.substeps);
+  EXPECT_LE(reduced.rise, full.rise);
+}
+
 TEST(PhysicsAdaptive, RefusesABudgetAboveTheJointsAndTheMultiplierSolvers) {
   ChainWorld cw = chainWorld(4, 5, 0.0, Eigen::Vector3d::UnitX());
   cw.world.step();
