@@ -6,9 +6,11 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <memory>
 #include <stdexcept>
 
+#include "bench/bench_peers.h"
 #include "bench/bench_report.h"
 #include "bench/bench_run.h"
 #include "engine/asset_loader.h"
@@ -64,8 +66,11 @@ std::vector<Method> loopMethods() {
 // Runs every method at every dt on a scene, interleaving the repeats of each dt's methods. A run
 // that stops (a loop left without drift control opening, an explicit step past its stability limit
 // at 1/60 s) is that row's finding, written with its reason, not a failure of the bench.
-void closureTable(std::ofstream& md, const std::string& title, const std::string& scene,
-                  const std::vector<Override>& extra, double seconds, bool energy, const LoopBenchOptions& o) {
+using LoopRuns = std::map<std::pair<std::string, int>, LoopRun>;  // by method name and 1/dt
+
+LoopRuns closureTable(std::ofstream& md, const std::string& title, const std::string& scene,
+                      const std::vector<Override>& extra, double seconds, bool energy, const LoopBenchOptions& o) {
+  LoopRuns all;
   md << "\n## " << title << "\n\n"
      << "`" << scene << "`" << (extra.empty() ? "" : " with") <<
       [&] {
@@ -100,6 +105,83 @@ void closureTable(std::ofstream& md, const std::string& title, const std::string
       std::fprintf(stderr, "bench loops: %s %-28s 1/%-5d closure %.3g m, drift %.3g J, %.3g cpu s/s%s\n", title.c_str(),
                    methods[k].name().c_str(), d, run.closure, run.drift, run.cpu,
                    run.stopped.empty() ? "" : " (stopped)");
+      all[{methods[k].name(), d}] = run;
+    }
+    md.flush();
+  }
+  return all;
+}
+
+// One peer's run of the four-bar, measured as runOnce() measures ours: the largest gap of its four
+// joints over every step, the energy drift against its own t = 0 energy, CPU per simulated second.
+void peerOnce(const Peer& peer, const PeerFourBar& f, double dt, double seconds, bool record, LoopRun& run) {
+  std::string error;
+  auto sim = peer.makeFourBar(f, dt, error);
+  if (!sim) {
+    run.stopped = error;
+    return;
+  }
+  std::vector<PeerLink> links;
+  if (record) run.e0 = sim->energy();
+  const long steps = std::lround(seconds / dt);
+  double cpu = 0.0;
+  long done = 0;
+  for (; done < steps; ++done) {
+    const double c0 = threadCpuSeconds();
+    sim->step();
+    cpu += threadCpuSeconds() - c0;
+    if (!sim->finite()) {
+      run.stopped = "t = " + fmt(sim->time(), "%.6g") + " s: the state became non-finite or ran away";
+      break;
+    }
+    if (!record) continue;
+    sim->links(links);
+    run.closure = std::max(run.closure, f.jointError(links));
+    run.drift = std::max(run.drift, std::abs(sim->energy() - run.e0));
+  }
+  if (done > 0) run.cpu = std::min(run.cpu, cpu / (static_cast<double>(done) * dt));
+}
+
+// The peers on the same four-bar beside ours (issue 34): each dt, each peer's repeats interleaved.
+void peerTable(std::ofstream& md, const std::vector<Override>& extra, const LoopRuns& ours, const LoopBenchOptions& o) {
+  const PeerModules modules = loadPeerModules(o.peer_dirs);
+  const PeerFourBar f = peerFourBarOf(Sim(loadScene(o.four_bar, extra), &assimpAssets()));
+  md << "\n## The peers on the same four-bar\n\n"
+     << "The four-bar of the first table (servo off, the same geometry, masses, inertias, gravity, t = 0 pose and "
+     << "dt, " << fmt(o.four_bar_seconds, "%g") << " s) in each peer engine, built as two trees (crank on a hinge with "
+     << "the coupler on a ball joint; the follower on a hinge) closed by the engine's own point-to-point "
+     << "constraint at the coupler's bottom end (bench/peer.h, PeerFourBar; ours closes the same RSSR linkage at "
+     << "the follower's ground hinge). Closure: the largest gap of any of the four joints over every step (m; in "
+     << "the engines with reduced coordinates, the closure's). Energy drift against the engine's own energy at "
+     << "t = 0, over our |E0|. Cost: CPU seconds of the engine's step per simulated second, the least of " << o.repeats
+     << " runs. Our rows are the first table's.\n\n";
+  for (const std::string& note : modules.notes) md << "- " << note << "\n";
+  for (const Peer& p : modules.peers) {
+    if (p.makeFourBar) md << "- " << p.name << ": " << p.four_bar_version << "\n";
+  }
+  md << "\n| method | dt | closure (m) | energy drift (J) | drift / E0 | CPU s per sim. s "
+        "|\n|---|---|---|---|---|---|\n";
+  for (int d : o.dts) {
+    const double dt = 1.0 / d;
+    std::vector<LoopRun> runs(modules.peers.size());
+    for (int r = 0; r < o.repeats; ++r) {
+      for (size_t k = 0; k < modules.peers.size(); ++k) {
+        if (modules.peers[k].makeFourBar) peerOnce(modules.peers[k], f, dt, o.four_bar_seconds, r == 0, runs[k]);
+      }
+    }
+    const auto row = [&](const std::string& name, const LoopRun& run) {
+      md << "| " << name << " | 1/" << d << " | " << fmt(run.closure) << " | " << fmt(run.drift) << " | "
+         << fmt(100.0 * run.drift / std::abs(ours.begin()->second.e0), "%.2g") << " % | " << fmt(run.cpu) << " |";
+      if (!run.stopped.empty()) md << " stopped: " << run.stopped;
+      md << "\n";
+      std::fprintf(stderr, "bench loops: four-bar %-28s 1/%-5d closure %.3g m, drift %.3g J, %.3g cpu s/s%s\n",
+                   name.c_str(), d, run.closure, run.drift, run.cpu, run.stopped.empty() ? "" : " (stopped)");
+    };
+    for (const char* m : {"featherstone/rk4/projection", "featherstone/rk4/none", "dense/rattle/none"}) {
+      if (auto it = ours.find({m, d}); it != ours.end()) row(std::string("ours: ") + m, it->second);
+    }
+    for (size_t k = 0; k < modules.peers.size(); ++k) {
+      if (modules.peers[k].makeFourBar) row(modules.peers[k].name, runs[k]);
     }
     md.flush();
   }
@@ -116,8 +198,11 @@ int runLoopBench(const LoopBenchOptions& o) {
      << "Written by `" << o.command_line << "` (bench/bench_loops.cpp; the method: docs/SOLVERS.md, \"Closed "
      << "loops\").\n\nLoad average before: " << loadAverage() << ".\n";
   int status = 0;
-  closureTable(md, "The four-bar, its servo off (a conservative linkage swinging under gravity)", o.four_bar,
-               {{"chain.servo.stiffness", "0"}, {"chain.servo.damping", "0"}}, o.four_bar_seconds, true, o);
+  const std::vector<Override> servo_off{{"chain.servo.stiffness", "0"}, {"chain.servo.damping", "0"}};
+  const LoopRuns four_bar =
+      closureTable(md, "The four-bar, its servo off (a conservative linkage swinging under gravity)", o.four_bar,
+                   servo_off, o.four_bar_seconds, true, o);
+  if (o.peers) peerTable(md, servo_off, four_bar, o);
   closureTable(md, "The hair loop (the braid tied back to the nape, on the showcase clip)", o.hair_loop, {},
                o.hair_loop_seconds, false, o);
 

@@ -4,7 +4,8 @@
 // integrator x stabilization x dt, the loop-closure error (max over the run of every joint's
 // error), the energy drift (the four-bar) and the CPU cost per simulated second; featherstone with
 // the hair loop's tie against the same tree without it; and the three solvers' agreement on the
-// hair loop over its first second. Its tables go to OUT/loops.md (docs/bench/loops.md).
+// hair loop over its first second; the peer engines on the same four-bar. Its tables go to OUT/loops.md
+// (docs/bench/loops.md).
 #pragma once
 
 #include <string>
@@ -20,6 +21,8 @@ struct LoopBenchOptions {
   int repeats = 2;                              // timed runs of the cost rows, interleaved; the least kept
   std::string four_bar = "assets/scenes/four_bar.json";
   std::string hair_loop = "assets/scenes/hair_loop.json";
+  bool peers = true;                   // the peer engines on the four-bar (the modules found in peer_dirs)
+  std::vector<std::string> peer_dirs;  // where the modules are (bench_peers.h, peerModuleDirs())
   std::string out = "docs/bench";
   std::string command_line;
 };

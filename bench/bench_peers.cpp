@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
+#include <stdexcept>
 
 #include "physics/stage_times.h"
 
@@ -90,6 +91,22 @@ PeerChain peerChainOf(const Sim& sim) {
     m.radius.push_back(ch.radii[i]);
   }
   return m;
+}
+
+PeerFourBar peerFourBarOf(const Sim& sim) {
+  const Scene& scene = sim.scene();
+  if (!scene.chain || scene.chain->links != 3 || scene.chain->hinge.norm() == 0.0 || scene.joints.size() != 1 ||
+      !scene.chains.empty()) {
+    throw std::runtime_error("the peers' four-bar needs one chain of three links on a root hinge and one joint");
+  }
+  PeerFourBar f;
+  f.chain = peerChainOf(sim);
+  f.axis = scene.chain->hinge.normalized();
+  f.ground = sim.chain()->bottom(sim.world(), 2);
+  f.speed = scene.chain->servo.speed;
+  f.stiffness = scene.chain->servo.stiffness;
+  f.damping = scene.chain->servo.damping;
+  return f;
 }
 
 RunResult benchPeerRun(const Peer& peer, const PeerChain& chain, double dt, double horizon, int repeats,
@@ -258,7 +275,7 @@ PeerModules loadPeerModules(const std::vector<std::string>& dirs) {
       m.notes.push_back(std::string(e.name) + "'s module " + path + " failed to load (" + dlerror() + ")" + no_rows);
       continue;
     }
-    const auto entry = reinterpret_cast<decltype(&ponyhop_peers_v1)>(dlsym(handle, kPeerEntry));
+    const auto entry = reinterpret_cast<decltype(&ponyhop_peers_v2)>(dlsym(handle, kPeerEntry));
     if (!entry) {
       m.notes.push_back(std::string(e.name) + "'s module " + path + " has no " + kPeerEntry +
                         " (built by another version of ponyhop?)" + no_rows);

@@ -15,6 +15,11 @@ namespace ponyhop {
 // The chain of a built scene (its chain, fixed anchor) as the peers build it.
 PeerChain peerChainOf(const Sim& sim);
 
+// The four-bar of a built scene (assets/scenes/four_bar.json: a three-link chain on a root hinge,
+// its last link's bottom end hinged to the world about the same axis) as the peers build it;
+// throws when the scene is not such a four-bar.
+PeerFourBar peerFourBarOf(const Sim& sim);
+
 // The peers of the modules that loaded, and one note per engine: its version and settings, or
 // that its module was not built or failed to load (and why).
 struct PeerModules {

@@ -954,6 +954,7 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
       if (args->loops_only) {
         LoopBenchOptions l;
         l.out = args->out;
+        l.peer_dirs = peerModuleDirs();
         if (args->quick) {
           l.four_bar_seconds = 1.0;
           l.hair_loop_seconds = 0.5;

@@ -16,6 +16,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
 #include <functional>
 #include <memory>
 #include <string>
@@ -90,20 +92,72 @@ class PeerSim {
   std::vector<PeerLink> scratch_;
 };
 
+// The RSSR four-bar (assets/scenes/four_bar.json) as the peers build it: `chain` holds its three
+// links (crank, coupler, follower; their masses, inertias and t = 0 orientations, the crank's
+// pivot as the anchor). Each peer builds it as two trees closed by a point-to-point constraint:
+//
+//   tree 1   the crank on a hinge about `axis` at the anchor (its top end), the coupler on a ball
+//            joint at the crank's bottom end
+//   tree 2   the follower on a hinge about `axis` at `ground` (its bottom end)
+//   closure  the coupler's bottom end and the follower's top end kept together (the engine's own
+//            point-to-point constraint: the loop's joint, whose error the bench reports)
+//
+// PeerSim::links() gives crank, coupler, follower in that order. The servo turns the crank (our
+// HingeServo's law, physics/hinge_joint.h): tau = -(k e + c (w . axis - speed)) about `axis`,
+// e = the crank's angle from its t = 0 pose minus speed t in (-pi, pi]; the peers apply it as a
+// joint torque computed from the state at the start of each step and held over the step.
+struct PeerFourBar {
+  PeerChain chain;
+  Eigen::Vector3d axis{0.0, 1.0, 0.0};  // both ground hinges (world, unit)
+  Eigen::Vector3d ground = Eigen::Vector3d::Zero();
+  double speed = 0.0, stiffness = 0.0, damping = 0.0;  // the servo (rad/s, N m/rad, N m s/rad)
+
+  bool servo() const { return stiffness != 0.0 || damping != 0.0; }
+  // The servo's torque about `axis` on the crank at time t, from its link state (N m).
+  double servoTorque(const PeerLink& crank, double t) const {
+    const Eigen::AngleAxisd turned((crank.q.normalized() * chain.q[0].conjugate()).normalized());
+    double angle = turned.angle() * (turned.axis().dot(axis) < 0.0 ? -1.0 : 1.0);
+    double e = std::remainder(angle - speed * t, 2.0 * 3.14159265358979323846);
+    if (e <= -3.14159265358979323846) e += 2.0 * 3.14159265358979323846;
+    return -(stiffness * e + damping * (crank.w.dot(axis) - speed));
+  }
+
+  // The largest position gap (m) of the four joints: the crank's pivot against the anchor, the
+  // coupler's top end against the crank's bottom end, the follower's bottom end against `ground`,
+  // and the closure (the coupler's bottom end against the follower's top end).
+  double jointError(const std::vector<PeerLink>& links) const {
+    const auto end = [&](int i, double sign) {
+      return Eigen::Vector3d(links[i].x +
+                             links[i].q.normalized() * Eigen::Vector3d(0.0, 0.0, sign * 0.5 * chain.length));
+    };
+    return std::max({(end(0, 1.0) - chain.anchor).norm(), (end(1, 1.0) - end(0, -1.0)).norm(),
+                     (end(2, -1.0) - ground).norm(), closure(links)});
+  }
+  // The closure's gap alone (m).
+  double closure(const std::vector<PeerLink>& links) const {
+    const Eigen::Vector3d half(0.0, 0.0, 0.5 * chain.length);
+    return (links[1].x - links[1].q.normalized() * half - (links[2].x + links[2].q.normalized() * half)).norm();
+  }
+};
+
 // An engine and one of its integrators: "mujoco/RK4", "bullet/multibody", "ode/quickstep".
 struct Peer {
   std::string name;
   std::string version;  // the engine and its settings, for the notes
   // A chain at rest in its t = 0 pose; nullptr with `error` set when the engine refused it.
   std::function<std::unique_ptr<PeerSim>(const PeerChain&, double dt, std::string& error)> make;
+  // The four-bar in its t = 0 pose, servo on when its gains are; nullptr with `error` set when
+  // the engine refused it. The PeerSim keeps a reference to the four-bar's chain.
+  std::function<std::unique_ptr<PeerSim>(const PeerFourBar&, double dt, std::string& error)> makeFourBar;
+  std::string four_bar_version;  // how the engine closes the loop, for the notes
 };
 
 // The name of the one symbol a module exports (found with dlsym), declared below.
-inline constexpr const char* kPeerEntry = "ponyhop_peers_v1";
+inline constexpr const char* kPeerEntry = "ponyhop_peers_v2";
 
 }  // namespace ponyhop
 
 // A module's entry point: appends its engine's peers to `out`. The module and the executable share
 // the types above, so both must come from one build; the version in the name makes a module built
 // against another layout of them fail to load (with a message) rather than crash.
-extern "C" void ponyhop_peers_v1(std::vector<ponyhop::Peer>* out);
+extern "C" void ponyhop_peers_v2(std::vector<ponyhop::Peer>* out);

@@ -11,6 +11,8 @@
 #include <BulletDynamics/Featherstone/btMultiBodyConstraintSolver.h>
 #include <BulletDynamics/Featherstone/btMultiBodyDynamicsWorld.h>
 #include <BulletDynamics/Featherstone/btMultiBodyLink.h>
+#include <BulletDynamics/Featherstone/btMultiBodyLinkCollider.h>
+#include <BulletDynamics/Featherstone/btMultiBodyPoint2Point.h>
 #include <btBulletDynamicsCommon.h>
 
 #include "bench/peer.h"
@@ -23,78 +25,140 @@ Eigen::Vector3d eigen(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
 
 class BulletSim final : public PeerSim {
  public:
-  BulletSim(const PeerChain& chain, double dt)
-      : PeerSim(chain), dispatcher_(&config_), world_(&dispatcher_, &broadphase_, &solver_, &config_), dt_(dt) {
+  BulletSim(const PeerChain& chain, double dt) : BulletSim(chain, dt, nullptr) {
     const int n = static_cast<int>(chain.mass.size());
     // Link frames are ponyhop's (centre of mass, axis z). Built with every joint at zero (all
     // links in the base's orientation, identity), then the joints set to the t = 0 pose.
-    body_ = std::make_unique<btMultiBody>(n, 0.0, btVector3(0, 0, 0), true, false);
-    btTransform base;
-    base.setIdentity();
-    base.setOrigin(bt(chain.anchor));
-    body_->setBaseWorldTransform(base);
+    btMultiBody* body = addMultiBody(n, chain.anchor, Eigen::Quaterniond::Identity());
     const btVector3 half(0.0, 0.0, 0.5 * chain.length);
     for (int i = 0; i < n; ++i) {
       // Pivot: the link's top end, +L/2 z from its centre; from the parent's centre it is -L/2 z
       // (the anchor is the base's origin).
       const btVector3 parent_to_pivot = i == 0 ? btVector3(0, 0, 0) : -half;
-      body_->setupSpherical(i, chain.mass[i], bt(chain.inertia[i]), i - 1, btQuaternion::getIdentity(), parent_to_pivot,
-                            -half, true);
+      body->setupSpherical(i, chain.mass[i], bt(chain.inertia[i]), i - 1, btQuaternion::getIdentity(), parent_to_pivot,
+                           -half, true);
     }
-    body_->finalizeMultiDof();
-    for (int i = 0; i < n; ++i) {
-      // Bullet's spherical joint coordinate is the child-to-parent rotation Q = q_p^-1 q_i.
-      const Eigen::Quaterniond rel = i == 0 ? chain.q[0] : chain.q[i - 1].conjugate() * chain.q[i];
-      btScalar pos[4] = {rel.x(), rel.y(), rel.z(), rel.w()};
-      body_->setJointPosMultiDof(i, pos);
-    }
-    body_->setLinearDamping(0.0);
-    body_->setAngularDamping(0.0);
-    body_->setCanSleep(false);
-    body_->setMaxCoordinateVelocity(1e30);
-    body_->setUseGyroTerm(true);
-    body_->setHasSelfCollision(false);
-    world_.setGravity(bt(chain.gravity));
-    world_.addMultiBody(body_.get());
-    btAlignedObjectArray<btQuaternion> scratch_q;
-    btAlignedObjectArray<btVector3> scratch_m;
-    body_->forwardKinematics(scratch_q, scratch_m);
-    omega_.resize(n + 1);
-    vel_.resize(n + 1);
+    body->finalizeMultiDof();
+    for (int i = 0; i < n; ++i) setSpherical(body, i, i == 0 ? chain.q[0] : chain.q[i - 1].conjugate() * chain.q[i]);
+    finish();
   }
-  ~BulletSim() override { world_.removeMultiBody(body_.get()); }
+  // The four-bar (bench/peer.h): two multibodies, each fixed base in its hinge's link orientation
+  // at t = 0 (so that a hinge angle of zero is the t = 0 pose), closed by a btMultiBodyPoint2Point
+  // between the coupler's bottom end and the follower's top end.
+  BulletSim(const PeerFourBar& f, double dt) : BulletSim(f.chain, dt, &f) {
+    const PeerChain& c = f.chain;
+    const btVector3 half(0.0, 0.0, 0.5 * c.length);
+    btMultiBody* arm = addMultiBody(2, c.anchor, c.q[0]);
+    arm->setupRevolute(0, c.mass[0], bt(c.inertia[0]), -1, btQuaternion::getIdentity(), bt(c.q[0].conjugate() * f.axis),
+                       btVector3(0, 0, 0), -half, true);
+    arm->setupSpherical(1, c.mass[1], bt(c.inertia[1]), 0, btQuaternion::getIdentity(), -half, -half, true);
+    arm->finalizeMultiDof();
+    setSpherical(arm, 1, c.q[0].conjugate() * c.q[1]);
+    btMultiBody* follower = addMultiBody(1, f.ground, c.q[2]);
+    follower->setupRevolute(0, c.mass[2], bt(c.inertia[2]), -1, btQuaternion::getIdentity(),
+                            bt(c.q[2].conjugate() * f.axis), btVector3(0, 0, 0), half, true);
+    follower->finalizeMultiDof();
+    // The solver takes a multibody constraint in the simulation island of its links' colliders: each
+    // link gets one (a point sphere in no collision group, so it never touches anything).
+    for (btMultiBody* body : {arm, follower}) {
+      for (int i = 0; i < body->getNumLinks(); ++i) {
+        colliders_.push_back(std::make_unique<btMultiBodyLinkCollider>(body, i));
+        colliders_.back()->setCollisionShape(&point_);
+        body->getLink(i).m_collider = colliders_.back().get();
+      }
+    }
+    closure_ = std::make_unique<btMultiBodyPoint2Point>(arm, 1, follower, 0, -half, half);
+    world_.addMultiBodyConstraint(closure_.get());
+    finish();
+    for (auto& collider : colliders_) world_.addCollisionObject(collider.get(), 0, 0);
+  }
+  ~BulletSim() override {
+    if (closure_) world_.removeMultiBodyConstraint(closure_.get());
+    for (auto& collider : colliders_) world_.removeCollisionObject(collider.get());
+    for (auto& b : bodies_) world_.removeMultiBody(b.get());
+  }
 
   void step() override {
+    if (four_bar_ && four_bar_->servo()) {
+      links(scratch_);
+      bodies_[0]->addJointTorque(0, four_bar_->servoTorque(scratch_[0], time_));  // cleared by the step
+    }
     world_.stepSimulation(dt_, 0);  // maxSubSteps 0: one step of exactly dt
     time_ += dt_;
   }
   double time() const override { return time_; }
+  // The links of each multibody in turn.
   void links(std::vector<PeerLink>& out) override {
-    const int n = body_->getNumLinks();
-    body_->compTreeLinkVelocities(&omega_[0], &vel_[0]);  // index 0: the base; link frames
-    out.resize(n);
-    for (int i = 0; i < n; ++i) {
-      // compTreeLinkVelocities gives each link's velocities in its own frame.
-      const btVector3 x = body_->localPosToWorld(i, btVector3(0, 0, 0));
-      const btMatrix3x3 to_world = body_->localFrameToWorld(i, btMatrix3x3::getIdentity());
-      btQuaternion q;
-      to_world.getRotation(q);
-      out[i].x = eigen(x);
-      out[i].q = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z());
-      out[i].w = eigen(to_world * omega_[i + 1]);
-      out[i].v = eigen(to_world * vel_[i + 1]);
+    out.clear();
+    for (auto& body : bodies_) {
+      const int n = body->getNumLinks();
+      omega_.resize(n + 1);
+      vel_.resize(n + 1);
+      body->compTreeLinkVelocities(&omega_[0], &vel_[0]);  // index 0: the base; link frames
+      for (int i = 0; i < n; ++i) {
+        // compTreeLinkVelocities gives each link's velocities in its own frame.
+        const btVector3 x = body->localPosToWorld(i, btVector3(0, 0, 0));
+        const btMatrix3x3 to_world = body->localFrameToWorld(i, btMatrix3x3::getIdentity());
+        btQuaternion q;
+        to_world.getRotation(q);
+        out.push_back({eigen(x), eigen(to_world * vel_[i + 1]), eigen(to_world * omega_[i + 1]),
+                       Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z())});
+      }
     }
   }
 
  private:
+  BulletSim(const PeerChain& chain, double dt, const PeerFourBar* four_bar)
+      : PeerSim(chain),
+        dispatcher_(&config_),
+        world_(&dispatcher_, &broadphase_, &solver_, &config_),
+        dt_(dt),
+        four_bar_(four_bar) {
+    world_.setGravity(bt(chain.gravity));
+  }
+  // A multibody of n links on a fixed base at `origin` in orientation `q` (base to world).
+  btMultiBody* addMultiBody(int n, const Eigen::Vector3d& origin, const Eigen::Quaterniond& q) {
+    bodies_.push_back(std::make_unique<btMultiBody>(n, 0.0, btVector3(0, 0, 0), true, false));
+    btTransform base;
+    base.setIdentity();
+    base.setOrigin(bt(origin));
+    base.setRotation(btQuaternion(q.x(), q.y(), q.z(), q.w()));
+    bodies_.back()->setBaseWorldTransform(base);
+    return bodies_.back().get();
+  }
+  // Bullet's spherical joint coordinate is the child-to-parent rotation Q = q_p^-1 q_i.
+  static void setSpherical(btMultiBody* body, int i, const Eigen::Quaterniond& rel) {
+    btScalar pos[4] = {rel.x(), rel.y(), rel.z(), rel.w()};
+    body->setJointPosMultiDof(i, pos);
+  }
+  // No damping (Bullet's default 0.04), no sleeping, the speed cap out of the way; then into the world.
+  void finish() {
+    for (auto& body : bodies_) {
+      body->setLinearDamping(0.0);
+      body->setAngularDamping(0.0);
+      body->setCanSleep(false);
+      body->setMaxCoordinateVelocity(1e30);
+      body->setUseGyroTerm(true);
+      body->setHasSelfCollision(false);
+      world_.addMultiBody(body.get());
+      btAlignedObjectArray<btQuaternion> scratch_q;
+      btAlignedObjectArray<btVector3> scratch_m;
+      body->forwardKinematics(scratch_q, scratch_m);
+    }
+  }
+
   btDefaultCollisionConfiguration config_;
   btCollisionDispatcher dispatcher_;
   btDbvtBroadphase broadphase_;
   btMultiBodyConstraintSolver solver_;
   btMultiBodyDynamicsWorld world_;
-  std::unique_ptr<btMultiBody> body_;
+  std::vector<std::unique_ptr<btMultiBody>> bodies_;
+  btSphereShape point_{1e-4};
+  std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders_;
+  std::unique_ptr<btMultiBodyPoint2Point> closure_;
   btAlignedObjectArray<btVector3> omega_, vel_;
   double dt_;
+  const PeerFourBar* four_bar_;
   double time_ = 0.0;
 };
 
@@ -108,10 +172,16 @@ Peer bulletPeer() {
   p.make = [](const PeerChain& chain, double dt, std::string&) -> std::unique_ptr<PeerSim> {
     return std::make_unique<BulletSim>(chain, dt);
   };
+  p.four_bar_version =
+      "Bullet: two btMultiBody trees (revolute crank + spherical coupler, revolute follower) closed by a "
+      "btMultiBodyPoint2Point, the constraint solver's default settings; the servo as a joint torque";
+  p.makeFourBar = [](const PeerFourBar& f, double dt, std::string&) -> std::unique_ptr<PeerSim> {
+    return std::make_unique<BulletSim>(f, dt);
+  };
   return p;
 }
 
 }  // namespace
 }  // namespace ponyhop
 
-extern "C" void ponyhop_peers_v1(std::vector<ponyhop::Peer>* out) { out->push_back(ponyhop::bulletPeer()); }
+extern "C" void ponyhop_peers_v2(std::vector<ponyhop::Peer>* out) { out->push_back(ponyhop::bulletPeer()); }

@@ -70,9 +70,8 @@ bool finite(const Model& s) {
   return s.d->warning[mjWARN_BADQACC].number == 0;
 }
 
-// The MJCF text of the chain with integrator "Euler" or "RK4" and timestep dt.
-std::string mujocoChainXml(const PeerChain& c, const std::string& integrator, double dt) {
-  std::ostringstream x;
+// The MJCF model's opening up to <worldbody>: integrator "Euler" or "RK4", timestep dt.
+void mujocoHeader(std::ostringstream& x, const PeerChain& c, const std::string& integrator, double dt) {
   x.precision(17);
   x << "<mujoco model=\"ponyhop chain\">\n"
     << "  <compiler angle=\"radian\" inertiafromgeom=\"false\"/>\n"
@@ -80,6 +79,19 @@ std::string mujocoChainXml(const PeerChain& c, const std::string& integrator, do
     << "    <flag contact=\"disable\" energy=\"enable\"/>\n"
     << "  </option>\n"
     << "  <worldbody>\n";
+}
+
+// A link's inertial element, its centre of mass at `com` in the body frame.
+std::string inertial(const PeerChain& c, size_t i, const Eigen::Vector3d& com) {
+  char m[32];
+  std::snprintf(m, sizeof m, "%.17g", c.mass[i]);
+  return "<inertial pos=\"" + vec(com) + "\" mass=\"" + m + "\" diaginertia=\"" + vec(c.inertia[i]) + "\"/>";
+}
+
+// The MJCF text of the chain with integrator "Euler" or "RK4" and timestep dt.
+std::string mujocoChainXml(const PeerChain& c, const std::string& integrator, double dt) {
+  std::ostringstream x;
+  mujocoHeader(x, c, integrator, dt);
   // Body frame of link i: origin at its top end (the ball joint), axes as ponyhop's link frame;
   // centre of mass at (0, 0, -L/2), the next link's top end at (0, 0, -L).
   const size_t n = c.mass.size();
@@ -92,8 +104,7 @@ std::string mujocoChainXml(const PeerChain& c, const std::string& integrator, do
       x << indent << "<body name=\"link" << i << "\" pos=\"0 0 " << -c.length << "\" quat=\"" << quat(rel) << "\">\n";
     }
     x << indent << "  <joint type=\"ball\" pos=\"0 0 0\" damping=\"0\" armature=\"0\"/>\n"
-      << indent << "  <inertial pos=\"0 0 " << -0.5 * c.length << "\" mass=\"" << c.mass[i] << "\" diaginertia=\""
-      << vec(c.inertia[i]) << "\"/>\n"
+      << indent << "  " << inertial(c, i, {0.0, 0.0, -0.5 * c.length}) << "\n"
       << indent << "  <geom type=\"cylinder\" fromto=\"0 0 0 0 0 " << -c.length << "\" size=\"" << c.radius[i]
       << "\" contype=\"0\" conaffinity=\"0\"/>\n";
     if (i + 1 == n) x << indent << "  <site name=\"tip\" pos=\"0 0 " << -c.length << "\"/>\n";
@@ -107,13 +118,51 @@ std::string mujocoChainXml(const PeerChain& c, const std::string& integrator, do
   return x.str();
 }
 
+// The MJCF text of the four-bar (bench/peer.h, PeerFourBar): the crank's body frame has its origin
+// at the crank's pivot (the anchor), the coupler's at its top end, as the chain's; the follower's
+// is its link frame (centre of mass at the origin), its hinge at its bottom end. The closure is a
+// `connect` equality with MuJoCo's default solref and solimp: the coupler's bottom end, (0, 0, -L)
+// in its frame, held to the follower point that coincides with it at qpos0 (the t = 0 pose).
+std::string mujocoFourBarXml(const PeerFourBar& f, const std::string& integrator, double dt) {
+  const PeerChain& c = f.chain;
+  std::ostringstream x;
+  mujocoHeader(x, c, integrator, dt);
+  const Eigen::Vector3d half(0.0, 0.0, 0.5 * c.length);
+  const Eigen::Quaterniond rel = c.q[0].conjugate() * c.q[1];
+  x << "    <body name=\"crank\" pos=\"" << vec(c.anchor) << "\" quat=\"" << quat(c.q[0]) << "\">\n"
+    << "      <joint type=\"hinge\" pos=\"0 0 0\" axis=\"" << vec(c.q[0].conjugate() * f.axis) << "\"/>\n"
+    << "      " << inertial(c, 0, -half) << "\n"
+    << "      <body name=\"coupler\" pos=\"" << vec(-2.0 * half) << "\" quat=\"" << quat(rel) << "\">\n"
+    << "        <joint type=\"ball\" pos=\"0 0 0\"/>\n"
+    << "        " << inertial(c, 1, -half) << "\n"
+    << "      </body>\n"
+    << "    </body>\n"
+    << "    <body name=\"follower\" pos=\"" << vec(f.ground + c.q[2] * half) << "\" quat=\"" << quat(c.q[2]) << "\">\n"
+    << "      <joint type=\"hinge\" pos=\"" << vec(-half) << "\" axis=\"" << vec(c.q[2].conjugate() * f.axis)
+    << "\"/>\n"
+    << "      " << inertial(c, 2, Eigen::Vector3d::Zero()) << "\n"
+    << "    </body>\n"
+    << "  </worldbody>\n"
+    << "  <equality>\n"
+    << "    <connect body1=\"coupler\" body2=\"follower\" anchor=\"" << vec(-2.0 * half) << "\"/>\n"
+    << "  </equality>\n"
+    << "</mujoco>\n";
+  return x.str();
+}
+
 class MujocoSim final : public PeerSim {
  public:
-  MujocoSim(const PeerChain& chain, std::unique_ptr<Model> model) : PeerSim(chain), s_(std::move(model)) {
+  // four_bar: the four-bar whose crank the servo turns (its hinge is dof 0), or nullptr.
+  MujocoSim(const PeerChain& chain, std::unique_ptr<Model> model, const PeerFourBar* four_bar = nullptr)
+      : PeerSim(chain), s_(std::move(model)), four_bar_(four_bar) {
     mj_forward(s_->m, s_->d);
   }
   void step() override {
     const double t = s_->d->time;
+    if (four_bar_ && four_bar_->servo()) {
+      links(scratch_);
+      s_->d->qfrc_applied[0] = four_bar_->servoTorque(scratch_[0], t);
+    }
     mj_step(s_->m, s_->d);
     // When an acceleration goes bad (non-finite or above 1e10), mj_step warns (mjWARN_BADQACC) and
     // resets the state to the model's start, time 0, and goes on from there: the run ended at this
@@ -145,6 +194,7 @@ class MujocoSim final : public PeerSim {
 
  private:
   std::unique_ptr<Model> s_;
+  const PeerFourBar* four_bar_;
   double stopped_ = -1.0;  // s, when MuJoCo reset the state after a bad acceleration
 };
 
@@ -162,13 +212,24 @@ Peer mujocoPeer(const std::string& integrator) {
     }
     return std::make_unique<MujocoSim>(chain, std::move(model));
   };
+  p.four_bar_version = "MuJoCo " + std::string(mj_versionString()) +
+                       ": two trees (crank + coupler, follower) closed by a `connect` equality, default solref "
+                       "(0.02, 1) and solimp; the servo as qfrc_applied on the crank's hinge";
+  p.makeFourBar = [integrator](const PeerFourBar& f, double dt, std::string& error) -> std::unique_ptr<PeerSim> {
+    auto model = load(mujocoFourBarXml(f, integrator, dt));
+    if (!model->m) {
+      error = model->error;
+      return nullptr;
+    }
+    return std::make_unique<MujocoSim>(f.chain, std::move(model), &f);
+  };
   return p;
 }
 
 }  // namespace
 }  // namespace ponyhop
 
-extern "C" void ponyhop_peers_v1(std::vector<ponyhop::Peer>* out) {
+extern "C" void ponyhop_peers_v2(std::vector<ponyhop::Peer>* out) {
   out->push_back(ponyhop::mujocoPeer("Euler"));
   out->push_back(ponyhop::mujocoPeer("RK4"));
 }

@@ -28,28 +28,38 @@ class OdeSim final : public PeerSim {
     Eigen::Vector3d pivot = chain.anchor;
     dBodyID parent = nullptr;
     for (size_t i = 0; i < chain.mass.size(); ++i) {
-      const Eigen::Quaterniond& q = chain.q[i];
-      const Eigen::Vector3d x = pivot - q * Eigen::Vector3d(0.0, 0.0, 0.5 * chain.length);
-      dBodyID b = dBodyCreate(world_);
-      dMass m;
-      dMassSetParameters(&m, chain.mass[i], 0, 0, 0, chain.inertia[i].x(), chain.inertia[i].y(), chain.inertia[i].z(),
-                         0, 0, 0);
-      dBodySetMass(b, &m);
-      dBodySetPosition(b, x.x(), x.y(), x.z());
-      const dQuaternion oq = {q.w(), q.x(), q.y(), q.z()};
-      dBodySetQuaternion(b, oq);
-      dBodySetGyroscopicMode(b, 1);
-      dJointID j = dJointCreateBall(world_, nullptr);
-      dJointAttach(j, parent, b);  // parent 0: the static environment (the fixed anchor)
-      dJointSetBallAnchor(j, pivot.x(), pivot.y(), pivot.z());
-      bodies_.push_back(b);
+      const Eigen::Vector3d x = pivot - chain.q[i] * Eigen::Vector3d(0.0, 0.0, 0.5 * chain.length);
+      dBodyID b = addBody(i, x);
+      ball(parent, b, pivot);  // parent 0: the static environment (the fixed anchor)
       parent = b;
-      pivot = x - q * Eigen::Vector3d(0.0, 0.0, 0.5 * chain.length);
+      pivot = x - chain.q[i] * Eigen::Vector3d(0.0, 0.0, 0.5 * chain.length);
     }
+  }
+  // The four-bar (bench/peer.h): hinges at the anchor and at the ground pivot, ball joints at the
+  // coupler's ends (the closure is one more ball joint: maximal coordinates have no tree).
+  OdeSim(const PeerFourBar& f, double dt, bool quick) : PeerSim(f.chain), dt_(dt), quick_(quick), four_bar_(&f) {
+    static OdeInit init;
+    const PeerChain& c = f.chain;
+    const Eigen::Vector3d half(0.0, 0.0, 0.5 * c.length);
+    world_ = dWorldCreate();
+    dWorldSetGravity(world_, c.gravity.x(), c.gravity.y(), c.gravity.z());
+    dWorldSetAutoDisableFlag(world_, 0);
+    dBodyID crank = addBody(0, c.anchor - c.q[0] * half);
+    dBodyID coupler = addBody(1, c.anchor - c.q[0] * (2.0 * half) - c.q[1] * half);
+    dBodyID follower = addBody(2, f.ground + c.q[2] * half);
+    hinge(crank, c.anchor, f.axis);
+    ball(crank, coupler, c.anchor - c.q[0] * (2.0 * half));
+    hinge(follower, f.ground, f.axis);
+    ball(coupler, follower, f.ground + c.q[2] * (2.0 * half));
   }
   ~OdeSim() override { dWorldDestroy(world_); }
 
   void step() override {
+    if (four_bar_ && four_bar_->servo()) {
+      links(scratch_);
+      const Eigen::Vector3d tau = four_bar_->servoTorque(scratch_[0], time_) * four_bar_->axis;
+      dBodyAddTorque(bodies_[0], tau.x(), tau.y(), tau.z());  // cleared by the step
+    }
     if (quick_)
       dWorldQuickStep(world_, dt_);
     else
@@ -72,10 +82,37 @@ class OdeSim final : public PeerSim {
   }
 
  private:
+  dBodyID addBody(size_t i, const Eigen::Vector3d& x) {
+    const Eigen::Quaterniond& q = chain_.q[i];
+    dBodyID b = dBodyCreate(world_);
+    dMass m;
+    dMassSetParameters(&m, chain_.mass[i], 0, 0, 0, chain_.inertia[i].x(), chain_.inertia[i].y(), chain_.inertia[i].z(),
+                       0, 0, 0);
+    dBodySetMass(b, &m);
+    dBodySetPosition(b, x.x(), x.y(), x.z());
+    const dQuaternion oq = {q.w(), q.x(), q.y(), q.z()};
+    dBodySetQuaternion(b, oq);
+    dBodySetGyroscopicMode(b, 1);
+    bodies_.push_back(b);
+    return b;
+  }
+  void ball(dBodyID a, dBodyID b, const Eigen::Vector3d& pivot) {
+    dJointID j = dJointCreateBall(world_, nullptr);
+    dJointAttach(j, a, b);
+    dJointSetBallAnchor(j, pivot.x(), pivot.y(), pivot.z());
+  }
+  void hinge(dBodyID b, const Eigen::Vector3d& pivot, const Eigen::Vector3d& axis) {
+    dJointID j = dJointCreateHinge(world_, nullptr);
+    dJointAttach(j, b, nullptr);  // to the static environment
+    dJointSetHingeAnchor(j, pivot.x(), pivot.y(), pivot.z());
+    dJointSetHingeAxis(j, axis.x(), axis.y(), axis.z());
+  }
+
   dWorldID world_;
   std::vector<dBodyID> bodies_;
   double dt_;
   bool quick_;
+  const PeerFourBar* four_bar_ = nullptr;  // the servo's four-bar, or nullptr (a chain)
   double time_ = 0.0;
 };
 
@@ -88,13 +125,19 @@ Peer odePeer(bool quick) {
   p.make = [quick](const PeerChain& chain, double dt, std::string&) -> std::unique_ptr<PeerSim> {
     return std::make_unique<OdeSim>(chain, dt, quick);
   };
+  p.four_bar_version =
+      "ODE: maximal coordinates, hinges at the ground pivots, ball joints at the coupler's ends (the closure one of "
+      "them), ERP 0.2, CFM 1e-10; the servo as a torque on the crank";
+  p.makeFourBar = [quick](const PeerFourBar& f, double dt, std::string&) -> std::unique_ptr<PeerSim> {
+    return std::make_unique<OdeSim>(f, dt, quick);
+  };
   return p;
 }
 
 }  // namespace
 }  // namespace ponyhop
 
-extern "C" void ponyhop_peers_v1(std::vector<ponyhop::Peer>* out) {
+extern "C" void ponyhop_peers_v2(std::vector<ponyhop::Peer>* out) {
   out->push_back(ponyhop::odePeer(false));
   out->push_back(ponyhop::odePeer(true));
 }

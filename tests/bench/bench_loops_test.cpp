@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -20,6 +21,7 @@ TEST(BenchLoops, AShortRunClosesEveryLoopAndAStoppedRowIsAFindingNotAFailure) {
   o.hair_loop_seconds = 0.1;
   o.agree_dts = {};  // its runs are a second long: the bench checks them
   o.repeats = 1;
+  o.peer_dirs = {std::filesystem::path(PONYHOP_EXE).parent_path().string()};  // the peers' modules, when built
   o.out = std::string(PONYHOP_TEST_OUT) + "/bench-loops";
   o.command_line = "bench_loops_test";
   EXPECT_EQ(runLoopBench(o), 0);

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
@@ -72,6 +73,54 @@ TEST(BenchPeers, EveryPeerBuildsTheSameChainAndMovesLikeIt) {
     // First-order steps at 1/1920 s over 0.1 s of the falling chain: millimetres, not a wrong chain
     // (a swapped inertia or pivot puts the tip centimetres off).
     EXPECT_LT(off, 5e-3);
+  }
+}
+
+// The four-bar (bench/peer.h, PeerFourBar) in every peer: at t = 0 its links sit where ours are and
+// its joints (the closure too) are closed; after 0.1 s with the servo on (ours at its own dt, the
+// peers at 1/1920 s) the crank has turned as ours has and the loop has stayed closed to what the
+// engine's constraint allows (a wrong pivot, axis or closure point shows as centimetres).
+TEST(BenchPeers, EveryPeerBuildsTheSameFourBarAndDrivesItLikeIt) {
+  const PeerModules modules = loadPeerModules({std::filesystem::path(PONYHOP_EXE).parent_path().string()});
+  if (modules.peers.empty()) GTEST_SKIP() << "no peer engine's module was built";
+  Sim sim(loadScene("assets/scenes/four_bar.json", {{"physics.dt", "0.000520833333333333"}}));
+  ASSERT_TRUE(sim.ok()) << sim.status();
+  const PeerFourBar four_bar = peerFourBarOf(sim);
+  const Chain& ch = *sim.chain();
+  std::vector<Eigen::Vector3d> x0;
+  for (int id : ch.links) x0.push_back(sim.world().body(id).x);
+  const int steps = 192;  // 0.1 s at 1/1920 s
+  for (int i = 0; i < steps; ++i) ASSERT_TRUE(sim.step()) << sim.status();
+  std::vector<Eigen::Vector3d> x1;
+  for (int id : ch.links) x1.push_back(sim.world().body(id).x);
+  ASSERT_GT((x1[1] - x0[1]).norm(), 0.01) << "the coupler did not move: the comparison would say nothing";
+  for (const Peer& peer : modules.peers) {
+    SCOPED_TRACE(peer.name);
+    ASSERT_TRUE(peer.makeFourBar);
+    std::string error;
+    auto peer_sim = peer.makeFourBar(four_bar, 1.0 / 1920.0, error);
+    ASSERT_TRUE(peer_sim) << error;
+    std::vector<PeerLink> links;
+    peer_sim->links(links);
+    ASSERT_EQ(links.size(), 3u);
+    for (size_t i = 0; i < 3; ++i) {
+      EXPECT_LT((links[i].x - x0[i]).norm(), 1e-9) << "link " << i;
+      EXPECT_LT(links[i].q.angularDistance(four_bar.chain.q[i]), 1e-9) << "link " << i;
+    }
+    EXPECT_LT(four_bar.jointError(links), 1e-9);
+    double closure = 0.0;
+    for (int i = 0; i < steps; ++i) {
+      peer_sim->step();
+      peer_sim->links(links);
+      closure = std::max(closure, four_bar.jointError(links));
+    }
+    ASSERT_TRUE(peer_sim->finite());
+    double off = 0.0;
+    for (size_t i = 0; i < 3; ++i) off = std::max(off, (links[i].x - x1[i]).norm());
+    std::printf("%-16s four-bar after 0.1 s: links %.3g m from ours, joints open %.3g m at most\n", peer.name.c_str(),
+                off, closure);
+    EXPECT_LT(off, 5e-3);
+    EXPECT_LT(closure, 5e-3);
   }
 }
 
