@@ -109,7 +109,8 @@ fuzz:
 
 # Long runs stay bounded: every shipped scene simulated for SOAK_SECONDS of wall time, max RSS
 # printed at 1 and 10 minutes (scripts/soak.sh); and the default method's energy over 60 s of the
-# 8-link chain at dt 1/60 and 1/1920 (about 4 s of CPU: too long for `make test`, which runs 1/240).
+# 8-link chain at dt 1/60, 1/240 and 1/1920 (about 4 s of CPU: too long for `make test`, which runs
+# 20 s at 1/60 and 60 s at 1/240).
 soak: build
 	@$(BUILD)/tests/physics_tests --gtest_also_run_disabled_tests \
 	  --gtest_filter='PhysicsIntegrator.DISABLED_DefaultMethodHoldsEnergyOver60s'

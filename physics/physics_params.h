@@ -44,10 +44,10 @@ struct PhysicsParams {
   double baumgarte_alpha = 10.0;             // 1/s
   double baumgarte_beta = 10.0;              // 1/s
   Eigen::Vector3d gravity{0.0, 0.0, -9.81};  // m/s^2, world frame (z up)
-  // Automatic substeps: a step in which a body turns more than 1.25x this is split in two, and
-  // each dt starts with enough substeps that the fastest body turns at most this much per
-  // substep (RATTLE: at the end of the dt too, else the dt is taken again with the end's count;
-  // docs/STABILITY.md). 0 = off (exactly `substeps` per dt).
+  // Automatic substeps: each dt starts with enough substeps that the fastest body turns at most
+  // this much per substep. RATTLE: at the end of the dt too, else the dt is taken again with the
+  // end's count; the other methods: a step in which a body turns more than 1.25x this is split
+  // in two (docs/STABILITY.md). 0 = off (exactly `substeps` per dt).
   double max_step_rotation = 2.0;  // deg per substep (2: energy within 1 % through the whip)
   // Accuracy instead of a step size: > 0 chooses the substeps of every dt by step doubling so
   // that the estimated position errors of the substeps of one simulated second add up to at

@@ -195,6 +195,9 @@ class World {
 
   void substep(double h, int depth = 0);
   void advanceToTolerance(double h, int depth);
+  // The substep count holds at both ends of each dt (RATTLE, not featherstone), and no substep
+  // is split for its turn (World::step, takeStep).
+  bool symmetricCount() const;
   bool takeStep(double h);  // stages 1-6 of one substep; false: split it (or stopped)
   void watchStability(double h);
   void followTeleports(double h);
