@@ -15,6 +15,10 @@ namespace {
 
 constexpr double kActiveSlop = 1e-6;  // m: a contact this close after the stage persists
 constexpr int kPositionPasses = 4;    // push-out and joint re-projection rounds at most
+// m: a search against a grid that finds nothing within reach goes on until it bounds the link's
+// gap this far beyond reach (where the grid's spacing allows), so the next substeps can skip the
+// link while it has moved less than that (Collisions::detect).
+constexpr double kClearanceSlack = 1e-3;
 // m: an overlap this small is left. Between analytic shapes 1 um (a push-out to the last 1e-10 m
 // only repeats searches). Against a grid (accurate to about 0.1 mm) 10 um, a tenth of the impact
 // tolerance: a link resting on the head sinks a few um a substep, and pushing each of those out
@@ -44,6 +48,11 @@ double kineticEnergyOf(const std::vector<RigidBody>& bodies) {
     e += 0.5 * b.mass * b.v.squaredNorm() + 0.5 * wb.dot(b.inertia.cwiseProduct(wb));
   }
   return e;
+}
+
+// Whether a point (in the grid's frame) lies in the grid's box, where its Lipschitz bound holds.
+bool inGrid(const SignedDistanceGrid& g, const Eigen::Vector3d& p) {
+  return (p.array() >= g.origin().array()).all() && (p.array() <= g.upper().array()).all();
 }
 
 Vector6d velocityOf(const RigidBody& b) {
@@ -110,14 +119,48 @@ std::vector<Collisions::Row> Collisions::detect(const std::vector<RigidBody>& bo
                                                 long* queries) const {
   std::vector<Row> rows;
   std::vector<ContactPoint> points;
+  const double collide_reach = reach + params_.margin;
+  clearances_.resize(pairs_.size());
+  const std::vector<Eigen::Vector3d>* cores = nullptr;  // asked for once, at the first grid pair
+  size_t core = 0;  // the pair's core ends in coresAt(): two per pair of a rounded shape and a grid
   for (size_t k = 0; k < pairs_.size(); ++k) {
     const Pair& pr = pairs_[k];
+    int ri = 0, gi = 0;
+    const bool grid_pair = roundedAndGrid(pr, ri, gi);
+    const size_t ends_at = core;
+    if (grid_pair) core += 2;
     const int ba = owners_[pr.a], bb = owners_[pr.b];
     if (!dynamicBody(bodies, ba) && !dynamicBody(bodies, bb)) continue;
     const RigidBody& A = bodyOf(bodies, ba);
     const RigidBody& B = bodyOf(bodies, bb);
     points.clear();
-    collide(place(shapes_[pr.a], A.x, A.q), place(shapes_[pr.b], B.x, B.q), reach + params_.margin, points, queries);
+    GridClearance clearance;
+    const Eigen::Vector3d* ends = nullptr;
+    if (grid_pair) {
+      const SignedDistanceGrid& g = *shapes_[gi].sdf;
+      if (!cores) cores = &coresAt(bodies);
+      ends = &(*cores)[ends_at];
+      const Clearance& last = clearances_[k];
+      // Inside the grid's box (convex: the segments between old and new points stay in it) the
+      // interpolant changes by at most lip |dx|_1, and each core point moves by an affine mix of
+      // its ends' moves, so by at most the larger one's |.|_1. 1e-9 m covers the round-off of the
+      // two ways the ends are computed.
+      if (last.valid && inGrid(g, ends[0]) && inGrid(g, ends[1])) {
+        const double moved = std::max((ends[0] - last.a).lpNorm<1>(), (ends[1] - last.b).lpNorm<1>());
+        if (last.lower - g.lipschitz() * moved - 1e-9 >= collide_reach) continue;
+      }
+      clearance.certify = collide_reach + kClearanceSlack;
+    }
+    collide(place(shapes_[pr.a], A.x, A.q), place(shapes_[pr.b], B.x, B.q), collide_reach, points, queries,
+            grid_pair ? &clearance : nullptr);
+    if (grid_pair) {
+      const SignedDistanceGrid& g = *shapes_[gi].sdf;
+      Clearance& last = clearances_[k];
+      last.valid = points.empty() && clearance.lower > collide_reach && inGrid(g, ends[0]) && inGrid(g, ends[1]);
+      last.lower = clearance.lower;
+      last.a = ends[0];
+      last.b = ends[1];
+    }
     for (size_t i = 0; i < points.size(); ++i) {
       Row r;
       r.a = ba;

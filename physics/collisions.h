@@ -197,6 +197,18 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
     int too_far = -1;  // movedTooFar() against memory_.cores (-1: not yet asked)
   };
   AtState& at(const std::vector<RigidBody>& bodies) const;
+  // Per pair of a rounded shape and a grid, in the pairs' order: a lower bound of its smallest gap
+  // (collide()'s GridClearance) at the core ends `a`, `b` (grid frame) it was found at, when its
+  // last search found nothing within reach. detect() skips the pair while the bound, less what the
+  // core has moved since (times the grid's Lipschitz bound), is still beyond reach: the search
+  // would find nothing (docs/PHYSICS.md, "Skipping a search"). A fact about the geometry, so it
+  // holds across restored states.
+  struct Clearance {
+    bool valid = false;
+    double lower = 0.0;
+    Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+  };
+  mutable std::vector<Clearance> clearances_;
   const std::vector<Eigen::Vector3d>& coresAt(const std::vector<RigidBody>& bodies) const;
   Memory memory_;
   mutable CollisionStats stats_;  // touching() counts its queries

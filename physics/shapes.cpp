@@ -207,7 +207,13 @@ struct Counted {
 // is then refined between its neighbours by golden section to a thirtieth of a cell along the
 // axis (0.1 mm at the default 3 mm cell): the grid is no more accurate than that, and the gap
 // there is second order in the error of s. `ends` gets f at s = 0 and 1.
-double gridSearch(const Core& c, const PlacedShape& b, double reach, long* queries, double ends[2], bool* none) {
+// With `clearance`, a search that found nothing below reach goes on over the intervals it set
+// aside with a bound below clearance->certify (the answer is settled: none of its samples can fall
+// below reach, every interval set aside being bounded at or above it), down to the sample spacing,
+// and clearance->lower gets the smallest bound of the intervals it ends with: a lower bound of f
+// over the whole core.
+double gridSearch(const Core& c, const PlacedShape& b, double reach, long* queries, double ends[2], bool* none,
+                  GridClearance* clearance) {
   const SignedDistanceGrid& g = *b.shape->sdf;
   const Counted f{c, b, queries};
   const double len = (c.b - c.a).norm();
@@ -228,10 +234,26 @@ double gridSearch(const Core& c, const PlacedShape& b, double reach, long* queri
   Span stack[64];
   int top = 0;
   stack[top++] = {0, n};
+  // The intervals set aside below the certificate's level, for `clearance` (too many: no bound).
+  constexpr int kAside = 128;
+  Span aside[kAside];
+  int asides = 0;
+  bool overflow = false;
+  double lower = std::numeric_limits<double>::infinity();
+  const double certify = clearance ? clearance->certify : -std::numeric_limits<double>::infinity();
   while (top > 0) {
     const Span sp = stack[--top];
     const double bound = 0.5 * (fs[sp.i] + fs[sp.j] - slope * (sp.j - sp.i) / n);
-    if (bound >= std::min(fs[best], reach)) continue;
+    if (bound >= std::min(fs[best], reach)) {
+      if (bound >= certify || sp.j - sp.i <= 1) {
+        lower = std::min(lower, bound);
+      } else if (asides < kAside) {
+        aside[asides++] = sp;
+      } else {
+        overflow = true;
+      }
+      continue;
+    }
     if (sp.j - sp.i <= 1) {
       maybe = true;
       continue;
@@ -249,7 +271,30 @@ double gridSearch(const Core& c, const PlacedShape& b, double reach, long* queri
     }
   }
   *none = !(fs[best] < reach) && !maybe;
-  if (*none) return static_cast<double>(best) / n;
+  if (*none) {
+    if (clearance) {
+      // Every interval set aside is bisected until its bound reaches the level or it is one
+      // spacing long; its samples are at or above reach (see above), so nothing found changes.
+      while (asides > 0 && !overflow) {
+        const Span sp = aside[--asides];
+        const double bound = 0.5 * (fs[sp.i] + fs[sp.j] - slope * (sp.j - sp.i) / n);
+        if (bound >= certify || sp.j - sp.i <= 1) {
+          lower = std::min(lower, bound);
+          continue;
+        }
+        if (asides + 2 > kAside) {
+          overflow = true;
+          break;
+        }
+        const int m = (sp.i + sp.j) / 2;
+        if (std::isnan(fs[m])) fs[m] = f(static_cast<double>(m) / n);
+        aside[asides++] = {sp.i, m};
+        aside[asides++] = {m, sp.j};
+      }
+      clearance->lower = overflow ? -std::numeric_limits<double>::infinity() : lower;
+    }
+    return static_cast<double>(best) / n;
+  }
   // The bracket's ends are samples when the bisection reached them (a NaN is not, and is asked).
   const int lo = std::max(0, best - 1), hi = std::min(n, best + 1);
   return minimizeConvex(f, lo / static_cast<double>(n), hi / static_cast<double>(n), g.cell() / (30.0 * len), fs[lo],
@@ -259,14 +304,14 @@ double gridSearch(const Core& c, const PlacedShape& b, double reach, long* queri
 // The smallest D_b(p(s)) - r(s) over s for a rounded a; its parameter in *at. A grid b whose
 // search finds nothing below `reach` returns a gap at or above it and no normal.
 ContactPoint roundedAgainst(const Core& c, const PlacedShape& b, double reach, long* queries, double* at = nullptr,
-                            double* ends = nullptr) {
+                            double* ends = nullptr, GridClearance* clearance = nullptr) {
   const Counted f{c, b, queries};
   double s = 0.0;
   if (!c.point()) {
     if (b.shape->type == ShapeType::Sdf) {
       double e[2];
       bool none = false;
-      s = gridSearch(c, b, reach, queries, e, &none);
+      s = gridSearch(c, b, reach, queries, e, &none, clearance);
       if (ends) {
         ends[0] = e[0];
         ends[1] = e[1];
@@ -316,7 +361,9 @@ double boundingRadius(const Shape& s) {
   }
 }
 
-int collide(const PlacedShape& a, const PlacedShape& b, double reach, std::vector<ContactPoint>& out, long* queries) {
+int collide(const PlacedShape& a, const PlacedShape& b, double reach, std::vector<ContactPoint>& out, long* queries,
+            GridClearance* clearance) {
+  if (clearance) clearance->lower = -std::numeric_limits<double>::infinity();
   const ShapeType ta = a.shape->type, tb = b.shape->type;
   // Broad phase: bounding spheres further apart than reach cannot touch (two capsules are
   // otherwise a search inside a search: thousands of distance evaluations a pair).
@@ -325,7 +372,7 @@ int collide(const PlacedShape& a, const PlacedShape& b, double reach, std::vecto
   if (!supported(ta, tb)) {
     if (!supported(tb, ta)) return 0;
     const size_t first = out.size();
-    const int n = collide(b, a, reach, out, queries);
+    const int n = collide(b, a, reach, out, queries, clearance);
     for (size_t i = first; i < out.size(); ++i) out[i].normal = -out[i].normal;
     return n;
   }
@@ -333,7 +380,7 @@ int collide(const PlacedShape& a, const PlacedShape& b, double reach, std::vecto
     const Core core = coreOf(a);
     double s = 0.0;
     double ends[2] = {-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
-    const ContactPoint cp = roundedAgainst(core, b, reach, queries, &s, ends);
+    const ContactPoint cp = roundedAgainst(core, b, reach, queries, &s, ends, clearance);
     if (!(cp.gap < reach)) return 0;
     out.push_back(cp);
     int added = 1;

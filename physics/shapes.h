@@ -95,8 +95,18 @@ bool supported(ShapeType a, ShapeType b);
 // surface rests on a segment); a box its corners (up to 8). Pairs that are only supported the other way round are
 // swapped (and their normals turned). Returns the number appended.
 // `queries`: when given, counts the signed-distance evaluations of b (the narrow phase's cost).
+// `clearance`: for a rounded shape against a grid (either order) that has no contact within
+// reach, the search goes on (after its answer is settled: the contacts found are the same) until
+// every part of the core is bounded below by `clearance->certify` or by its closest samples, and
+// `clearance->lower` gets a lower bound of the pair's smallest gap min_s D(p(s)) - r(s) over the
+// whole core (the grid's interpolant; -infinity when there is none). A caller that keeps it can
+// skip the pair while the core has moved too little to close it (Collisions::detect).
+struct GridClearance {
+  double certify = 0.0;  // m: search on to this gap (at most, where the grid's spacing allows)
+  double lower = -std::numeric_limits<double>::infinity();
+};
 int collide(const PlacedShape& a, const PlacedShape& b, double reach, std::vector<ContactPoint>& out,
-            long* queries = nullptr);
+            long* queries = nullptr, GridClearance* clearance = nullptr);
 
 // The contact collide(a, b) found at `feature` (ContactPoint::feature), measured again at the
 // shapes' present poses without a search: one query with its gradient. The gap there is at least

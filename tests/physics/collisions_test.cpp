@@ -228,13 +228,19 @@ TEST(Contact, InelasticImpactsNeverRaiseTheEnergy) {
 // against the grid since the last stage (Collisions::movedTooFar) catches it: the World splits
 // the step, and the ball stops on the plate instead of falling on below it. In tolerance mode as
 // well: free flight under gravity has no integration error, so only the impact check splits there.
-void fastBallOntoAThinGrid(double tolerance) {
+// A 20 x 20 cm plate 1 cm thick (top at z = 5 mm) as a distance grid of 2 mm cells.
+std::shared_ptr<SignedDistanceGrid> thinPlate() {
   const std::vector<Vector3d> v = {{-0.1, -0.1, -0.005}, {0.1, -0.1, -0.005}, {0.1, 0.1, -0.005}, {-0.1, 0.1, -0.005},
                                    {-0.1, -0.1, 0.005},  {0.1, -0.1, 0.005},  {0.1, 0.1, 0.005},  {-0.1, 0.1, 0.005}};
   const std::vector<uint32_t> idx = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
                                      1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7};
   auto plate = std::make_shared<SignedDistanceGrid>();
-  ASSERT_TRUE(plate->build(v, idx, 0.002, 0.02).ok());
+  EXPECT_TRUE(plate->build(v, idx, 0.002, 0.02).ok());
+  return plate;
+}
+
+void fastBallOntoAThinGrid(double tolerance) {
+  const std::shared_ptr<SignedDistanceGrid> plate = thinPlate();
   PhysicsParams pp = params();
   pp.tolerance = tolerance;
   World world(pp);
@@ -264,6 +270,42 @@ void fastBallOntoAThinGrid(double tolerance) {
 
 TEST(Contact, AFastBallDoesNotPassThroughAThinGrid) { fastBallOntoAThinGrid(0.0); }
 TEST(Contact, AFastBallDoesNotPassThroughAThinGridInToleranceMode) { fastBallOntoAThinGrid(1e-3); }
+
+// Skipping a search (docs/PHYSICS.md, "No pass-through", 4): a link whose last search bounded its
+// gap beyond reach is not searched again while it has moved too little to close that gap, and is
+// searched, and its contact found, as soon as it has moved far enough.
+TEST(Contact, AGridSearchIsSkippedOnlyWhileTheLinkCannotHaveClosedItsGap) {
+  const std::shared_ptr<SignedDistanceGrid> plate = thinPlate();
+  World world(params());
+  const double r = 0.004, top = 0.005;
+  RigidBody body = solidSphere(0.01, r, Vector3d(0.0, 0.0, top + r + 0.006));
+  body.q = Quaterniond(Eigen::AngleAxisd(0.5 * std::numbers::pi, Vector3d::UnitY()));  // the capsule lies flat
+  const int link = world.addDynamicBody(body);
+  auto col = std::make_shared<Collisions>(CollisionParams{});
+  col->addPair(col->addShape(link, Shape::capsule(0.02, r, r)), col->addShape(kWorldBody, Shape::grid(plate)));
+  std::vector<RigidBody> bodies = world.bodies();
+  long queries = 0;
+  EXPECT_TRUE(col->detect(bodies, 0.0, &queries).empty());  // 6 mm above the plate
+  EXPECT_GT(queries, 0);
+  // 0.1 mm lower and 0.1 mm aside: the bound from the last search still holds, no query.
+  bodies[link].x += Vector3d(1e-4, 0.0, -1e-4);
+  queries = 0;
+  EXPECT_TRUE(col->detect(bodies, 0.0, &queries).empty());
+  EXPECT_EQ(queries, 0) << "a link that cannot have closed its gap was searched again";
+  // 7 mm lower: 1 mm into the plate. The bound no longer holds; the search runs and finds it.
+  bodies[link].x.z() = top + r - 0.001;
+  queries = 0;
+  const std::vector<Collisions::Row> rows = col->detect(bodies, 0.0, &queries);
+  EXPECT_GT(queries, 0);
+  ASSERT_FALSE(rows.empty()) << "a link that moved into the plate was skipped";
+  EXPECT_NEAR(rows[0].gap, -0.001, 2e-4);
+  // What a skip leaves out is what a search would not find: a fresh collider agrees.
+  auto fresh = std::make_shared<Collisions>(CollisionParams{});
+  fresh->addPair(fresh->addShape(link, Shape::capsule(0.02, r, r)), fresh->addShape(kWorldBody, Shape::grid(plate)));
+  const std::vector<Collisions::Row> again = fresh->detect(bodies, 0.0);
+  ASSERT_EQ(again.size(), rows.size());
+  for (size_t i = 0; i < rows.size(); ++i) EXPECT_EQ(again[i].gap, rows[i].gap);
+}
 
 TEST(Contact, ChainFallingOnTheGroundKeepsItsJointsAndLosesEnergy) {
   for (SolverKind solver : {SolverKind::Dense, SolverKind::Tree}) {
