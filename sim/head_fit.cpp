@@ -25,10 +25,14 @@ Eigen::Matrix3d upFix(UpAxis a) {
   return Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
 }
 
-// F * U of the formula in head_fit.h: the mesh's up to body +z, its face to body -y.
+// F * U of the formula in head_fit.h: the mesh's up to body +z, its face to body -y. A body
+// modelled upside down is turned over about the body's x first: a figure made facing body -y and
+// turned head down about its left-right axis (its face then toward +y) comes back facing -y.
 Eigen::Matrix3d upright(const HeadFit& f) {
-  if (f.face_turn == 0.0) return upFix(f.up);
-  return Eigen::AngleAxisd(f.face_turn * std::numbers::pi / 180.0, Eigen::Vector3d::UnitZ()) * upFix(f.up);
+  Eigen::Matrix3d u = upFix(f.up);
+  if (f.upside_down) u = Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitX()).toRotationMatrix() * u;
+  if (f.face_turn == 0.0) return u;
+  return Eigen::AngleAxisd(f.face_turn * std::numbers::pi / 180.0, Eigen::Vector3d::UnitZ()) * u;
 }
 
 std::string lowerExtension(const std::string& path) {
@@ -238,6 +242,30 @@ HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData&
           }
         }
       }
+      // Still far from a head: the body may be modelled upside down (its feet on top). The same
+      // search from the other end, on the mesh mirrored along the up axis (only heights and slice
+      // widths are read, so the mirror changes nothing else); a neck found there and a head-like
+      // part beyond it turn the fit over.
+      if (!head_like(ratio)) {
+        MeshData turned;
+        turned.positions = mesh.positions;
+        turned.indices = mesh.indices;
+        for (Eigen::Vector3f& p : turned.positions) p[up] = -p[up];
+        const std::optional<float> low_neck =
+            findNeck(turned, std::vector<bool>(turned.positions.size(), true), up, -mesh.bbox.min()[up], height);
+        if (low_neck) {
+          const Eigen::AlignedBox3f again = headAboveNeck(turned, up, *low_neck);
+          if (head_like(ratio_of(again))) {
+            Eigen::Vector3f lo = again.min(), hi = again.max();
+            lo[up] = -again.max()[up];
+            hi[up] = -again.min()[up];
+            f.upside_down = true;
+            f.neck = -*low_neck;
+            f.head_bounds = Eigen::AlignedBox3f(lo, hi);
+            ratio = ratio_of(f.head_bounds);
+          }
+        }
+      }
       if (!head_like(ratio)) {
         char buf[256];
         std::snprintf(
@@ -268,7 +296,7 @@ std::string unsureFitMessage(const HeadFit& fit, const MeshData& mesh) {
          "). If the picture is wrong, pick the head by hand with a box in the mesh's coordinates: --set "
          "head.box_min=[x,y,z] --set head.box_max=[x,y,z] (the guess: " +
          box(fit.head_bounds) + "; the whole mesh: " + box(mesh.bbox) + ", " + (fit.up == UpAxis::Z ? "z" : "y") +
-         " up)";
+         " up" + (fit.upside_down ? ", upside down" : "") + ")";
 }
 
 Eigen::Affine3d headMeshToBody(const HeadParams& head, const HeadFit& fit) {

@@ -26,6 +26,7 @@ struct HeadFit {
   bool whole_body = false;                          // the mesh is taller than a head: its top part was taken
   float neck = 0.0f;                                // mesh units along the up axis, whole_body only
   bool by_hand = false;                             // head.box_min/box_max picked the head
+  bool upside_down = false;                         // the head is at the low end of the up axis (U turned over)
   std::string unsure;                               // why the head found is a guess (empty: it is not)
   Eigen::Vector3d pivot = Eigen::Vector3d::Zero();  // mesh coordinates of the body origin
 };
