@@ -419,46 +419,65 @@ void ArticulatedSystem::readState(const std::vector<RigidBody>& bodies) {
 //              w_i = w_p + R_p omega, v_i = v_p + w_p x r_p - w_i x r_i (both ends of the joint
 //              move with P);
 //   prismatic: q_i = q_p Q0, d = R_p (e + s z), x_i = x_p + d, w_i = w_p, v_i = v_p + w_p x d + s' R_p z.
-void ArticulatedSystem::writeState(std::vector<RigidBody>& bodies) const {
+void ArticulatedSystem::writeState(std::vector<RigidBody>& bodies) const { writeParts<true, true>(bodies); }
+
+// The two halves of writeState(), apart: the poses (and frames_) alone, or the velocities alone
+// from the poses and frames_ as they are. The same expressions in the same order as together, so
+// writing positions then velocities gives the bodies writeState() gives, bit for bit. The loop
+// projection moves the poses with the velocities unused, then u with the poses fixed.
+template <bool Positions, bool Velocities>
+void ArticulatedSystem::writeParts(std::vector<RigidBody>& bodies) const {
   for (size_t i = 0; i < nodes_.size(); ++i) {
     const Node& nd = nodes_[i];
     const RigidBody& p = bodyOf(bodies, nd.parent);
     RigidBody& b = bodies[nd.body];
     switch (nd.type) {
       case Type::Free:
-        b.x = coords_.x[i];
-        b.q = renormalized(coords_.q[i]);
-        b.v = u_.segment<3>(nd.dof);
-        b.w = u_.segment<3>(nd.dof + 3);
-        frames_[i].R = b.q.toRotationMatrix();
+        if constexpr (Positions) {
+          b.x = coords_.x[i];
+          b.q = renormalized(coords_.q[i]);
+        }
+        if constexpr (Velocities) {
+          b.v = u_.segment<3>(nd.dof);
+          b.w = u_.segment<3>(nd.dof + 3);
+        }
+        if constexpr (Positions) frames_[i].R = b.q.toRotationMatrix();
         break;
       case Type::Spherical: {
         // Rotation matrices, each built once (parents first: a dynamic parent's is in frames_)
         // and kept for jointKinematics.
         Frame& f = frames_[i];
-        b.q = renormalized(p.q * coords_.q[i]);  // one normalization: RK4 stages are not unit
-        f.R = b.q.toRotationMatrix();
         // The parent's rotation read where it is (a copy of it into a local was read back across
         // its 16-byte stores: a failed store forwarding, a fifth of this pass's samples), and
         // w_i kept in a local for v_i (read back from b.w, the same stall).
         Eigen::Matrix3d rp_prescribed;
         const Eigen::Matrix3d& rp =
             nd.parent_node >= 0 ? frames_[nd.parent_node].R : (rp_prescribed = p.rotation(), rp_prescribed);
-        f.r_p.noalias() = rp * nd.point_parent;
-        f.r_i.noalias() = f.R * nd.point_child;
-        b.x = p.x + f.r_p - f.r_i;
-        const Eigen::Vector3d w = p.w + rp * u_.segment<3>(nd.dof);
-        b.w = w;
-        b.v = p.v + p.w.cross(f.r_p) - w.cross(f.r_i);
+        if constexpr (Positions) {
+          b.q = renormalized(p.q * coords_.q[i]);  // one normalization: RK4 stages are not unit
+          f.R = b.q.toRotationMatrix();
+          f.r_p.noalias() = rp * nd.point_parent;
+          f.r_i.noalias() = f.R * nd.point_child;
+          b.x = p.x + f.r_p - f.r_i;
+        }
+        if constexpr (Velocities) {
+          const Eigen::Vector3d w = p.w + rp * u_.segment<3>(nd.dof);
+          b.w = w;
+          b.v = p.v + p.w.cross(f.r_p) - w.cross(f.r_i);
+        }
         break;
       }
       case Type::Prismatic: {
-        b.q = renormalized(p.q * nd.rest);
-        frames_[i].R = b.q.toRotationMatrix();
+        if constexpr (Positions) {
+          b.q = renormalized(p.q * nd.rest);
+          frames_[i].R = b.q.toRotationMatrix();
+        }
         const Eigen::Vector3d d = p.q * (nd.offset + coords_.s[i] * nd.axis);
-        b.x = p.x + d;
-        b.w = p.w;
-        b.v = p.v + p.w.cross(d) + u_(nd.dof) * (p.q * nd.axis);
+        if constexpr (Positions) b.x = p.x + d;
+        if constexpr (Velocities) {
+          b.w = p.w;
+          b.v = p.v + p.w.cross(d) + u_(nd.dof) * (p.q * nd.axis);
+        }
         break;
       }
     }
@@ -938,6 +957,7 @@ Status ArticulatedSystem::projectLoops(std::vector<RigidBody>& bodies) {
   constexpr double kTolerance = 1e-12;  // m, as projectPositions
   constexpr int kIterations = 20;
   double error = evaluateLoops(bodies);
+  bool moved = false;
   for (int it = 0; it < kIterations && error > kTolerance; ++it) {
     for (const LoopJoint& l : loops_) loop_rhs_.segment(l.row, l.rows) = l.eval.C;
     loop_lambda_ = loop_llt_.solve(loop_rhs_);
@@ -957,9 +977,11 @@ Status ArticulatedSystem::projectLoops(std::vector<RigidBody>& bodies) {
           break;
       }
     }
-    writeState(bodies);
+    writeParts<true, false>(bodies);
     error = evaluateLoops(bodies);
+    moved = true;
   }
+  if (moved) writeParts<false, true>(bodies);  // the velocities at the projected poses
   if (!(error < 1e-6)) {
     char buf[160];
     std::snprintf(buf, sizeof buf, "the loop projection left a loop joint open by %.3g m", error);
@@ -983,7 +1005,7 @@ Status ArticulatedSystem::projectLoops(std::vector<RigidBody>& bodies) {
     last = residual;
     loop_lambda_ = loop_llt_.solve(loop_rhs_);
     u_.noalias() -= loop_y_ * loop_lambda_;
-    writeState(bodies);
+    writeParts<false, true>(bodies);  // the poses are as they were
   }
   return {};
 }

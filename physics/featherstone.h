@@ -260,6 +260,9 @@ class ArticulatedSystem {
     Eigen::Vector3d r_i;
   };
   mutable std::vector<Frame> frames_;
+  // writeState()'s poses (and frames_) and velocities apart (featherstone.cpp).
+  template <bool Positions, bool Velocities>
+  void writeParts(std::vector<RigidBody>& bodies) const;
   std::vector<Pass> pass_;
   Coordinates c0_, y_, r_[4];
   Eigen::VectorXd u0_, us_, k_[4];
