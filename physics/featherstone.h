@@ -216,8 +216,11 @@ class ArticulatedSystem {
   template <int D, int M>
   void loopOutward(size_t i, int col, int m);
   // Projection of the coordinates onto the loops' C = 0, then of u onto C' = 0, in the metric H,
-  // with the last closeLoops()'s H^-1 L^T and K (a chord iteration). Bodies written after.
+  // with the last closeLoops()'s H^-1 L^T and K (a chord iteration). The caller has written the
+  // poses (writeParts<true, false>); the velocities are written here.
   Status projectLoops(std::vector<RigidBody>& bodies);
+  // out = H^-1 L^T K^-1 rhs, with the last closeLoops()'s H^-1 L^T and factor of K.
+  void loopCorrection(const Eigen::VectorXd& rhs, Eigen::VectorXd& out);
   void rates(const Coordinates& c, const Eigen::VectorXd& u, Coordinates& out) const;
   bool bodiesChanged(const std::vector<RigidBody>& bodies) const;
   void remember(const std::vector<RigidBody>& bodies);
@@ -319,6 +322,7 @@ class ArticulatedSystem {
   Eigen::MatrixXd loop_y_;           // H^-1 L^T (dofs x loop rows)
   Eigen::MatrixXd loop_k_;           // K = L H^-1 L^T
   Eigen::LLT<Eigen::MatrixXd> loop_llt_;
+  Eigen::LLT<Eigen::Matrix3d> loop_llt3_;  // K's factor when loop_rows_ == 3 (one spherical loop joint)
   Eigen::VectorXd loop_rhs_, loop_lambda_, loop_step_;
 };
 
