@@ -136,8 +136,9 @@ std::vector<Collisions::Row> Collisions::detect(const std::vector<RigidBody>& bo
     points.clear();
     GridClearance clearance;
     const Eigen::Vector3d* ends = nullptr;
-    if (grid_pair) {
-      const SignedDistanceGrid& g = *shapes_[gi].sdf;
+    const SignedDistanceGrid* grid = grid_pair ? shapes_[gi].sdf.get() : nullptr;
+    if (grid) {
+      const SignedDistanceGrid& g = *grid;
       if (!cores) cores = &coresAt(bodies);
       ends = &(*cores)[ends_at];
       const Clearance& last = clearances_[k];
@@ -152,11 +153,11 @@ std::vector<Collisions::Row> Collisions::detect(const std::vector<RigidBody>& bo
       clearance.certify = collide_reach + kClearanceSlack;
     }
     collide(place(shapes_[pr.a], A.x, A.q), place(shapes_[pr.b], B.x, B.q), collide_reach, points, queries,
-            grid_pair ? &clearance : nullptr);
-    if (grid_pair) {
-      const SignedDistanceGrid& g = *shapes_[gi].sdf;
+            grid ? &clearance : nullptr);
+    if (grid) {
       Clearance& last = clearances_[k];
-      last.valid = points.empty() && clearance.lower > collide_reach && inGrid(g, ends[0]) && inGrid(g, ends[1]);
+      last.valid =
+          points.empty() && clearance.lower > collide_reach && inGrid(*grid, ends[0]) && inGrid(*grid, ends[1]);
       last.lower = clearance.lower;
       last.a = ends[0];
       last.b = ends[1];

@@ -201,7 +201,7 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
   // (collide()'s GridClearance) at the core ends `a`, `b` (grid frame) it was found at, when its
   // last search found nothing within reach. detect() skips the pair while the bound, less what the
   // core has moved since (times the grid's Lipschitz bound), is still beyond reach: the search
-  // would find nothing (docs/PHYSICS.md, "Skipping a search"). A fact about the geometry, so it
+  // would find nothing (docs/PHYSICS.md, "No pass-through", 4). A fact about the geometry, so it
   // holds across restored states.
   struct Clearance {
     bool valid = false;
