@@ -7,6 +7,7 @@
 #include <assimp/Importer.hpp>
 #include <cmath>
 #include <map>
+#include <set>
 
 #include "app/pose_sampling.h"
 #include "common/run_util.h"
@@ -112,6 +113,24 @@ TEST(GltfExport, HopperWithItsPonytailRoundTripsThroughAssimp) {
   std::printf("ponytail_hopper: %d nodes x %d frames, max error %.3g m, %.3g rad\n", e.nodes, e.frames, e.max_position,
               e.max_angle);
   EXPECT_EQ(e.frames, 50);
+  EXPECT_LT(e.max_position, 1e-5);
+  EXPECT_LT(e.max_angle, 1e-5);
+}
+
+TEST(GltfExport, TwoChainsOnTheHeadRoundTripThroughAssimp) {
+  // pigtails.json: two chains, no `chain`: each chain's links are their own animated nodes.
+  const RoundTrip e = roundTrip("assets/scenes/pigtails.json", 30.0, 15);  // dt 1/240: 8 steps a frame
+  std::printf("pigtails: %d nodes x %d frames, max error %.3g m, %.3g rad\n", e.nodes, e.frames, e.max_position,
+              e.max_angle);
+  EXPECT_EQ(e.frames, 15);
+  Sim sim(loadScene("assets/scenes/pigtails.json"), &assimpAssets());
+  ASSERT_EQ(sim.chains().size(), 2u);
+  size_t links = 0;
+  for (const Chain& c : sim.chains()) links += c.links.size();
+  EXPECT_GE(size_t(e.nodes), links + 1) << "every link of both chains, and the head, is a node";
+  // The two chains are different bodies with different names: no node was written twice.
+  const std::vector<std::string> ids = bodyIds(sim.world());
+  EXPECT_EQ(std::set<std::string>(ids.begin(), ids.end()).size(), ids.size());
   EXPECT_LT(e.max_position, 1e-5);
   EXPECT_LT(e.max_angle, 1e-5);
 }

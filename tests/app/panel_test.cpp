@@ -296,6 +296,37 @@ TEST(PanelTest, MouseOrbitsZoomsAndPullsOnALink) {
   EXPECT_LT((h.panel.camera().eye - h.panel.camera().target).norm(), 0.8 * d0) << "zoom in";
 }
 
+TEST(PanelTest, EachChainOfATwoChainSceneHasItsOwnFieldsAndLinksToPull) {
+  // pigtails.json holds two chains (a `chains` list, no `chain`): each gets its own section, and
+  // the mouse catches either chain's links.
+  Harness h("assets/scenes/pigtails.json");
+  ASSERT_EQ(h.sim.runtime().chains().size(), 2u);
+  h.frames(5);
+  const Chain& second = h.sim.runtime().chains()[1];
+  const int grabbed = second.links.back();
+  const Eigen::Vector2f px = toPixel(h.panel.camera(), h.sim.runtime().world().body(grabbed).x, h.layout);
+  ASSERT_LT(px.x(), float(h.layout.sceneWidth()));
+  h.moveTo(px.x(), px.y());
+  h.in.mouse_down[0] = true;
+  h.frame();
+  EXPECT_TRUE(h.sim.perturbation().active()) << "the click caught the second chain's last link";
+  EXPECT_EQ(h.sim.perturbation().body, grabbed);
+  h.in.mouse_down[0] = false;
+  h.frame();
+
+  h.panel.setSectionOpen("Chain chains.1: every field", true);
+  h.frames(2);
+  const WidgetRect r = h.rect("chains.1.links");
+  EXPECT_GE(r.x0, float(h.layout.sceneWidth())) << "the slider belongs to the panel at the right";
+  h.drag(r.cx(), r.cy(), r.x0 - 40.0f, r.cy());  // to the left end of the track: one link
+  ASSERT_EQ(h.sim.runtime().chains().size(), 2u);
+  EXPECT_EQ(h.sim.applied().chains[1].links, 1);
+  EXPECT_EQ(h.sim.runtime().chains()[1].links.size(), 1u) << "the world has the chain the panel shows";
+  EXPECT_EQ(h.sim.runtime().chains()[0].links.size(), 8u) << "the other chain keeps its links";
+  h.frames(5);
+  EXPECT_TRUE(h.sim.ok()) << h.sim.stopMessage();
+}
+
 // --- With GL (OSMesa): the panel in real frames. -----------------------------------------------
 
 struct RegionStats {
