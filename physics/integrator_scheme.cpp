@@ -44,9 +44,29 @@ class World::SymplecticEulerScheme final : public World::ForceStagesScheme {
     // Its quaternions are unit (normalized by the step). The same operations as stepping a
     // gathered copy and copying it back.
     bool fine = true;
+    // With projection the stabilize stage needs the step's start and J(q_n) (shakePositions,
+    // physics/stabilization.h): the joint-force stage evaluated the system there and left A(q_n)
+    // factored.
+    const bool shake = w.shakes();
+    if (shake) {
+      w.shake_work_.jn = w.system_;  // same rows as last step: copied into the storage it has
+      w.shake_work_.held_generation = w.solver_->generation();
+      w.shake_work_.h = h;
+      w.shake_work_.start.resize(w.bodies_.size());
+    }
     for (int i : w.dynamic_) {
       RigidBody& b = w.bodies_[i];
+      if (shake) {
+        ShakeStart& s = w.shake_work_.start[size_t(i)];
+        s.x = b.x;
+        s.q = b.q;
+      }
       symplecticEulerStep(h, b.a, b.alpha, b.state());
+      if (shake) {
+        ShakeStart& s = w.shake_work_.start[size_t(i)];
+        s.v = b.v;
+        s.w = b.w;
+      }
       fine = fine && finiteAndBounded(b.x) && finite(b.q.coeffs()) && finiteAndBounded(b.v) && finiteAndBounded(b.w);
     }
     w.state_.time += h;

@@ -97,6 +97,62 @@ ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constrai
   return result;
 }
 
+ProjectionResult shakePositions(std::vector<RigidBody>& bodies, const Constraints& constraints,
+                                ConstraintSystem& system, ConstraintSolver& solver, ShakeWork& work, double h,
+                                double tolerance, int max_iterations) {
+  ProjectionResult result;
+  const size_t n = bodies.size();
+  const ConstraintSystem& jn = work.jn;
+  const int rows = jn.rows();
+  work.z.setZero(rows);
+  work.fc.resize(n);
+  // The positions for multiplier z: the start's velocities plus the impulse J_n^T z / h, drifted
+  // over h from the start (M^-1 at the start orientation, as symplectic Euler's kick used it).
+  const auto drift = [&] {
+    std::fill(work.fc.begin(), work.fc.end(), Vector6d::Zero());
+    if (rows > 0) jn.addTransposeTimes(work.z, bodies, work.fc);
+    for (size_t i = 0; i < n; ++i) {
+      RigidBody& b = bodies[i];
+      if (!b.isDynamic()) continue;
+      const ShakeStart& s = work.start[i];
+      const Eigen::Matrix3d r = s.q.toRotationMatrix();
+      b.v = s.v + work.fc[i].head<3>() / (b.mass * h);
+      b.w = s.w + r * (r.transpose() * work.fc[i].tail<3>()).cwiseQuotient(b.inertia) / h;
+      b.x = s.x + h * b.v;
+      b.q = renormalized(quaternionFromRotationVector(h * b.w) * s.q);
+    }
+  };
+  system.evaluate(bodies, constraints);  // the end point symplectic Euler reached (z = 0)
+  bool factored = rows > 0 && solver.generation() == work.held_generation;  // A(q_n), from the joint-force stage
+  double previous = 0.0;
+  for (int k = 0;; ++k) {
+    result.error = system.maxError();
+    result.iterations = k;
+    if (!std::isfinite(result.error)) {
+      result.status = Status::error("non-finite position correction");
+      return result;
+    }
+    if (result.error <= tolerance) break;
+    if (k > 0 && result.error > 0.5 * previous && result.error < 1e-11) break;   // round-off floor
+    if (k >= max_iterations || (k > 3 && result.error > 0.9 * previous)) break;  // not converging
+    if (!factored || (k > 0 && result.error > 0.25 * previous)) {
+      if (!solver.factor(bodies, system)) {
+        result.status = Status::error("the constraint matrix J M^-1 J^T is singular");
+        return result;
+      }
+      factored = true;
+    }
+    work.rhs = -system.C();
+    solver.solveInto(work.rhs, work.dz);
+    work.z += work.dz;
+    previous = result.error;
+    drift();
+    system.evaluate(bodies, constraints);
+  }
+  result.converged = result.error <= 1e-11 || result.error <= tolerance;
+  return result;
+}
+
 Status projectVelocities(std::vector<RigidBody>& bodies, const Constraints& constraints, ConstraintSystem& system,
                          ConstraintSolver& solver, Eigen::VectorXd* impulses) {
   ProjectionWork work;

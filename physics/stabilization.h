@@ -51,6 +51,37 @@ ProjectionResult projectPositions(std::vector<RigidBody>& bodies, const Constrai
                                   ConstraintSystem& system, ConstraintSolver& solver, ProjectionWork& work,
                                   double tolerance = 1e-12, int max_iterations = 10, double max_step = INFINITY);
 
+// Symplectic Euler's projection (the constrained symplectic Euler, SHAKE's position solve; Hairer,
+// Lubich & Wanner, "Geometric Numerical Integration", VII.1): post-stabilization after symplectic
+// Euler corrects the positions along the END point's joint directions and leaves the velocities to
+// a separate projection. Its velocity kick h a_n carries the centripetal part -h |v|^2 / r along
+// the joint, which the drift then turns into a tangent velocity the end point's projection cannot
+// see: every step adds about m h^2 |v|^4 / (2 r^2) of kinetic energy (docs/SOLVERS.md), a drift
+// at a rate proportional to h that no dt cures (the 8-link chain's energy grows without bound and
+// the projection fails after 2.3 s at every dt from 1/60 to 1/1920 s). Here the correction is an
+// impulse along the START's joint directions J(q_n) that enters the velocity too:
+//   v = v' + M_n^-1 J_n^T z / h,  x = x_n + h v,  w = w' + I_n^-1 (J_n^T z)_rot / h,  q = exp(h w) q_n
+// with z (m kg) chosen so that C(x, q) = 0 (chord iteration on A = J M^-1 J^T, first the
+// factorization the joint-force stage left at q_n, refactored at the latest iterate when an
+// iteration contracts by less than 4x), then the velocities onto J v = -J_k v_k at the new
+// positions (projectVelocities). The step is then symplectic Euler for the constrained system:
+// the energy error stays bounded instead of drifting.
+struct ShakeStart {
+  Eigen::Vector3d x, v, w;  // the step's start position; the velocities symplectic Euler gave
+  Eigen::Quaterniond q;     // the step's start orientation
+};
+struct ShakeWork {
+  ConstraintSystem jn;            // J(q_n), evaluated by the joint-force stage
+  std::vector<ShakeStart> start;  // per body (dynamic ones only are read)
+  std::vector<Vector6d> fc;       // J_n^T z per body
+  Eigen::VectorXd z, rhs, dz;
+  unsigned long held_generation = 0;  // the solver's generation after the joint-force stage (A at q_n)
+  double h = 0.0;                     // the step (s)
+};
+ProjectionResult shakePositions(std::vector<RigidBody>& bodies, const Constraints& constraints,
+                                ConstraintSystem& system, ConstraintSolver& solver, ShakeWork& work, double h,
+                                double tolerance = 1e-12, int max_iterations = 40);
+
 // Velocities of the dynamic bodies onto J v = -J_k v_k (kinematic bodies' velocities as they
 // are). Returns ok or what failed. `impulses` (optional): the multiplier y of every row (N s),
 // dv = M^-1 J^T y; a contact reads its own rows' impulse from it.

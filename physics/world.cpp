@@ -171,7 +171,7 @@ void World::substep(double h, int depth) {
   // when the substep can be undone: a contact set may report an impact inside it, the rotation
   // limit may split it, RATTLE or implicit Euler may fail and ask for halves. Otherwise a step
   // that fails has stopped the world, and nothing is restored.
-  const bool undoable = !contacts_.empty() || splitsOnRotation(params_) || scheme_->mayFail();
+  const bool undoable = !contacts_.empty() || splitsOnRotation(params_) || scheme_->mayFail() || shakes();
   if (undoable) snapshotInto(start);
   const bool stepped = takeStep(h);
   if (stepped && depth < kMaxSplits && impactInside()) {
@@ -497,12 +497,29 @@ bool World::finishConstrainedStep(const ConstrainedStepResult& r, double h) {
   return true;
 }
 
+bool World::shakes() const {
+  return !reduced_ && scheme_->kind() == Integrator::SymplecticEuler &&
+         params_.stabilization == Stabilization::Projection && !joints_.empty();
+}
+
 void World::stabilize() {
   if (!ok() || !split_reason_.empty()) return;
   if (params_.stabilization != Stabilization::Projection || joints_.empty()) return;
   const auto timed = clock_.time(Stage::Stabilize);
   updateKinematicBodies(state_.time);
-  const ProjectionResult r = projectPositions(bodies_, joints_, system_, *solver_, projection_work_);
+  // After symplectic Euler: its constrained form (the impulse along J(q_n), into the velocity too);
+  // after the other methods: post-stabilization along the end point's directions.
+  const bool shake = shakes();
+  const ProjectionResult r = shake ? shakePositions(bodies_, joints_, system_, *solver_, shake_work_, shake_work_.h)
+                                   : projectPositions(bodies_, joints_, system_, *solver_, projection_work_);
+  if (r.status.ok() && !r.converged && shake) {
+    // The chord iteration did not contract (a link turned far within the step): the substep is
+    // undone and taken as two halves, as RATTLE's is.
+    char buf[112];
+    std::snprintf(buf, sizeof buf, "symplectic Euler's position solve did not converge (joint error %.3g m)", r.error);
+    split_reason_ = buf;
+    return;
+  }
   if (!r.status.ok() || !(r.error < 1e-6)) {
     char buf[96];
     std::snprintf(buf, sizeof buf, " (joint error %.3g m after %d iterations)", r.error, r.iterations);

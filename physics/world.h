@@ -184,6 +184,8 @@ class World {
   void solveJointForces();
   void integrate(double h);
   void stabilize();
+  // Symplectic Euler with projection: its position solve (shakePositions) may fail and split the substep.
+  bool shakes() const;
   void resolveContacts();
   bool impactInside() const;   // any contact set's impact within the substep just taken
   void reducedStep(double h);  // featherstone: replaces joint forces + integrate + stabilize
@@ -253,6 +255,7 @@ class World {
   SavedState dt_start_;                   // step(): the dt's start, for RATTLE's redo at the end's count
   RattleWork rattle_work_;                // RATTLE: the step's work space (sized once)
   ProjectionWork projection_work_;        // stabilize(): the projections' work space (sized once)
+  ShakeWork shake_work_;                  // stabilize() after symplectic Euler: its start and J(q_n)
   Rk4Work rk4_work_;                      // RK4 (multiplier solvers): the stages (sized once)
   // The bodies moved since the last acceleration-level solve (a RATTLE step, a restore):
   // lambda() runs it on demand.
