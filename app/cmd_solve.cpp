@@ -9,6 +9,7 @@
 // scene field, so `render` cannot replay them).
 // Exit code 0 when every goal is met, 1 when one is not (the scene is still written: the closest
 // control found), 2 for bad input.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
@@ -42,9 +43,18 @@ void printReport(const Scene& scene, const GoalSolveReport& r) {
   for (size_t g = 0; g < r.goals.size(); ++g) {
     const Goal& goal = scene.goals[g];
     const GoalOutcome& o = r.goals[g];
-    std::printf("goal %zu: %s at t = %g s: error %.2f mm (tolerance %.2f mm) %s%s%s\n", g, goal.point.c_str(), goal.t,
-                o.error * 1000.0, goal.tolerance * 1000.0, o.met ? "met" : "NOT MET", o.why.empty() ? "" : ": ",
-                o.why.c_str());
+    std::printf("goal %zu: %s at t = %g s: error %.2f mm (tolerance %.2f mm), at (%.4f, %.4f, %.4f) m %s%s%s\n", g,
+                goal.point.c_str(), goal.t, o.error * 1000.0, goal.tolerance * 1000.0, o.reached.x(), o.reached.y(),
+                o.reached.z(), o.met ? "met" : "NOT MET", o.why.empty() ? "" : ": ", o.why.c_str());
+  }
+  const bool hopper_only =
+      !scene.goals.empty() && std::all_of(scene.goals.begin(), scene.goals.end(),
+                                          [](const Goal& g) { return g.point == "toe" || g.point == "body"; });
+  if (!r.guide.script.empty() || hopper_only) {
+    // The hopper's solved commands (sim/hopper_goal_solve.h): their effort against the scene's own.
+    std::printf("iterations %d, simulations %d, effort %.4g m^2/s (the commands against the scene's own), CPU %.2f s\n",
+                r.iterations, r.simulations, r.effort, r.cpu_seconds);
+    return;
   }
   std::printf(
       "iterations %d, simulations %d, effort %.4g N^2 m^2 s, work %.4g J (integral of |power| %.4g J), CPU %.2f s\n",

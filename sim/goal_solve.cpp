@@ -8,6 +8,7 @@
 #include <ctime>
 #include <limits>
 
+#include "sim/hopper_goal_solve.h"
 #include "sim/input_error.h"
 #include "sim/sim.h"
 
@@ -347,6 +348,12 @@ GoalSolveReport evaluateGoals(const Scene& scene, const AssetLoader* assets) {
     for (double t = 0.0; t <= end; t += dt)
       for (size_t j = 0; j < sim.guide()->joints(); ++j) report.effort += sim.guide()->torque(j, t).squaredNorm() * dt;
   }
+  // The hopper's solved commands: their effort against the scene's own (sim/hopper_goal_solve.h).
+  if (scene.guide && scene.guide->enabled && !scene.guide->script.empty()) {
+    double until = 0.0;
+    for (const Goal& g : scene.goals) until = std::max(until, g.t);
+    report.effort += hopperCommandEffort(scene, scene.guide->script, until);
+  }
   report.cpu_seconds = cpuSeconds() - cpu0;
   return report;
 }
@@ -355,6 +362,17 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
   const double cpu0 = cpuSeconds();
   const std::string& src = scene_in.path;
   if (scene_in.goals.empty()) throw InputError(src + ": goals: the scene has no goals to solve for");
+  // Goals on the hopper alone: its commands are solved for (sim/hopper_goal_solve.h).
+  const bool hopper_only = std::all_of(scene_in.goals.begin(), scene_in.goals.end(), [](const Goal& g) {
+    GoalPoint p;
+    return parseGoalPoint(g.point, p) && (p.kind == GoalPoint::Kind::Toe || p.kind == GoalPoint::Kind::Body);
+  });
+  if (hopper_only && (scene_in.hopper || !scene_in.hoppers.empty())) {
+    HopperGoalSolveOptions ho;
+    ho.keys = opt.knots;
+    ho.max_iterations = opt.max_iterations;
+    return solveHopperGoals(scene_in, assets, ho);
+  }
   if (!scene_in.chain) throw InputError(src + ": the goal solve guides a chain, and the scene has none");
   if (opt.knots == 1 || opt.knots < 0) throw InputError(src + ": the goal solve needs at least 2 knots per joint");
 

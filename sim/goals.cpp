@@ -52,10 +52,26 @@ void checkGoals(const Scene& scene, std::vector<std::string>& errors) {
     if (g.frame == GoalFrame::Head && !scene.head) errors.push_back(key + "frame: \"head\" needs a head section");
   }
   if (scene.guide) {
-    if (!scene.chain) {
-      errors.push_back("guide: needs a chain section (the torques act at the chain's joints)");
+    if (!scene.chain && !has_hopper) {
+      errors.push_back(
+          "guide: needs a chain section (its knots turn the chain's joints) or a hopper section (its "
+          "script commands the hopper)");
+    } else if (scene.guide->knots.empty()) {
+      // nothing to check against a chain
+    } else if (!scene.chain) {
+      errors.push_back("guide.knots: needs a chain section (the torques act at the chain's joints)");
     } else if (Status s = validate(*scene.guide, scene.chain->links); !s.ok()) {
       errors.push_back(s.message());
+    }
+    const std::vector<HopperCommandKey>& script = scene.guide->script;
+    if (!script.empty() && !has_hopper) errors.push_back("guide.script: needs a hopper section (it is its commands)");
+    for (size_t i = 1; i < script.size(); ++i) {
+      if (script[i].t <= script[i - 1].t) {
+        errors.push_back("guide.script." + std::to_string(i) + ".t = " + std::to_string(script[i].t) +
+                         " s: keys must be in increasing time order (the previous key is at " +
+                         std::to_string(script[i - 1].t) + " s)");
+        break;
+      }
     }
   }
 }

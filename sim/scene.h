@@ -474,7 +474,8 @@ struct Scene {
       {.help = "Boxes on the ground (steps, slopes) for the hoppers' toes and, with collision.ground, their bodies",
        .apply = Apply::Restart});
     v("guide", guide,
-      {.help = "Solved joint torques of the chain (written by ponyhop solve)", .apply = Apply::Restart});
+      {.help = "Solved control (written by ponyhop solve): joint torques of the chain, commands of the hopper",
+       .apply = Apply::Restart});
   }
 };
 

@@ -126,6 +126,13 @@ void Sim::buildHoppers() {
   std::vector<const HopperParams*> all;
   if (scene_.hopper) all.push_back(&*scene_.hopper);
   for (const HopperSection& p : scene_.hoppers) all.push_back(&p);
+  // The guide's solved commands drive the first hopper (docs/GOALS.md, "The hopper").
+  HopperParams guided;
+  if (!all.empty() && scene_.guide && scene_.guide->enabled && !scene_.guide->script.empty()) {
+    guided = *all[0];
+    guided.script = scene_.guide->script;
+    all[0] = &guided;
+  }
   for (size_t i = 0; i < all.size(); ++i) {
     hoppers_.push_back(Hopper::add(world_, *all[i], terrain_));
     if (!world_.ok()) {

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "physics/controller.h"
+#include "physics/models/hopper_params.h"
 #include "physics/reflect.h"
 #include "physics/status.h"
 
@@ -38,12 +39,18 @@ struct GuideKnot {
 struct GuideParams {
   bool enabled = true;  // false: the unguided motion (the knots are kept)
   std::vector<GuideKnot> knots;
+  // The first hopper's solved commands (docs/GOALS.md, "The hopper"): a course like hopper.script,
+  // each key from its t on, in force instead of hopper.script while the guide is enabled.
+  std::vector<HopperCommandKey> script;
 
   template <class V>
   void reflect(V& v) {
     v("enabled", enabled, {.help = "Apply the solved torques (false: the unguided motion)", .apply = Apply::Restart});
     v("knots", knots,
       {.help = "Torque knots per joint (a smooth curve through each joint's knots, zero outside them)",
+       .apply = Apply::Restart});
+    v("script", script,
+      {.help = "The first hopper's solved commands, each key from its t on (replaces hopper.script while enabled)",
        .apply = Apply::Restart});
   }
 };

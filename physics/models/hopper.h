@@ -114,6 +114,8 @@ class Hopper final : public Controller {
   // state machine keeps its phase, the next think() reads it. Returns ok or the range error
   // ("hopper.command.height = 9: must be ..."), leaving the command unchanged.
   Status setCommand(const HopperCommand& command);
+  // Replaces the scripted course (the goal solve's trials; keys in time order, checked by the caller).
+  void setScript(std::vector<HopperCommandKey> script) { params_.script = std::move(script); }
   bool inContact() const { return contact_->inContact(); }
   int hops() const { return mem_.hops; }              // liftoffs so far
   double lastApex() const { return mem_.last_apex; }  // m, body height at the last apex

@@ -77,6 +77,18 @@ TEST(Goals, BadInputNamesTheField) {
   EXPECT_NE(errorOf(R"({"anchor": {}, "chain": {}, "guide": {"knots": [{"t": 1}, {"t": 1}]}})").find("two knots at t"),
             std::string::npos);
   EXPECT_NE(errorOf(R"({"guide": {}})").find("guide: needs a chain section"), std::string::npos);
+  // The hopper's solved commands (guide.script).
+  EXPECT_NE(errorOf(R"({"anchor": {}, "chain": {}, "guide": {"script": [{"t": 0}]}})")
+                .find("guide.script: needs a hopper section"),
+            std::string::npos);
+  EXPECT_NE(errorOf(R"({"hopper": {}, "guide": {"script": [{"t": 1}, {"t": 0.5}]}})")
+                .find("guide.script.1.t = 0.500000 s: keys must be in increasing time order"),
+            std::string::npos);
+  EXPECT_NE(errorOf(R"({"hopper": {}, "guide": {"script": [{"t": 0, "vx": 9}]}})").find("guide.script.0.vx"),
+            std::string::npos);
+  EXPECT_NE(
+      errorOf(R"({"hopper": {}, "guide": {"knots": [{"t": 0}, {"t": 1}]}})").find("guide.knots: needs a chain section"),
+      std::string::npos);
 }
 
 TEST(Goals, GuideCurveInterpolatesItsKnotsAndIsZeroOutside) {
@@ -250,6 +262,67 @@ TEST(Goals, SolvedSceneMeetsItsGoalAndReplaysFromTheFile) {
   Scene off = saved;
   off.guide->enabled = false;
   EXPECT_EQ(evaluateGoals(off, nullptr).goals[0].reached, free_tip);
+}
+
+// The hopper (sim/hopper_goal_solve.h): from rest, commanded 0.5 m/s along x; its second landing
+// puts the toe at about (0.12, 0, 0) from 1.3 to 1.5 s.
+Scene hopperScene() {
+  return parseSceneText(
+      R"({"physics": {"dt": 0.001, "integrator": "rk4", "stabilization": "projection"},
+          "hopper": {"position": [0, 0, 1.05], "command": {"vx": 0.5}}})",
+      "hop.json");
+}
+
+Eigen::Vector3d toeAt(const Scene& scene, double t) {
+  Sim sim(scene);
+  sim.advanceTo(t);
+  return sim.hopper()->footPoint(sim.world());
+}
+
+TEST(HopperGoals, AMarkTheHopperAlreadyLandsOnNeedsNoChange) {
+  Scene s = hopperScene();
+  s.goals = {Goal{.t = 1.4, .point = "toe", .position = toeAt(s, 1.4), .tolerance = 0.02}};
+  const GoalSolveReport r = solveGoals(s, nullptr, {.knots = 3});
+  EXPECT_TRUE(r.all_met) << r.goals[0].error;
+  EXPECT_EQ(r.iterations, 0);
+  EXPECT_EQ(r.effort, 0.0);
+  EXPECT_TRUE(r.guide.script.empty()) << "the scene's own commands: nothing to write";
+}
+
+// A mark 6 cm from the unguided landing, met by the commands (the toe within the goal's 2 cm), and
+// the solved scene replays it from the file, bit for bit; guide.enabled = false is the unguided run.
+TEST(HopperGoals, TheToeLandsOnAMarkAndTheSolvedSceneReplaysIt) {
+  Scene s = hopperScene();
+  const Eigen::Vector3d free_toe = toeAt(s, 1.4);
+  s.goals = {
+      Goal{.t = 1.4, .point = "toe", .position = free_toe + Eigen::Vector3d(0.05, 0.03, 0.0), .tolerance = 0.02}};
+  const GoalSolveReport r = solveGoals(s, nullptr, {.knots = 3});
+  ASSERT_TRUE(r.all_met) << r.goals[0].error << " " << r.goals[0].why;
+  EXPECT_GT(r.iterations, 0);
+  EXPECT_GT(r.effort, 0.0);
+  ASSERT_FALSE(r.guide.script.empty());
+  EXPECT_TRUE(r.guide.knots.empty()) << "no chain: no torques";
+  s.guide = r.guide;
+  const Scene saved = parseScene(sceneToJson(s), "solved.json");
+  const GoalSolveReport replay = evaluateGoals(saved, nullptr);
+  EXPECT_EQ(replay.goals[0].error, r.goals[0].error);
+  EXPECT_DOUBLE_EQ(replay.effort, r.effort);
+  Scene off = saved;
+  off.guide->enabled = false;
+  EXPECT_LT((evaluateGoals(off, nullptr).goals[0].reached - free_toe).norm(), 1e-12);
+}
+
+TEST(HopperGoals, AMarkOutOfReachIsReportedWithWhatStoppedIt) {
+  Scene s = hopperScene();
+  s.goals = {Goal{.t = 1.0, .point = "toe", .position = {20.0, 0.0, 0.0}, .tolerance = 0.02}};
+  const GoalSolveReport r = solveGoals(s, nullptr, {.knots = 2, .max_iterations = 4});
+  EXPECT_FALSE(r.all_met);
+  const std::string& why = r.goals[0].why;
+  EXPECT_NE(why.find("the closest the hopper's commands got is"), std::string::npos) << why;
+  EXPECT_TRUE(why.find("at its bound") != std::string::npos || why.find("fall") != std::string::npos ||
+              why.find("iteration limit") != std::string::npos ||
+              why.find("lowered the goal error") != std::string::npos)
+      << why;
 }
 
 }  // namespace
