@@ -88,7 +88,19 @@ PeerChain peerChainOf(const Sim& sim) {
     m.mass.push_back(b.mass);
     m.inertia.push_back(b.inertia);
     m.q.push_back(b.q);
+    m.v.push_back(b.v);
+    m.w.push_back(b.w);
     m.radius.push_back(ch.radii[i]);
+  }
+  // A moving anchor (the bench's shake case): the kinematic anchor body's prescribed motion.
+  const Scene& scene = sim.scene();
+  if (scene.anchor && scene.anchor->motion != AnchorMotion::Fixed && sim.anchorBody() >= 0) {
+    const KinematicMotion motion = sim.world().body(sim.anchorBody()).motion;
+    const Eigen::Vector3d offset = m.anchor - motion(0.0).x;  // the anchor point in the anchor body (zero)
+    m.motion = [motion, offset](double t) {
+      const KinematicState k = motion(t);
+      return PeerAnchorState{k.x + offset, k.v, k.a};
+    };
   }
   return m;
 }
@@ -190,9 +202,9 @@ RunResult benchPeerRun(const Peer& peer, const PeerChain& chain, double dt, doub
   return r;
 }
 
-double peerJointError(const PeerChain& chain, const std::vector<PeerLink>& links) {
+double peerJointError(const PeerChain& chain, const std::vector<PeerLink>& links, double t) {
   double worst = 0.0;
-  Eigen::Vector3d above = chain.anchor;  // the end the next link's top must meet
+  Eigen::Vector3d above = chain.anchorAt(t).x;  // the end the next link's top must meet
   for (const PeerLink& l : links) {
     const Eigen::Vector3d half = l.q.normalized() * Eigen::Vector3d(0.0, 0.0, 0.5 * chain.length);
     worst = std::max(worst, (l.x + half - above).norm());
@@ -219,7 +231,7 @@ class PeerSubject final : public ScalingSubject {
   bool ok() override { return sim_->finite(); }
   double jointError() override {
     sim_->links(links_);
-    return peerJointError(chain_, links_);
+    return peerJointError(chain_, links_, sim_->time());
   }
   std::string why() const override {
     char b[160];
@@ -275,7 +287,7 @@ PeerModules loadPeerModules(const std::vector<std::string>& dirs) {
       m.notes.push_back(std::string(e.name) + "'s module " + path + " failed to load (" + dlerror() + ")" + no_rows);
       continue;
     }
-    const auto entry = reinterpret_cast<decltype(&ponyhop_peers_v2)>(dlsym(handle, kPeerEntry));
+    const auto entry = reinterpret_cast<decltype(&ponyhop_peers_v3)>(dlsym(handle, kPeerEntry));
     if (!entry) {
       m.notes.push_back(std::string(e.name) + "'s module " + path + " has no " + kPeerEntry +
                         " (built by another version of ponyhop?)" + no_rows);

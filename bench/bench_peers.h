@@ -12,7 +12,8 @@
 
 namespace ponyhop {
 
-// The chain of a built scene (its chain, fixed anchor) as the peers build it.
+// The chain of a built scene (its chain, its anchor fixed or moving, the links' velocities at
+// t = 0) as the peers build it.
 PeerChain peerChainOf(const Sim& sim);
 
 // The four-bar of a built scene (assets/scenes/four_bar.json: a three-link chain on a root hinge,
@@ -52,7 +53,7 @@ std::vector<std::string> buildFlagNotes();
 ScalingConfig peerScalingConfig(const Peer& peer, const std::string& scene);
 
 // The largest gap of a joint of `links` (link i's top end against link i-1's bottom end, link 0's
-// against the anchor), m.
-double peerJointError(const PeerChain& chain, const std::vector<PeerLink>& links);
+// against the anchor where it is at time t), m.
+double peerJointError(const PeerChain& chain, const std::vector<PeerLink>& links, double t = 0.0);
 
 }  // namespace ponyhop
