@@ -811,8 +811,8 @@ int runBench(BenchArgs& args) {
           const auto slash = peer.name.find('/');
           BenchRow row{&c,      peer.name, peer.name.substr(0, slash), peer.name.substr(slash + 1), "-", "fixed", dt,
                        horizon, {}};
-          row.r =
-              benchPeerRun(peer, chain, dt, horizon, cfg.repeats, c.long_duration, ref.trajectory, sim.chainEnergy());
+          row.r = benchPeerRun(peer, chain, dt, horizon, cfg.repeats, c.long_duration, ref.trajectory,
+                               sim.chainEnergy(), c.conservative);
           std::fprintf(stderr, "bench: %-14s %-40s dt 1/%-4d %-10s %9.1f us/step  err %.3g m\n", c.id.c_str(),
                        row.method.c_str(), d, row.r.status.c_str(), row.r.us_per_step, row.r.err_rms);
           rows.push_back(std::move(row));

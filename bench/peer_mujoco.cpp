@@ -6,7 +6,8 @@
 // dynamics (each of RK4's four stages, at the stage's time), after the mass matrix is factored and
 // the bias and passive forces are known, so the callback sets the slide joints' qfrc_applied to
 // the force f that gives them the wanted acceleration: qacc = M^-1 (qfrc_passive - qfrc_bias + f),
-// f = A^-1 (target - qacc0) with A the slide rows and columns of M^-1 (mj_solveM). RK4: the target
+// f = A^-1 (target - qacc0), qacc0 by mj_solveM, A (the slide rows and columns of M^-1) from the
+// root block of MuJoCo's factor of M. RK4: the target
 // is the path's acceleration at the stage's time. Euler (semi-implicit: the new velocity moves the
 // positions): the target takes the anchor's velocity to the secant velocity to the path's point at
 // t + dt (PeerChain::secant), so the anchor is on the path at every step's end.
@@ -190,7 +191,7 @@ class MujocoSim final : public PeerSim {
         const Eigen::Vector3d va = chain.anchorAt(0.0).v;
         for (int k = 0; k < 3; ++k) s_->d->qvel[v++] = va[k];
         first_link_ = 2;
-        solve_.resize(size_t(4 * s_->m->nv));
+        solve_.resize(size_t(s_->m->nv));
         rhs_.resize(solve_.size());
         mjcb_control = &driveAnchor;
       }
@@ -243,19 +244,24 @@ class MujocoSim final : public PeerSim {
   // slide joints' forces that give the anchor its prescribed acceleration.
   void drive(const mjModel* m, mjData* d) {
     const int nv = m->nv;
-    // Four right-hand sides: the smooth force without f, then a unit force on each slide.
+    // qacc0: the acceleration without f (one solve with the factored M).
     mjtNum* y = rhs_.data();
     mjtNum* x = solve_.data();
-    std::fill(rhs_.begin(), rhs_.end(), 0.0);
     for (int i = 0; i < nv; ++i) y[i] = d->qfrc_passive[i] - d->qfrc_bias[i];
-    for (int k = 0; k < 3; ++k) y[(k + 1) * nv + k] = 1.0;
-    mj_solveM(m, d, x, y, 4);
-    Eigen::Matrix3d a;
-    Eigen::Vector3d acc0;
-    for (int r = 0; r < 3; ++r) {
-      acc0[r] = x[r];
-      for (int k = 0; k < 3; ++k) a(r, k) = x[(k + 1) * nv + r];
-    }
+    mj_solveM(m, d, x, y, 1);
+    const Eigen::Vector3d acc0(x[0], x[1], x[2]);
+    // A = (M^-1)_ss from the factor's root block: MuJoCo factors M = L' D L, L unit lower
+    // triangular with L(i, j) != 0 only for j an ancestor of i, stored in qLD as M is (dof i at
+    // dof_Madr[i]: D(i), then L(i, parent), L(i, grandparent), ...). L^-1 is lower triangular, so
+    // the slides' rows of M^-1 = L^-1 D^-1 L^-T involve only the 3 x 3 root block:
+    // A = Lss^-1 Dss^-1 Lss^-T (the slides are dofs 0, 1, 2, each the parent of the next).
+    Eigen::Matrix3d l = Eigen::Matrix3d::Identity();
+    l(1, 0) = d->qLD[m->dof_Madr[1] + 1];
+    l(2, 1) = d->qLD[m->dof_Madr[2] + 1];
+    l(2, 0) = d->qLD[m->dof_Madr[2] + 2];
+    const Eigen::Matrix3d li = l.triangularView<Eigen::UnitLower>().solve(Eigen::Matrix3d::Identity());
+    const Eigen::Matrix3d a =
+        li * Eigen::Vector3d(d->qLDiagInv[0], d->qLDiagInv[1], d->qLDiagInv[2]).asDiagonal() * li.transpose();
     const double t = d->time, h = m->opt.timestep;
     const Eigen::Vector3d vel(d->qvel[0], d->qvel[1], d->qvel[2]);
     Eigen::Vector3d target;
@@ -291,6 +297,11 @@ Peer mujocoPeer(const std::string& integrator) {
     auto model = load(mujocoChainXml(chain, integrator, dt));
     if (!model->m) {
       error = model->error;
+      return nullptr;
+    }
+    if (chain.moving() &&
+        (model->m->dof_parentid[0] != -1 || model->m->dof_parentid[1] != 0 || model->m->dof_parentid[2] != 1)) {
+      error = "MuJoCo ordered the anchor's slide joints otherwise than the drive reads its factor";
       return nullptr;
     }
     return std::make_unique<MujocoSim>(chain, std::move(model));
