@@ -196,9 +196,11 @@ Peer bulletPeer() {
   Peer p;
   p.name = "bullet/multibody";
   const int v = btGetVersion();  // 324 for 3.24
-  p.version = "Bullet " + std::to_string(v / 100) + "." + std::to_string(v % 100) +
-              " btMultiBody, double precision (BT_USE_DOUBLE_PRECISION, the -float64 libraries): spherical joints, "
-              "its semi-implicit Euler, damping 0, no sleeping, no collision shapes";
+  p.version =
+      "Bullet " + std::to_string(v / 100) + "." + std::to_string(v % 100) +
+      " btMultiBody, double precision (BT_USE_DOUBLE_PRECISION, the -float64 libraries): spherical joints, "
+      "its semi-implicit Euler, damping 0, no sleeping, no collision shapes; a shaking anchor as a floating 1e12 kg "
+      "base forced to the path";
   p.make = [](const PeerChain& chain, double dt, std::string&) -> std::unique_ptr<PeerSim> {
     return std::make_unique<BulletSim>(chain, dt);
   };

@@ -156,8 +156,10 @@ class DartSim final : public PeerSim {
 Peer dartPeer() {
   Peer p;
   p.name = "dart/ball";
-  p.version = std::string("DART ") + DART_VERSION +
-              ": Skeleton of BallJoints, articulated-body dynamics, its semi-implicit Euler, no shapes";
+  p.version =
+      std::string("DART ") + DART_VERSION +
+      ": Skeleton of BallJoints, articulated-body dynamics, its semi-implicit Euler, no shapes; a shaking anchor "
+      "on a VELOCITY-actuated TranslationalJoint";
   p.make = [](const PeerChain& chain, double dt, std::string&) -> std::unique_ptr<PeerSim> {
     return std::make_unique<DartSim>(chain, dt);
   };

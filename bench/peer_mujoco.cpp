@@ -292,7 +292,7 @@ Peer mujocoPeer(const std::string& integrator) {
   p.name = "mujoco/" + integrator;
   p.version = std::string("MuJoCo ") + mj_versionString() +
               ": Euler = its semi-implicit Euler, RK4; ball joints, exact masses and inertias, no contact, damping "
-              "or armature";
+              "or armature; a shaking anchor on three slide joints forced to the path's acceleration (mjcb_control)";
   p.make = [integrator](const PeerChain& chain, double dt, std::string& error) -> std::unique_ptr<PeerSim> {
     auto model = load(mujocoChainXml(chain, integrator, dt));
     if (!model->m) {

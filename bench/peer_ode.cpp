@@ -142,7 +142,8 @@ Peer odePeer(bool quick) {
   p.name = quick ? "ode/quickstep" : "ode/worldstep";
   p.version =
       "ODE (libode-dev, double precision): maximal coordinates, ball joints, dWorldStep (direct) and "
-      "dWorldQuickStep (20 Gauss-Seidel iterations), its defaults ERP 0.2, CFM 1e-10, gyroscopic term on";
+      "dWorldQuickStep (20 Gauss-Seidel iterations), its defaults ERP 0.2, CFM 1e-10, gyroscopic term on; a shaking "
+      "anchor as a kinematic body";
   p.make = [quick](const PeerChain& chain, double dt, std::string&) -> std::unique_ptr<PeerSim> {
     return std::make_unique<OdeSim>(chain, dt, quick);
   };
