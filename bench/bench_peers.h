@@ -12,7 +12,8 @@
 
 namespace ponyhop {
 
-// The chain of a built scene (its chain, fixed anchor) as the peers build it.
+// The chain of a built scene (its chain, its anchor fixed or moving, the links' velocities at
+// t = 0) as the peers build it.
 PeerChain peerChainOf(const Sim& sim);
 
 // The four-bar of a built scene (assets/scenes/four_bar.json: a three-link chain on a root hinge,
@@ -37,10 +38,11 @@ std::vector<std::string> peerModuleDirs();
 
 // One peer run, measured like benchRun(): `repeats` timed runs of [0, horizon], the tip's error
 // against the reference, then the first repeat continued (untimed) to long_duration for the
-// energy drift (against the peer's own energy at t = 0; e_start: the chain's energy in ponyhop's
-// reference, for the relative drift).
+// energy drift (conservative: against the peer's own energy at t = 0; e_start: the chain's energy in
+// ponyhop's reference, for the relative drift) or, on a driven chain (the shaking anchor), the joint
+// drift: bounded as ours are (joints within 1 cm, the tip slower than 100 m/s).
 RunResult benchPeerRun(const Peer& peer, const PeerChain& chain, double dt, double horizon, int repeats,
-                       double long_duration, const Trajectory& reference, double e_start);
+                       double long_duration, const Trajectory& reference, double e_start, bool conservative = true);
 
 // The build flags of ours (this build's compiler, build type and flags) and of each engine's
 // Debian package as far as it records them (its version, its pkg-config flags; Debian's default
@@ -52,7 +54,7 @@ std::vector<std::string> buildFlagNotes();
 ScalingConfig peerScalingConfig(const Peer& peer, const std::string& scene);
 
 // The largest gap of a joint of `links` (link i's top end against link i-1's bottom end, link 0's
-// against the anchor), m.
-double peerJointError(const PeerChain& chain, const std::vector<PeerLink>& links);
+// against the anchor where it is at time t), m.
+double peerJointError(const PeerChain& chain, const std::vector<PeerLink>& links, double t = 0.0);
 
 }  // namespace ponyhop

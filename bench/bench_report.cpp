@@ -407,7 +407,9 @@ void writeEqualAccuracySection(std::ostream& f, const std::vector<CostPoint>& po
        "every method and dt the bench ran, among the runs whose long run stayed bounded (a run that reaches the "
        "level and then blows up is no choice); cost in ms of wall time per simulated second (the timed repeats' "
        "median), its error in brackets. Ours / peer: ours against the cheapest peer (below 1: ours is cheaper). The "
-       "peers run the fixed-anchor cases only (their chains have no moving anchor). From "
+       "peers run every chain case; on the shaking anchor each is given the anchor's prescribed motion as its API "
+       "allows (bench/peer.h: MuJoCo slide joints forced to the path's acceleration, Bullet a floating base of "
+       "1e12 kg forced likewise, ODE a kinematic body, DART a velocity-actuated translational joint). From "
     << source << ".\n\n";
   for (const auto& t : tables) {
     f << "### " << t.case_title << "\n\n| RMS error at most (m) | ours |";

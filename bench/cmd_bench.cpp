@@ -9,8 +9,8 @@
 //   long runs: energy drift (fixed anchor), joint drift, whether the motion stays bounded;
 //   cost:     microseconds per step and per simulated second (median of repeats), per stage.
 // Scaling: cost per step for N = 2 ... 1024, in motion, ours and the peers interleaved. The peer engines whose modules
-// were built (MuJoCo, Bullet, ODE, DART: bench/peer.h) run the fixed-anchor chains and the scaling sweep beside them,
-// with a table of ours / fastest peer per N. Writes CSV, Markdown and PNGs.
+// were built (MuJoCo, Bullet, ODE, DART: bench/peer.h) run the chains (fixed and shaking anchor) and the scaling sweep
+// beside them, with a table of ours / fastest peer per N. Writes CSV, Markdown and PNGs.
 #include <sys/utsname.h>
 
 #include <algorithm>
@@ -803,7 +803,7 @@ int runBench(BenchArgs& args) {
                      row.r.status == "ok" && row.r.long_status != "ok" ? row.r.long_status.c_str() : "");
         rows.push_back(std::move(row));
       }
-      if (!peers.empty() && c.links > 0 && c.anchor == "fixed") {
+      if (!peers.empty() && c.links > 0) {
         const PeerChain chain = peerChainOf(c.scene, c.overrides);
         Sim sim(loadScene(c.scene, c.overrides));
         for (const Peer& peer : peers) {
@@ -811,8 +811,8 @@ int runBench(BenchArgs& args) {
           const auto slash = peer.name.find('/');
           BenchRow row{&c,      peer.name, peer.name.substr(0, slash), peer.name.substr(slash + 1), "-", "fixed", dt,
                        horizon, {}};
-          row.r =
-              benchPeerRun(peer, chain, dt, horizon, cfg.repeats, c.long_duration, ref.trajectory, sim.chainEnergy());
+          row.r = benchPeerRun(peer, chain, dt, horizon, cfg.repeats, c.long_duration, ref.trajectory,
+                               sim.chainEnergy(), c.conservative);
           std::fprintf(stderr, "bench: %-14s %-40s dt 1/%-4d %-10s %9.1f us/step  err %.3g m\n", c.id.c_str(),
                        row.method.c_str(), d, row.r.status.c_str(), row.r.us_per_step, row.r.err_rms);
           rows.push_back(std::move(row));

@@ -8,8 +8,12 @@
 // that a module links nothing of ponyhop's.
 //
 // Every peer builds the same chain (a PeerChain read from the built World: exact masses and
-// principal inertias, link length, gravity, the initial orientations, the fixed anchor), with
-// ball joints, no damping, contact, limits or armature, and steps it at the same dt. The peers
+// principal inertias, link length, gravity, the initial orientations and velocities, the anchor
+// and its prescribed motion), with ball joints, no damping, contact, limits or armature, and steps
+// it at the same dt. A moving anchor (the bench's shake case) is driven as each engine allows
+// (bench/peer_<engine>.cpp says how); the engines that integrate with semi-implicit Euler are given
+// the anchor's secant velocity over each step (PeerChain::secant), so that their anchor is on the
+// prescribed path at every step's end. The peers
 // work in reduced coordinates (MuJoCo, Bullet, DART: joints hold by construction) or with
 // maximal coordinates and joint error correction (ODE: its defaults, ERP 0.2, CFM 1e-10).
 #pragma once
@@ -25,8 +29,15 @@
 
 namespace ponyhop {
 
+// The anchor's prescribed state at a time (world; the anchor does not rotate).
+struct PeerAnchorState {
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();  // m
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();  // m/s
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();  // m/s^2
+};
+
 // The chain as the peers need it: link i's top end is link i-1's bottom end (link 0's is the
-// fixed anchor); each link's frame (ponyhop's) has its centre of mass at the origin and its axis
+// anchor); each link's frame (ponyhop's) has its centre of mass at the origin and its axis
 // along z, the top end at +length/2 z.
 struct PeerChain {
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();
@@ -34,8 +45,32 @@ struct PeerChain {
   std::vector<double> mass;              // kg
   std::vector<double> radius;            // m (drawing only: the inertia is given explicitly)
   std::vector<Eigen::Vector3d> inertia;  // kg m^2, principal, link frame
-  std::vector<Eigen::Quaterniond> q;     // link to world at t = 0 (the chain starts at rest)
+  std::vector<Eigen::Quaterniond> q;     // link to world at t = 0
+  // The links' velocities at t = 0 (world; centre of mass, angular): empty, the chain starts at
+  // rest. On a shaking anchor the chain at rest takes Kelvin's velocities at t = 0 (the least
+  // kinetic energy that meets the moving anchor: physics/models/chain.h); the peers start from them.
+  std::vector<Eigen::Vector3d> v, w;
   Eigen::Vector3d gravity{0.0, 0.0, -9.81};
+  // The anchor's prescribed motion; empty: fixed at `anchor`. motion(0).x is `anchor`.
+  std::function<PeerAnchorState(double t)> motion;
+
+  bool moving() const { return static_cast<bool>(motion); }
+  PeerAnchorState anchorAt(double t) const {
+    if (motion) return motion(t);
+    PeerAnchorState s;
+    s.x = anchor;
+    return s;
+  }
+  // The velocity that takes the anchor from its prescribed place at t to its place at t + dt (m/s).
+  Eigen::Vector3d secant(double t, double dt) const { return (anchorAt(t + dt).x - anchorAt(t).x) / dt; }
+  // Link i's velocities at t = 0 (zero when the chain starts at rest).
+  Eigen::Vector3d v0(size_t i) const { return i < v.size() ? v[i] : Eigen::Vector3d::Zero(); }
+  Eigen::Vector3d w0(size_t i) const { return i < w.size() ? w[i] : Eigen::Vector3d::Zero(); }
+  // Link i's angular velocity relative to its parent (link i-1, or the non-rotating anchor) at
+  // t = 0, in link i's frame: a ball joint's velocity coordinates in MuJoCo, Bullet and DART.
+  Eigen::Vector3d relativeW0(size_t i) const {
+    return q[i].conjugate() * (w0(i) - (i == 0 ? Eigen::Vector3d::Zero() : w0(i - 1)));
+  }
 };
 
 // One link's state in world coordinates (centre of mass, link to world, velocities).
@@ -144,7 +179,8 @@ struct PeerFourBar {
 struct Peer {
   std::string name;
   std::string version;  // the engine and its settings, for the notes
-  // A chain at rest in its t = 0 pose; nullptr with `error` set when the engine refused it.
+  // The chain in its t = 0 pose and velocities, its anchor fixed or moving as the PeerChain says;
+  // nullptr with `error` set when the engine refused it (or cannot move its anchor so).
   std::function<std::unique_ptr<PeerSim>(const PeerChain&, double dt, std::string& error)> make;
   // The four-bar in its t = 0 pose, servo on when its gains are; nullptr with `error` set when
   // the engine refused it. The PeerSim keeps a reference to the four-bar's chain.
@@ -153,11 +189,11 @@ struct Peer {
 };
 
 // The name of the one symbol a module exports (found with dlsym), declared below.
-inline constexpr const char* kPeerEntry = "ponyhop_peers_v2";
+inline constexpr const char* kPeerEntry = "ponyhop_peers_v3";
 
 }  // namespace ponyhop
 
 // A module's entry point: appends its engine's peers to `out`. The module and the executable share
 // the types above, so both must come from one build; the version in the name makes a module built
 // against another layout of them fail to load (with a message) rather than crash.
-extern "C" void ponyhop_peers_v2(std::vector<ponyhop::Peer>* out);
+extern "C" void ponyhop_peers_v3(std::vector<ponyhop::Peer>* out);

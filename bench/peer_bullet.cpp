@@ -7,6 +7,15 @@
 // with exactly dt per step (stepSimulation(dt, 0)). Its integrator is semi-implicit Euler. No
 // damping (Bullet's default 0.04 linear/angular multibody damping is set to 0), no sleeping,
 // the joint speed cap raised out of the way, no collision shapes.
+//
+// A moving anchor (the shake case): btMultiBody has no prescribed-motion base (a fixed base is
+// taken as unaccelerated in the articulated-body pass; setBaseVel/setBasePos on it would carry the
+// chain without the inertial forces), so the base is floating, of mass and inertia kAnchorMass,
+// with link 0's pivot at its centre of mass (the chain's pull exerts no torque on it: it never
+// turns), and before each step a base force gives it the acceleration that takes it to the
+// secant velocity to the path's point at t + dt (PeerChain::secant; Bullet integrates positions
+// with the new velocity). The chain's pull (tens of newtons) moves a base of 1e12 kg by
+// 1e-11 m/s^2: the motion is prescribed to round-off, and the next step's target corrects it.
 #include <BulletDynamics/Featherstone/btMultiBody.h>
 #include <BulletDynamics/Featherstone/btMultiBodyConstraintSolver.h>
 #include <BulletDynamics/Featherstone/btMultiBodyDynamicsWorld.h>
@@ -23,13 +32,15 @@ namespace {
 btVector3 bt(const Eigen::Vector3d& v) { return btVector3(v.x(), v.y(), v.z()); }
 Eigen::Vector3d eigen(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
 
+constexpr double kAnchorMass = 1e12;  // kg (and kg m^2): the moving anchor's base
+
 class BulletSim final : public PeerSim {
  public:
   BulletSim(const PeerChain& chain, double dt) : BulletSim(chain, dt, nullptr) {
     const int n = static_cast<int>(chain.mass.size());
     // Link frames are ponyhop's (centre of mass, axis z). Built with every joint at zero (all
     // links in the base's orientation, identity), then the joints set to the t = 0 pose.
-    btMultiBody* body = addMultiBody(n, chain.anchor, Eigen::Quaterniond::Identity());
+    btMultiBody* body = addMultiBody(n, chain.anchor, Eigen::Quaterniond::Identity(), chain.moving());
     const btVector3 half(0.0, 0.0, 0.5 * chain.length);
     for (int i = 0; i < n; ++i) {
       // Pivot: the link's top end, +L/2 z from its centre; from the parent's centre it is -L/2 z
@@ -39,7 +50,17 @@ class BulletSim final : public PeerSim {
                            -half, true);
     }
     body->finalizeMultiDof();
-    for (int i = 0; i < n; ++i) setSpherical(body, i, i == 0 ? chain.q[0] : chain.q[i - 1].conjugate() * chain.q[i]);
+    for (int i = 0; i < n; ++i) {
+      setSpherical(body, i, i == 0 ? chain.q[0] : chain.q[i - 1].conjugate() * chain.q[i]);
+      // A spherical joint's velocity: the link's angular velocity relative to its parent, link frame.
+      const Eigen::Vector3d w = chain.relativeW0(i);
+      btScalar qd[3] = {w.x(), w.y(), w.z()};
+      body->setJointVelMultiDof(i, qd);
+    }
+    if (chain.moving()) {
+      body->setBaseVel(bt(chain.anchorAt(0.0).v));
+      moving_ = true;
+    }
     finish();
   }
   // The four-bar (bench/peer.h): two multibodies, each fixed base in its hinge's link orientation
@@ -83,6 +104,12 @@ class BulletSim final : public PeerSim {
       links(scratch_);
       bodies_[0]->addJointTorque(0, four_bar_->servoTorque(scratch_[0], time_));  // cleared by the step
     }
+    if (moving_) {
+      btMultiBody& base = *bodies_[0];
+      const Eigen::Vector3d x = eigen(base.getBasePos()), v = eigen(base.getBaseVel());
+      const Eigen::Vector3d target = ((chain_.anchorAt(time_ + dt_).x - x) / dt_ - v) / dt_;
+      base.addBaseForce(bt(kAnchorMass * (target - chain_.gravity)));  // the world adds M g; cleared by the step
+    }
     world_.stepSimulation(dt_, 0);  // maxSubSteps 0: one step of exactly dt
     time_ += dt_;
   }
@@ -116,9 +143,11 @@ class BulletSim final : public PeerSim {
         four_bar_(four_bar) {
     world_.setGravity(bt(chain.gravity));
   }
-  // A multibody of n links on a fixed base at `origin` in orientation `q` (base to world).
-  btMultiBody* addMultiBody(int n, const Eigen::Vector3d& origin, const Eigen::Quaterniond& q) {
-    bodies_.push_back(std::make_unique<btMultiBody>(n, 0.0, btVector3(0, 0, 0), true, false));
+  // A multibody of n links on a fixed base at `origin` in orientation `q` (base to world), or on a
+  // floating base of kAnchorMass there (`floating`: the moving anchor).
+  btMultiBody* addMultiBody(int n, const Eigen::Vector3d& origin, const Eigen::Quaterniond& q, bool floating = false) {
+    const double mass = floating ? kAnchorMass : 0.0;
+    bodies_.push_back(std::make_unique<btMultiBody>(n, mass, btVector3(mass, mass, mass), !floating, false));
     btTransform base;
     base.setIdentity();
     base.setOrigin(bt(origin));
@@ -159,6 +188,7 @@ class BulletSim final : public PeerSim {
   btAlignedObjectArray<btVector3> omega_, vel_;
   double dt_;
   const PeerFourBar* four_bar_;
+  bool moving_ = false;  // the base is the moving anchor
   double time_ = 0.0;
 };
 
@@ -166,9 +196,11 @@ Peer bulletPeer() {
   Peer p;
   p.name = "bullet/multibody";
   const int v = btGetVersion();  // 324 for 3.24
-  p.version = "Bullet " + std::to_string(v / 100) + "." + std::to_string(v % 100) +
-              " btMultiBody, double precision (BT_USE_DOUBLE_PRECISION, the -float64 libraries): spherical joints, "
-              "its semi-implicit Euler, damping 0, no sleeping, no collision shapes";
+  p.version =
+      "Bullet " + std::to_string(v / 100) + "." + std::to_string(v % 100) +
+      " btMultiBody, double precision (BT_USE_DOUBLE_PRECISION, the -float64 libraries): spherical joints, "
+      "its semi-implicit Euler, damping 0, no sleeping, no collision shapes; a shaking anchor as a floating 1e12 kg "
+      "base forced to the path";
   p.make = [](const PeerChain& chain, double dt, std::string&) -> std::unique_ptr<PeerSim> {
     return std::make_unique<BulletSim>(chain, dt);
   };
@@ -184,4 +216,4 @@ Peer bulletPeer() {
 }  // namespace
 }  // namespace ponyhop
 
-extern "C" void ponyhop_peers_v2(std::vector<ponyhop::Peer>* out) { out->push_back(ponyhop::bulletPeer()); }
+extern "C" void ponyhop_peers_v3(std::vector<ponyhop::Peer>* out) { out->push_back(ponyhop::bulletPeer()); }

@@ -4,6 +4,13 @@
 // forward dynamics), the first joint's parent frame at the anchor, stepped by
 // dart::simulation::World (semi-implicit Euler). Body frames are ponyhop's link frames (centre
 // of mass at the origin, principal axes); no shapes, so its collision detection finds nothing.
+//
+// A moving anchor (the shake case) is a body on a TranslationalJoint from the world whose actuator
+// type is VELOCITY (dart/dynamics/detail/JointAspect.hpp: the command is the joint velocity, the
+// joint force is the output): DART takes the joint acceleration (command - velocity) / dt and
+// integrates it with its semi-implicit Euler, so the command, set before each step to the secant
+// velocity (PeerChain::secant), puts the anchor on the prescribed path at every step's end and
+// the chain feels the path's acceleration to second order (a central difference).
 #include <dart/config.hpp>
 #include <dart/constraint/BallJointConstraint.hpp>
 #include <dart/constraint/ConstraintSolver.hpp>
@@ -12,6 +19,7 @@
 #include <dart/dynamics/BodyNode.hpp>
 #include <dart/dynamics/RevoluteJoint.hpp>
 #include <dart/dynamics/Skeleton.hpp>
+#include <dart/dynamics/TranslationalJoint.hpp>
 #include <dart/simulation/World.hpp>
 
 #include "bench/peer.h"
@@ -27,18 +35,35 @@ class DartSim final : public PeerSim {
   DartSim(const PeerChain& chain, double dt) : PeerSim(chain) {
     skeleton_ = dart::dynamics::Skeleton::create("chain");
     BodyNode* parent = nullptr;
+    Eigen::Vector3d top = chain.anchor;  // link 0's pivot in its parent's frame (the world's)
+    if (chain.moving()) {
+      dart::dynamics::TranslationalJoint::Properties joint;
+      joint.mName = "anchor";
+      joint.mActuatorType = dart::dynamics::Joint::VELOCITY;
+      BodyNode::Properties b;
+      b.mName = "anchor";
+      b.mInertia = dart::dynamics::Inertia(1.0, Eigen::Vector3d::Zero(), 1e-3 * Eigen::Matrix3d::Identity());
+      auto [j, body] = skeleton_->createJointAndBodyNodePair<dart::dynamics::TranslationalJoint>(nullptr, joint, b);
+      j->setPositions(chain.anchor);
+      j->setVelocities(chain.anchorAt(0.0).v);
+      anchor_ = j;
+      parent = body;
+      top.setZero();
+    }
     const Eigen::Vector3d half(0.0, 0.0, 0.5 * chain.length);
     for (size_t i = 0; i < chain.mass.size(); ++i) {
       BallJoint::Properties joint;
       joint.mName = "joint" + std::to_string(i);
-      // The pivot: the anchor (in the world) or the parent's bottom end; the child's top end.
+      // The pivot: the anchor or the parent's bottom end; the child's top end.
       joint.mT_ParentBodyToJoint = Eigen::Isometry3d::Identity();
-      joint.mT_ParentBodyToJoint.translation() = i == 0 ? chain.anchor : Eigen::Vector3d(-half);
+      joint.mT_ParentBodyToJoint.translation() = i == 0 ? top : Eigen::Vector3d(-half);
       joint.mT_ChildBodyToJoint = Eigen::Isometry3d::Identity();
       joint.mT_ChildBodyToJoint.translation() = half;
       auto [j, b] = skeleton_->createJointAndBodyNodePair<BallJoint>(parent, joint, body(i));
       const Eigen::Quaterniond rel = i == 0 ? chain.q[0] : chain.q[i - 1].conjugate() * chain.q[i];
       j->setPositions(BallJoint::convertToPositions(rel.normalized().toRotationMatrix()));
+      // A BallJoint's velocity: the child's angular velocity relative to its parent, child frame.
+      j->setVelocities(chain.relativeW0(i));
       nodes_.push_back(b);
       parent = b;
     }
@@ -73,6 +98,7 @@ class DartSim final : public PeerSim {
       links(scratch_);
       crank_->setForce(0, four_bar_->servoTorque(scratch_[0], world_->getTime()));  // reset by the step
     }
+    if (anchor_) anchor_->setCommands(chain_.secant(world_->getTime(), world_->getTimeStep()));  // reset by the step
     world_->step();
   }
   double time() const override { return world_->getTime(); }
@@ -120,6 +146,7 @@ class DartSim final : public PeerSim {
 
   const PeerFourBar* four_bar_ = nullptr;  // the servo's four-bar, or nullptr (a chain)
   dart::dynamics::RevoluteJoint* crank_ = nullptr;
+  dart::dynamics::TranslationalJoint* anchor_ = nullptr;  // the moving anchor's joint, or nullptr (fixed)
   dart::dynamics::SkeletonPtr follower_;
   dart::dynamics::SkeletonPtr skeleton_;
   dart::simulation::WorldPtr world_;
@@ -129,8 +156,10 @@ class DartSim final : public PeerSim {
 Peer dartPeer() {
   Peer p;
   p.name = "dart/ball";
-  p.version = std::string("DART ") + DART_VERSION +
-              ": Skeleton of BallJoints, articulated-body dynamics, its semi-implicit Euler, no shapes";
+  p.version =
+      std::string("DART ") + DART_VERSION +
+      ": Skeleton of BallJoints, articulated-body dynamics, its semi-implicit Euler, no shapes; a shaking anchor "
+      "on a VELOCITY-actuated TranslationalJoint";
   p.make = [](const PeerChain& chain, double dt, std::string&) -> std::unique_ptr<PeerSim> {
     return std::make_unique<DartSim>(chain, dt);
   };
@@ -148,4 +177,4 @@ Peer dartPeer() {
 }  // namespace
 }  // namespace ponyhop
 
-extern "C" void ponyhop_peers_v2(std::vector<ponyhop::Peer>* out) { out->push_back(ponyhop::dartPeer()); }
+extern "C" void ponyhop_peers_v3(std::vector<ponyhop::Peer>* out) { out->push_back(ponyhop::dartPeer()); }

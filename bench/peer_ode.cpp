@@ -6,6 +6,12 @@
 // steppers: dWorldStep (a direct LCP factorization, O(m^3)) and dWorldQuickStep (projected
 // Gauss-Seidel, 20 iterations by default). ODE's defaults are kept (ERP 0.2: joint drift pulled
 // back by 20 % per step; CFM 1e-10), gyroscopic mode on, no auto-disable, no collision.
+//
+// A moving anchor (the shake case) is a kinematic body (dBodySetKinematic: infinite mass, moved by
+// its velocity) that link 0's ball joint holds: before each step it is put on the prescribed path
+// at t and given the secant velocity to the path at t + dt (PeerChain::secant), which ODE's
+// velocity-level joint holds link 0's top end to and with which it moves the anchor to the path's
+// point at t + dt. ODE is given no acceleration: the joint's velocity constraint is its way.
 #include <ode/ode.h>
 
 #include "bench/peer.h"
@@ -26,11 +32,20 @@ class OdeSim final : public PeerSim {
     dWorldSetGravity(world_, chain.gravity.x(), chain.gravity.y(), chain.gravity.z());
     dWorldSetAutoDisableFlag(world_, 0);
     Eigen::Vector3d pivot = chain.anchor;
-    dBodyID parent = nullptr;
+    dBodyID parent = nullptr;  // 0: the static environment (the fixed anchor)
+    if (chain.moving()) {
+      anchor_ = dBodyCreate(world_);
+      dBodySetKinematic(anchor_);
+      dBodySetPosition(anchor_, pivot.x(), pivot.y(), pivot.z());
+      parent = anchor_;
+    }
     for (size_t i = 0; i < chain.mass.size(); ++i) {
       const Eigen::Vector3d x = pivot - chain.q[i] * Eigen::Vector3d(0.0, 0.0, 0.5 * chain.length);
       dBodyID b = addBody(i, x);
-      ball(parent, b, pivot);  // parent 0: the static environment (the fixed anchor)
+      const Eigen::Vector3d v = chain.v0(i), w = chain.w0(i);
+      dBodySetLinearVel(b, v.x(), v.y(), v.z());
+      dBodySetAngularVel(b, w.x(), w.y(), w.z());
+      ball(parent, b, pivot);
       parent = b;
       pivot = x - chain.q[i] * Eigen::Vector3d(0.0, 0.0, 0.5 * chain.length);
     }
@@ -59,6 +74,11 @@ class OdeSim final : public PeerSim {
       links(scratch_);
       const Eigen::Vector3d tau = four_bar_->servoTorque(scratch_[0], time_) * four_bar_->axis;
       dBodyAddTorque(bodies_[0], tau.x(), tau.y(), tau.z());  // cleared by the step
+    }
+    if (anchor_) {
+      const Eigen::Vector3d x = chain_.anchorAt(time_).x, v = chain_.secant(time_, dt_);
+      dBodySetPosition(anchor_, x.x(), x.y(), x.z());
+      dBodySetLinearVel(anchor_, v.x(), v.y(), v.z());
     }
     if (quick_)
       dWorldQuickStep(world_, dt_);
@@ -109,6 +129,7 @@ class OdeSim final : public PeerSim {
   }
 
   dWorldID world_;
+  dBodyID anchor_ = nullptr;  // the moving anchor (kinematic), or nullptr (fixed: the environment)
   std::vector<dBodyID> bodies_;
   double dt_;
   bool quick_;
@@ -121,7 +142,8 @@ Peer odePeer(bool quick) {
   p.name = quick ? "ode/quickstep" : "ode/worldstep";
   p.version =
       "ODE (libode-dev, double precision): maximal coordinates, ball joints, dWorldStep (direct) and "
-      "dWorldQuickStep (20 Gauss-Seidel iterations), its defaults ERP 0.2, CFM 1e-10, gyroscopic term on";
+      "dWorldQuickStep (20 Gauss-Seidel iterations), its defaults ERP 0.2, CFM 1e-10, gyroscopic term on; a shaking "
+      "anchor as a kinematic body";
   p.make = [quick](const PeerChain& chain, double dt, std::string&) -> std::unique_ptr<PeerSim> {
     return std::make_unique<OdeSim>(chain, dt, quick);
   };
@@ -137,7 +159,7 @@ Peer odePeer(bool quick) {
 }  // namespace
 }  // namespace ponyhop
 
-extern "C" void ponyhop_peers_v2(std::vector<ponyhop::Peer>* out) {
+extern "C" void ponyhop_peers_v3(std::vector<ponyhop::Peer>* out) {
   out->push_back(ponyhop::odePeer(false));
   out->push_back(ponyhop::odePeer(true));
 }
