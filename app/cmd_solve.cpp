@@ -52,8 +52,15 @@ void printReport(const Scene& scene, const GoalSolveReport& r) {
                                           [](const Goal& g) { return g.point == "toe" || g.point == "body"; });
   if (!r.guide.script.empty() || hopper_only) {
     // The hopper's solved commands (sim/hopper_goal_solve.h): their effort against the scene's own.
-    std::printf("iterations %d, simulations %d, effort %.4g m^2/s (the commands against the scene's own), CPU %.2f s\n",
-                r.iterations, r.simulations, r.effort, r.cpu_seconds);
+    // The muscles' work beyond the scene's own course: measured by the solve (not by --check).
+    char muscles[160] = "";
+    if (r.energy != 0.0 || r.abs_energy != 0.0)
+      std::snprintf(muscles, sizeof muscles,
+                    ", the hopper's muscles %+.4g J of work (%+.4g J of integral of |power|) beyond its own course's",
+                    r.energy, r.abs_energy);
+    std::printf(
+        "iterations %d, simulations %d, effort %.4g m^2/s (the commands against the scene's own)%s, CPU %.2f s\n",
+        r.iterations, r.simulations, r.effort, muscles, r.cpu_seconds);
     return;
   }
   std::printf(

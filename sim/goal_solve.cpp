@@ -796,8 +796,13 @@ namespace {
 std::shared_ptr<GoalSprings> attachGoalSprings(Sim& sim, double stiffness) {
   const Scene& scene = sim.scene();
   const Chain* chain = sim.chain();
-  if (!chain) throw InputError(scene.path + ": the goal springs pull a chain, and the scene has none");
   const std::vector<GoalPoint> kinds = goalPoints(scene);
+  for (const GoalPoint& k : kinds) {
+    if ((k.kind == GoalPoint::Kind::Tip || k.kind == GoalPoint::Kind::Link) && !chain)
+      throw InputError(scene.path + ": the goal springs pull a chain, and the scene has none");
+    if ((k.kind == GoalPoint::Kind::Toe || k.kind == GoalPoint::Kind::Body) && !sim.hopper())
+      throw InputError(scene.path + ": the goal springs pull a hopper, and the scene has none");
+  }
   std::vector<size_t> order(scene.goals.size());
   for (size_t g = 0; g < order.size(); ++g) order[g] = g;
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return scene.goals[a].t < scene.goals[b].t; });
@@ -805,7 +810,20 @@ std::shared_ptr<GoalSprings> attachGoalSprings(Sim& sim, double stiffness) {
   double from = 0.0;
   for (size_t g : order) {
     const Goal& goal = scene.goals[g];
-    if (kinds[g].kind != GoalPoint::Kind::Tip && kinds[g].kind != GoalPoint::Kind::Link) continue;
+    if (kinds[g].kind == GoalPoint::Kind::Toe || kinds[g].kind == GoalPoint::Kind::Body) {
+      // The hopper's toe (the foot's point that touches the ground, fixed in the foot where it is at
+      // t = 0) or its body's centre.
+      const Hopper* h = sim.hopper();
+      const World& w = sim.world();
+      const bool toe = kinds[g].kind == GoalPoint::Kind::Toe;
+      const int body = toe ? h->model().foot : h->model().body;
+      const Eigen::Vector3d local =
+          toe ? Eigen::Vector3d(w.body(body).q.conjugate() * (h->footPoint(w) - w.body(body).x))
+              : Eigen::Vector3d::Zero();
+      springs.push_back({body, local, goal.position, goal.frame == GoalFrame::Head, from, goal.t});
+      from = goal.t;
+      continue;
+    }
     const int link = kinds[g].kind == GoalPoint::Kind::Tip ? int(chain->links.size()) - 1 : kinds[g].link;
     springs.push_back({chain->links[size_t(link)], Eigen::Vector3d(0.0, 0.0, -0.5 * chain->length), goal.position,
                        goal.frame == GoalFrame::Head, from, goal.t});
@@ -847,7 +865,8 @@ SpringOutcome springGoals(const Scene& scene_in, const AssetLoader* assets, doub
     o.target = goal.frame == GoalFrame::Head ? w.body(sim.headBody()).pointToWorld(goal.position) : goal.position;
     o.reached = kinds[g].kind == GoalPoint::Kind::Tip    ? chain->tip(w)
                 : kinds[g].kind == GoalPoint::Kind::Link ? chain->bottom(w, kinds[g].link)
-                                                         : Eigen::Vector3d::Constant(std::nan(""));
+                : kinds[g].kind == GoalPoint::Kind::Toe  ? sim.hopper()->footPoint(w)
+                                                         : w.body(sim.hopper()->model().body).x;
     o.error = (o.reached - o.target).norm();
     o.met = o.error <= goal.tolerance;
     if (!sim.ok()) o.why = "the simulation stopped: " + sim.status();

@@ -93,6 +93,21 @@ struct Keys {
   }
 };
 
+// The power of the first hopper's muscles now (its leg spring with the thrust setpoint and stops,
+// its hip servos: computeHopperForces on a copy of the bodies), W.
+double hopperMusclePower(const Sim& sim) {
+  const Hopper* h = sim.hopper();
+  std::vector<RigidBody> bodies = sim.world().bodies();
+  for (RigidBody& b : bodies) {
+    b.force.setZero();
+    b.torque.setZero();
+  }
+  computeHopperForces(h->model(), h->setpoints(), sim.time(), bodies);
+  double p = 0.0;
+  for (const RigidBody& b : bodies) p += b.force.dot(b.v) + b.torque.dot(b.w);
+  return p;
+}
+
 // Runs of the hopper with a course: from the start for the goal errors (recording a snapshot at
 // each key), from a key's snapshot for a Jacobian column (a key changes nothing before its time).
 class HopperShooter {
@@ -112,7 +127,8 @@ class HopperShooter {
   // The goals' points for course c, run from key `from` (-1: the start); record: the key
   // snapshots are taken on the way (a run the next differences start from). False when the run
   // stopped or the hopper fell (its body below 0.3 m at a goal's time).
-  bool run(const Eigen::VectorXd& c, int from, std::vector<Eigen::Vector3d>& points, bool record) {
+  bool run(const Eigen::VectorXd& c, int from, std::vector<Eigen::Vector3d>& points, bool record,
+           double* work = nullptr, double* abs_work = nullptr) {
     ++runs_;
     if (from < 0) {
       sim_.restore(start_);
@@ -130,6 +146,11 @@ class HopperShooter {
       while (sim_.ok() && sim_.time() + 0.5 * dt <= times_[g]) {
         while (record && next_key < size_t(keys_.count()) && keys_.times[next_key] < sim_.time() + dt)
           snapshots_[next_key++] = sim_.snapshot();
+        if (work) {
+          const double P = hopperMusclePower(sim_);
+          *work += P * dt;
+          *abs_work += std::abs(P) * dt;
+        }
         sim_.step();
       }
       const World& w = sim_.world();
@@ -352,7 +373,13 @@ GoalSolveReport solveHopperGoals(const Scene& scene_in, const AssetLoader* asset
     window_why.emplace_back(until, why);
   }
   until = T;
-  shooter.run(c, -1, points, true);  // every goal of the final course
+  // The muscles' work up to the last goal with the scene's own course and with the solved one: what
+  // the guidance asks of the hopper beyond what it does anyway (report.energy, abs_energy).
+  double own_work = 0.0, own_abs = 0.0, work = 0.0, abs_work = 0.0;
+  shooter.run(c0, -1, trial_points, false, &own_work, &own_abs);
+  shooter.run(c, -1, points, true, &work, &abs_work);  // every goal of the final course
+  report.energy = work - own_work;
+  report.abs_energy = abs_work - own_abs;
   report.simulations = shooter.runs();
 
   // The outcome of the final course, and what stopped a goal that is not met.

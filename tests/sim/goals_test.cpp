@@ -312,6 +312,21 @@ TEST(HopperGoals, TheToeLandsOnAMarkAndTheSolvedSceneReplaysIt) {
   EXPECT_LT((evaluateGoals(off, nullptr).goals[0].reached - free_toe).norm(), 1e-12);
 }
 
+// What film tools would do instead: a spring pulling the toe to the mark meets it, at a cost in
+// work far beyond what steering the controller asks of the hopper's own muscles.
+TEST(HopperGoals, AGoalSpringPullsTheToeAndCostsMoreThanTheCommands) {
+  Scene s = hopperScene();
+  s.goals = {
+      Goal{.t = 1.4, .point = "toe", .position = toeAt(s, 1.4) + Eigen::Vector3d(0.05, 0.03, 0.0), .tolerance = 0.02}};
+  const SpringOutcome spring = springGoals(s, nullptr, 1e4);
+  EXPECT_TRUE(spring.all_met) << spring.goals[0].error;
+  const GoalSolveReport r = solveGoals(s, nullptr, {.knots = 3});
+  ASSERT_TRUE(r.all_met);
+  // The muscles' work beyond the scene's own course (it can be less: here -5.9 J of |power|).
+  EXPECT_NE(r.abs_energy, 0.0) << "the muscles' extra work is measured";
+  EXPECT_LT(std::abs(r.abs_energy), 0.5 * spring.abs_work);
+}
+
 TEST(HopperGoals, AMarkOutOfReachIsReportedWithWhatStoppedIt) {
   Scene s = hopperScene();
   s.goals = {Goal{.t = 1.0, .point = "toe", .position = {20.0, 0.0, 0.0}, .tolerance = 0.02}};
