@@ -22,11 +22,10 @@ struct HopperGoalSolveOptions {
   double fd_height = 0.01;  // m, of an apex-height command
 };
 
-// Solves for the first hopper's commands (report.guide.script; the scene's guide knots are kept;
-// report.energy, abs_energy: the hopper's muscles' work beyond the scene's own course up to the
-// last goal, J)
-// that meet `scene`'s goals, every one of them a hopper point (toe, body). Throws InputError when
-// the scene has no hopper, no goals, or a goal on the chain.
+// Solves for the first hopper's commands that meet `scene`'s goals, every one of them a hopper
+// point (toe, body): report.guide.script (the scene's guide knots are kept); report.energy and
+// abs_energy: the hopper's muscles' work beyond the scene's own course up to the last goal (J).
+// Throws InputError when the scene has no hopper, no goals, or a goal on the chain.
 GoalSolveReport solveHopperGoals(const Scene& scene, const AssetLoader* assets,
                                  const HopperGoalSolveOptions& options = {});
 
