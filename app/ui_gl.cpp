@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "engine/gl_context.h"
+#include "physics/stage_times.h"
 
 namespace ponyhop {
 
@@ -18,7 +19,8 @@ UiGl::~UiGl() { ImGui_ImplOpenGL3_Shutdown(); }
 
 void UiGl::newFrame() { ImGui_ImplOpenGL3_NewFrame(); }
 
-void UiGl::compose(const Renderer& renderer, unsigned fbo, int width, int height, int scene_width) {
+void UiGl::compose(const Renderer& renderer, unsigned fbo, int width, int height, int scene_width, Times* times) {
+  const auto t0 = Clock::now();
   glBindFramebuffer(GL_FRAMEBUFFER, fbo);
   glViewport(0, 0, width, height);
   glDisable(GL_SCISSOR_TEST);
@@ -26,10 +28,21 @@ void UiGl::compose(const Renderer& renderer, unsigned fbo, int width, int height
   const ImVec4 bg = ImGui::GetStyle().Colors[ImGuiCol_WindowBg];
   glClearColor(bg.x, bg.y, bg.z, 1.0f);
   glClear(GL_COLOR_BUFFER_BIT);
+  // The scene's one copy on its way to the screen (a draw on llvmpipe, whose window back buffer
+  // takes no memory copy: docs/bench/render.md, session 24), scaled up for a draft view.
   if (scene_width > 0 && renderer.width() > 0) renderer.blitTo(fbo, scene_width, height);
+  if (times) {
+    glFinish();
+    times->copy_ms = msSince(t0);
+  }
+  const auto t1 = Clock::now();
   glBindFramebuffer(GL_FRAMEBUFFER, fbo);
   glViewport(0, 0, width, height);
   if (ImDrawData* d = ImGui::GetDrawData()) ImGui_ImplOpenGL3_RenderDrawData(d);
+  if (times) {
+    glFinish();
+    times->panel_ms = msSince(t1);
+  }
 }
 
 OffscreenTarget::OffscreenTarget(int width, int height) : width_(width), height_(height) {

@@ -23,9 +23,16 @@ class UiGl {
   UiGl& operator=(const UiGl&) = delete;
 
   void newFrame();  // before ImGui::NewFrame()
+  // Where a compose's time goes (ms): the clear and the one copy of the scene into the frame, then
+  // the panel (ImGui) drawn into the same framebuffer over it.
+  struct Times {
+    double copy_ms = 0.0, panel_ms = 0.0;
+  };
   // Into framebuffer `fbo` (width x height): the renderer's last frame in the left scene_width
   // pixels, then ImGui's draw data of the frame just ended (ImGui::Render()) over everything.
-  void compose(const Renderer& renderer, unsigned fbo, int width, int height, int scene_width);
+  // With `times`: each step ends with glFinish and is timed (a software rasterizer draws a
+  // framebuffer's binned work at its flush, so the time lands in its step).
+  void compose(const Renderer& renderer, unsigned fbo, int width, int height, int scene_width, Times* times = nullptr);
 };
 
 // An RGBA8 framebuffer for headless frames with the panel.

@@ -1,7 +1,8 @@
 // The window of `ponyhop run`: GLFW + the same Renderer as the headless path + the tuning panel.
 // GL is loaded through glfwGetProcAddress (never -lGL, see engine/gl_context.h). Each frame:
 // events -> panel (edits, playback: the physics steps at its own dt up to the new simulated
-// time, within a wall-time budget) -> scene render -> compose (scene blit + ImGui) -> swap.
+// time, within a wall-time budget) -> scene render -> compose (scene blit + ImGui) -> swap. The run
+// prints each stage's mean per quality, the compose split into the scene's copy, the panel, the swap.
 #include <glad/gl.h>
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -90,12 +91,17 @@ bool screenshot(const std::string& path, int w, int h) {
 struct StageSums {
   std::vector<double> frame_ms;
   double physics = 0, panel = 0, render = 0, compose = 0;
-  void add(double frame, double physics_ms, double panel_ms, double render_ms, double compose_ms) {
+  double copy = 0, panel_draw = 0, swap = 0;  // compose = copy + panel_draw + swap
+  void add(double frame, double physics_ms, double panel_ms, double render_ms, double compose_ms, const UiGl::Times& ct,
+           double swap_ms) {
     frame_ms.push_back(frame);
     physics += physics_ms;
     panel += panel_ms;
     render += render_ms;
     compose += compose_ms;
+    copy += ct.copy_ms;
+    panel_draw += ct.panel_ms;
+    swap += swap_ms;
   }
   double mean() const {
     double sum = 0;
@@ -204,10 +210,13 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
         }
 
         t0 = Clock::now();
-        gl.compose(renderer, 0, fb_w, fb_h, scene_fb_w);
+        UiGl::Times compose_times;
+        gl.compose(renderer, 0, fb_w, fb_h, scene_fb_w, &compose_times);
         const bool last = o.frames > 0 && frame + 1 >= o.frames;
         if (last && !o.screenshot.empty() && !screenshot(o.screenshot, fb_w, fb_h)) code = 1;
-        glfwSwapBuffers(window);
+        const auto t_swap = Clock::now();
+        glfwSwapBuffers(window);  // the back buffer to the X server (llvmpipe: a put-image)
+        const double swap_ms = msSince(t_swap);
         const double compose_ms = msSince(t0);
 
         const double frame_ms = msSince(t_frame);
@@ -216,7 +225,7 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
           // This frame's own physics time (the smoothed readout lags: the panel's share came out negative).
           const double physics_ms = sim.readouts().physics_frame_ms;
           for (StageSums* s : {&stats.all, quality == RenderQuality::Draft ? &stats.draft : &stats.final})
-            s->add(frame_ms, physics_ms, build_ms - physics_ms, render_ms, compose_ms);
+            s->add(frame_ms, physics_ms, build_ms - physics_ms, render_ms, compose_ms, compose_times, swap_ms);
         }
         ++frame;
         if (last) break;
@@ -237,8 +246,11 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
            {std::pair<const char*, const StageSums&>{"draft (moving)", stats.draft}, {"final (still)", stats.final}}) {
         if (s.frame_ms.empty()) continue;
         const double n = double(s.frame_ms.size());
-        std::fprintf(stderr, "run: %zu %s frames: mean %.1f ms = %.1f fps (scene render %.2f, compose+swap %.2f ms)\n",
-                     s.frame_ms.size(), name, s.mean(), 1000.0 / s.mean(), s.render / n, s.compose / n);
+        std::fprintf(stderr,
+                     "run: %zu %s frames: mean %.1f ms = %.1f fps (scene render %.2f, compose+swap %.2f ms: "
+                     "clear + scene copy %.2f, panel %.2f, swap %.2f)\n",
+                     s.frame_ms.size(), name, s.mean(), 1000.0 / s.mean(), s.render / n, s.compose / n, s.copy / n,
+                     s.panel_draw / n, s.swap / n);
       }
       if (!sim.ok()) std::fprintf(stderr, "run: the simulation stopped: %s\n", sim.stopMessage().c_str());
     }  // GL objects go while the context is current

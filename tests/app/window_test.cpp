@@ -133,6 +133,23 @@ TEST(WindowTest, ViewIsDraftWhileMovingAndFinalWhenStill) {
   EXPECT_GT(still_final, 0) << "final when nothing moves\n" << log;
   EXPECT_TRUE(last_final) << "back to final once the drag ended\n" << log;
   EXPECT_NE(log.find("final (still) frames"), std::string::npos) << "the run reports fps per quality\n" << log;
+  // ... and splits each quality's compose + swap into its parts, which lie within it.
+  for (const char* quality : {"draft (moving) frames", "final (still) frames"}) {
+    const size_t at = log.find(quality);
+    ASSERT_NE(at, std::string::npos) << log;
+    const size_t split = log.find("compose+swap", at);
+    ASSERT_NE(split, std::string::npos) << log;
+    double total = -1, copy = -1, panel = -1, swap = -1;
+    ASSERT_EQ(std::sscanf(log.c_str() + split, "compose+swap %lf ms: clear + scene copy %lf, panel %lf, swap %lf",
+                          &total, &copy, &panel, &swap),
+              4)
+        << "the compose split, " << quality << "\n"
+        << log;
+    EXPECT_GT(copy, 0.0) << log;
+    EXPECT_GT(panel, 0.0) << log;
+    EXPECT_GT(swap, 0.0) << log;
+    EXPECT_LE(copy + panel + swap, total + 0.02) << "the parts lie within compose + swap (0.01 ms printing)\n" << log;
+  }
 #endif
 }
 
