@@ -221,6 +221,18 @@ TEST(HeadsTexture, AnUnnamedSkinIsFoundBesideTheModelAndAMissingNamedOneIsSaidOn
   }
 }
 
+// A file assimp reads without a mesh in it (Half-Life's manT.mdl: its textures only) is refused
+// with a reason, not an empty one.
+TEST(HeadsLoad, AFileWithoutAMeshSaysWhy) {
+  const std::string textures = kModels + "MDL/MDL (HL1)/manT.mdl";
+  ASSERT_TRUE(fs::exists(textures)) << "scripts/setup.sh installs assimp-testmodels";
+  MeshData m;
+  std::string err;
+  EXPECT_FALSE(loadMesh(textures, m, &err));
+  std::printf("%s\n", err.c_str());
+  EXPECT_NE(err.find("assimp read no mesh from it"), std::string::npos) << err;
+}
+
 // A whole character the automatic fit cannot read says so, and tells how to pick the head by hand;
 // the box given picks it (fit only: no simulation). The mesh: a wall 1.8 tall, 1 wide, 0.2 deep, z
 // up: a whole body by its shape, with no neck from either end and no head-like top.
