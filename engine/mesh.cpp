@@ -147,7 +147,9 @@ bool importMesh(const std::string& path, MeshData& out, std::string* err) {
   if (scene && scene->mRootNode) file_up = statedUpAxis(*scene);
   if (scene) scene = importer.ApplyPostProcessing(flags);
   if (!scene || !scene->mRootNode || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
-    if (err) *err = path + ": " + importer.GetErrorString();
+    // An incomplete scene comes with no error string (Half-Life's manT.mdl holds textures only).
+    const std::string why = importer.GetErrorString();
+    if (err) *err = path + ": " + (why.empty() ? "assimp read no mesh from it (an incomplete scene)" : why);
     return false;
   }
   MeshData m;

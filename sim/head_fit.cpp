@@ -139,6 +139,64 @@ Eigen::AlignedBox3f headAboveNeck(const MeshData& m, int up, float neck) {
   return all;
 }
 
+// The extents of a figure without what it holds out: the pieces (connected by position and
+// triangles) whose centre lies beside the largest piece's footprint across the up axis, like the
+// dwarf's axe held out in front of him. A mesh of one piece, or whose pieces all lie over the
+// largest, keeps its bounds.
+Eigen::AlignedBox3f boundsWithoutHeldOut(const MeshData& m, int up) {
+  const std::vector<uint32_t> root = pieceRoots(m, up, std::numeric_limits<float>::lowest());
+  std::map<uint32_t, std::pair<size_t, Eigen::AlignedBox3f>> pieces;
+  for (uint32_t i = 0; i < m.positions.size(); ++i) {
+    auto& piece = pieces[root[i]];
+    if (piece.first == 0) piece.second.setEmpty();
+    ++piece.first;
+    piece.second.extend(m.positions[i]);
+  }
+  const auto largest = std::max_element(pieces.begin(), pieces.end(), [](const auto& a, const auto& b) {
+                         return a.second.first < b.second.first;
+                       })->second.second;
+  Eigen::AlignedBox3f core;
+  core.setEmpty();
+  for (const auto& [r, piece] : pieces) {
+    const Eigen::Vector3f c = piece.second.center();
+    bool over = true;
+    for (int k = 0; k < 3; ++k)
+      if (k != up) over = over && c[k] >= largest.min()[k] && c[k] <= largest.max()[k];
+    if (over) core.extend(piece.second);
+  }
+  return core;
+}
+
+// Which way a standing figure faces, from its feet: toes reach forward of the ankles, so the
+// vertices of the lowest 4 % of its height (the far end from the head when it is upside down) lie
+// ahead of those 6 % to 14 % up (the shins). Returns the mesh axis it faces (+-1 on one axis
+// across the up axis), or nothing when the feet do not say so clearly: a step of at least 3 % of
+// the height along one axis, twice that along the other (a robe, a bust, feet drawn as boxes).
+std::optional<Eigen::Vector3f> facingFromFeet(const MeshData& m, int up, bool upside_down) {
+  const float lo = m.bbox.min()[up], height = m.bbox.sizes()[up];
+  if (!(height > 0.0f)) return std::nullopt;
+  Eigen::Vector3d feet = Eigen::Vector3d::Zero(), shins = Eigen::Vector3d::Zero();
+  int n_feet = 0, n_shins = 0;
+  for (const Eigen::Vector3f& p : m.positions) {
+    const float h = upside_down ? (lo + height - p[up]) / height : (p[up] - lo) / height;
+    if (h < 0.04f) {
+      feet += p.cast<double>();
+      ++n_feet;
+    } else if (h > 0.06f && h < 0.14f) {
+      shins += p.cast<double>();
+      ++n_shins;
+    }
+  }
+  if (n_feet == 0 || n_shins == 0) return std::nullopt;
+  const Eigen::Vector3d step = (feet / n_feet - shins / n_shins) / double(height);
+  const int a1 = (up + 1) % 3, a2 = (up + 2) % 3;
+  const int k = std::abs(step[a1]) >= std::abs(step[a2]) ? a1 : a2, other = k == a1 ? a2 : a1;
+  if (std::abs(step[k]) < 0.03 || std::abs(step[k]) < 2.0 * std::abs(step[other])) return std::nullopt;
+  Eigen::Vector3f face = Eigen::Vector3f::Zero();
+  face[k] = step[k] > 0 ? 1.0f : -1.0f;
+  return face;
+}
+
 }  // namespace
 
 UpAxis detectUpAxis(const std::string& path, const MeshData& mesh, std::string* reason) {
@@ -195,11 +253,19 @@ HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData&
   } else {
     const Eigen::Vector3f size = mesh.bbox.sizes();
     const float height = size[up];
-    const float wide = std::max(size[(up + 1) % 3], size[(up + 2) % 3]);
-    const float deep = std::min(size[(up + 1) % 3], size[(up + 2) % 3]);
     // A whole body: much taller than wide, or (arms spread in a T pose) much taller than deep. Keep
     // the part above the neck.
-    if (height > 1.6f * wide || height > 2.2f * deep) {
+    // A weapon held out (the dwarf's axe) widens the bounds of a figure as tall as it is: the
+    // same test on its bounds without what it holds out. Only for a figure standing on the origin
+    // (as characters are exported): a head centred on its origin, the default head's, is not
+    // split into pieces (that costs 10 ms on its 22 k vertices at every load).
+    const auto tall = [height](const Eigen::Vector3f& across, int k1, int k2) {
+      const float w = std::max(across[k1], across[k2]), d = std::min(across[k1], across[k2]);
+      return height > 1.6f * w || height > 2.2f * d;
+    };
+    const int k1 = (up + 1) % 3, k2 = (up + 2) % 3;
+    const bool stands = std::abs(mesh.bbox.min()[up]) <= 0.02f * height;
+    if (tall(size, k1, k2) || (stands && tall(boundsWithoutHeldOut(mesh, up).sizes(), k1, k2))) {
       f.whole_body = true;
       const float top = mesh.bbox.max()[up];
       const std::optional<float> neck = findNeck(mesh, std::vector<bool>(mesh.positions.size(), true), up, top, height);
@@ -265,6 +331,20 @@ HeadFit fitHead(const HeadParams& head, const std::string& path, const MeshData&
             ratio = ratio_of(f.head_bounds);
           }
         }
+      }
+      // The face: a standing figure's feet point the way it looks. Where they say so clearly, the
+      // turn about the up axis that brings that way to the body's -y replaces the format's
+      // convention (Quake's +x agrees with Sydney's and the faerie's feet; IQM's mrfixit looks
+      // along +x too, the dwarf along +y in a z-up file).
+      if (const std::optional<Eigen::Vector3f> face = facingFromFeet(mesh, up, f.upside_down)) {
+        HeadFit straight = f;
+        straight.face_turn = 0.0;
+        const Eigen::Vector3d v = upright(straight) * face->cast<double>();
+        // The angle about z that takes v to -y, in (-180, 180].
+        double turn = std::round(-90.0 - std::atan2(v.y(), v.x()) * 180.0 / std::numbers::pi);
+        while (turn <= -180.0) turn += 360.0;
+        while (turn > 180.0) turn -= 360.0;
+        f.face_turn = turn;
       }
       if (!head_like(ratio)) {
         char buf[256];
