@@ -93,19 +93,22 @@ void Collisions::addTwistLimit(int parent, int child, const Eigen::Vector3d& chi
 }
 
 void Collisions::attach(World& world) {
-  if (world.reduced()) {
-    world.fail(
-        "collisions: physics.solver = featherstone does not take contact or limit rows (reduced coordinates); "
-        "use solver = tree or dense");
-    return;
-  }
   world.addContactSet(shared_from_this());
   coresInGrids(world.bodies(), memory_.cores);  // the first substep's moves count from here
 }
 
 void Collisions::update(World& world) {
   if (!world.ok()) return;
-  if (Status s = resolve(world.bodies(), world.joints()); !s.ok()) world.fail("collisions: " + s.message());
+  reduced_ = world.reduced();  // featherstone: the responses in joint space
+  if (reduced_ && reduced_->loopRows() > 0) {
+    reduced_ = nullptr;
+    return world.fail(
+        "collisions: physics.solver = featherstone takes contacts on a tree only (its contact impulses do not "
+        "keep closed loops); use solver = tree or dense for this scene");
+  }
+  const Status s = resolve(world.bodies(), world.joints());
+  reduced_ = nullptr;
+  if (!s.ok()) world.fail("collisions: " + s.message());
 }
 
 bool Collisions::impactInside(const World& world) const { return impactIn(world.bodies()); }
@@ -383,14 +386,20 @@ void Collisions::buildJacobians(const std::vector<RigidBody>& bodies, const std:
 bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Constraints& joints) {
   const size_t n = bodies.size();
   const int m = static_cast<int>(jrows_.size());
-  joint_system_.evaluate(bodies, joints);
-  const bool has_joints = joint_system_.rows() > 0;
+  if (reduced_) {
+    // Reduced coordinates: W_c = Phi H^-1 Phi^T J_c^T, the joints hold by construction.
+    reduced_rows_.resize(m);
+    for (int k = 0; k < m; ++k) reduced_rows_[k] = {jrows_[k].a, jrows_[k].b, jrows_[k].ja, jrows_[k].jb};
+    if (!reduced_->impulseResponse(bodies, reduced_rows_, w_)) return false;
+  }
+  if (!reduced_) joint_system_.evaluate(bodies, joints);
+  const bool has_joints = !reduced_ && joint_system_.rows() > 0;
   if (has_joints && !solver_->factor(bodies, joint_system_)) return false;
   // The columns' storage and the joint solves' work space are kept from stage to stage: a
   // steady stage allocates nothing here. w_ never shrinks (the push-out keeps its first rows):
   // a column beyond the rows in use keeps its storage for the next stage's.
   if (w_.size() < static_cast<size_t>(m)) w_.resize(m);
-  for (int k = 0; k < m; ++k) {
+  for (int k = 0; k < m && !reduced_; ++k) {
     const JRow& j = jrows_[k];
     std::vector<Vector6d>& w = w_[k];
     w.assign(n, Vector6d::Zero());
@@ -459,7 +468,7 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
 
   // 1. Impulses.
   buildJacobians(bodies, rows, false);
-  if (!buildDelassus(bodies, joints)) return Status::error("the joints' constraint matrix is singular");
+  if (!buildDelassus(bodies, joints)) return Status::error(singularMessage());
   const int m = static_cast<int>(jrows_.size());
   Eigen::VectorXd u0(m), target = Eigen::VectorXd::Zero(m), p = Eigen::VectorXd::Zero(m);
   std::vector<std::pair<int, int>> blocks;
@@ -522,7 +531,7 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
       delassus_.swap(normal_d_);
     } else {
       buildJacobians(bodies, rows, true);
-      if (!buildDelassus(bodies, joints)) return Status::error("the joints' constraint matrix is singular");
+      if (!buildDelassus(bodies, joints)) return Status::error(singularMessage());
     }
     Eigen::VectorXd gap(mo);
     std::vector<std::pair<int, int>> nb;
@@ -547,7 +556,9 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
       b.x += dq[i].head<3>();
       b.q = (quaternionFromRotationVector(dq[i].tail<3>()) * b.q).normalized();
     }
-    if (!joints.empty()) {
+    if (reduced_) {
+      reduced_->projectBodies(bodies);  // back onto the joints: coordinates read, bodies written
+    } else if (!joints.empty()) {
       const ProjectionResult pr = projectPositions(bodies, joints, joint_system_, *solver_);
       if (!pr.status.ok()) return Status::error("joint projection after the push-out: " + pr.status.message());
     }

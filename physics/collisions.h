@@ -51,6 +51,7 @@
 #include "physics/constraint.h"
 #include "physics/constraint_solver.h"
 #include "physics/controller.h"
+#include "physics/featherstone.h"
 #include "physics/physics_params.h"
 #include "physics/shapes.h"
 #include "physics/status.h"
@@ -100,8 +101,9 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
   void addTwistLimit(int parent, int child, const Eigen::Vector3d& child_axis, double max_angle,
                      const std::vector<RigidBody>& bodies);
 
-  // Adds this set to the world (hold it in a shared_ptr). Featherstone: fails the world with a
-  // message (reduced coordinates do not take contact rows).
+  // Adds this set to the world (hold it in a shared_ptr). Featherstone (reduced coordinates): the
+  // stage's W_c is Phi H^-1 Phi^T J_c^T from the world's ArticulatedSystem (its impulseResponse()),
+  // the push-out's joint projection its projectBodies(); everything else is the same.
   void attach(World& world);
   // ContactSet: the contact stage and the impact check on the world's bodies and joints.
   void update(World& world) override;
@@ -213,6 +215,12 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
   Memory memory_;
   mutable CollisionStats stats_;  // touching() counts its queries
   std::unique_ptr<ConstraintSolver> solver_;
+  ArticulatedSystem* reduced_ = nullptr;  // during update() on a featherstone world: its tree
+  std::vector<ArticulatedSystem::ImpulseRow> reduced_rows_;
+  const char* singularMessage() const {
+    return reduced_ ? "the joint-space mass matrix is not positive definite"
+                    : "the joints' constraint matrix is singular";
+  }
   ConstraintSystem joint_system_;
 
   // Scratch of one solve.

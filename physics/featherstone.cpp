@@ -1089,6 +1089,49 @@ Eigen::MatrixXd ArticulatedSystem::massMatrix(const std::vector<RigidBody>& bodi
   return h;
 }
 
+// Contact impulses in joint space: tau = Phi^T J^T (each row's wrench carried from its body to
+// every joint above it, F_p = X^T F), y = H^-1 tau, then the twists Phi y outward (V_i = X_i V_p +
+// S_i y_i, a prescribed parent still). Dense H: O(n^3) per contact stage with rows, O(n) per row.
+bool ArticulatedSystem::impulseResponse(const std::vector<RigidBody>& bodies, const std::vector<ImpulseRow>& rows,
+                                        std::vector<std::vector<Vector6d>>& out) const {
+  const size_t n = nodes_.size();
+  const int m = static_cast<int>(rows.size());
+  if (out.size() < rows.size()) out.resize(rows.size());
+  std::vector<int> node_of(bodies.size(), -1);
+  for (size_t i = 0; i < n; ++i) node_of[nodes_[i].body] = static_cast<int>(i);
+  std::vector<Kinematics> kin;
+  jointKinematics(bodies, kin);
+  const Eigen::LLT<Eigen::MatrixXd> llt(massMatrix(bodies));
+  if (llt.info() != Eigen::Success) return false;
+  Eigen::MatrixXd tau = Eigen::MatrixXd::Zero(dofs_, m);
+  for (int k = 0; k < m; ++k) {
+    const ImpulseRow& r = rows[k];
+    for (const auto& [body, wrench] : {std::pair<int, Vector6d>{r.a, r.ja}, std::pair<int, Vector6d>{r.b, r.jb}}) {
+      if (body < 0 || body >= static_cast<int>(bodies.size()) || node_of[body] < 0) continue;
+      const Eigen::Vector3d f = wrench.head<3>();
+      for (int j = node_of[body]; j >= 0; j = nodes_[j].parent_node) {
+        Vector6d at_j;
+        at_j << f, wrench.tail<3>() + (bodies[body].x - bodies[nodes_[j].body].x).cross(f);
+        const Node& nj = nodes_[j];
+        tau.block(nj.dof, k, nj.dofs, 1) += kin[j].S.leftCols(nj.dofs).transpose() * at_j;
+      }
+    }
+  }
+  const Eigen::MatrixXd y = llt.solve(tau);
+  std::vector<Vector6d> twist(n);
+  for (int k = 0; k < m; ++k) {
+    std::vector<Vector6d>& w = out[k];
+    w.assign(bodies.size(), Vector6d::Zero());
+    for (size_t i = 0; i < n; ++i) {
+      const Node& nd = nodes_[i];
+      twist[i] = kin[i].S.leftCols(nd.dofs) * y.block(nd.dof, k, nd.dofs, 1);
+      if (nd.parent_node >= 0) twist[i] += shiftMotion(kin[i].d, twist[nd.parent_node]);
+      w[nd.body] = twist[i];
+    }
+  }
+  return true;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Adaptive dynamics (docs/SOLVERS.md, "Adaptive dynamics"; Redon, Galoppo & Lin 2005)
 

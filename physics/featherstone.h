@@ -46,7 +46,10 @@
 // the right-hand side above, or projection after each step onto C = 0 and C' = 0 in the joint-space
 // mass metric H (projectLoops()). Adaptive dynamics does not take loops.
 //
-// What it cannot express, reported by build() as a message naming the solver: contacts and any
+// Contacts are not rows of the step: the contact stage (physics/collisions.h) runs after it on the
+// bodies, with impulse responses in joint space (impulseResponse()).
+//
+// What it cannot express, reported by build() as a message naming the solver: any
 // joint type other than spherical and prismatic, a prismatic joint whose sliding frame is on the
 // child.
 #pragma once
@@ -102,6 +105,27 @@ class ArticulatedSystem {
   Status step(double t, double h, Integrator integrator, std::vector<RigidBody>& bodies, const ReducedHooks& hooks);
   // The force evaluation at time t without stepping (World::evaluate).
   Status evaluate(double t, std::vector<RigidBody>& bodies, const ReducedHooks& hooks);
+
+  // Contacts (physics/collisions.h; docs/SOLVERS.md, "Contacts"). A row is a unit impulse: the
+  // wrench ja on body a and jb on body b (world frame, about each body's centre; an end on the
+  // world or a prescribed body takes nothing). out[k][body] = Phi H^-1 Phi^T J_k^T, the velocity
+  // change of every body (zero for bodies outside the tree) for row k, over all joints (a joint
+  // rigid under adaptive dynamics takes the impulse like any other: the next step's choice sees the
+  // speeds). H is the CRBA's at the bodies as they are, factored once per call. False when H is
+  // not positive definite.
+  struct ImpulseRow {
+    int a = kWorldBody, b = kWorldBody;
+    Vector6d ja = Vector6d::Zero(), jb = Vector6d::Zero();
+  };
+  bool impulseResponse(const std::vector<RigidBody>& bodies, const std::vector<ImpulseRow>& rows,
+                       std::vector<std::vector<Vector6d>>& out) const;
+  // The bodies put back on the joints after someone moved them (a contact's push-out): the joint
+  // coordinates and speeds read from them, then the bodies written (kinematic bodies must be at
+  // the current time).
+  void projectBodies(std::vector<RigidBody>& bodies) {
+    readState(bodies);
+    writeState(bodies);
+  }
 
   // Loop closure (closed loops, above): the drift correction of the loop joints' rows.
   void setLoopStabilization(Stabilization stabilization, double baumgarte_alpha, double baumgarte_beta);

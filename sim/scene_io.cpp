@@ -608,11 +608,6 @@ void validateScene(const Scene& scene_in, const std::string& source) {
           "collision.head: the ponytail collides with the head only when chain.attach is \"head\" (or a chains "
           "entry's attach) and the scene has a head (set collision.head false, or leave the collision section out)");
     }
-    if (scene.physics.solver == SolverKind::Featherstone) {
-      errors.push_back(
-          "collision: physics.solver \"featherstone\" takes no contact or limit rows (reduced "
-          "coordinates); use \"tree\" or \"dense\", or leave the collision section out");
-    }
   }
   {
     // camera.follow names a body the scene has ("" = the scene's main body).
