@@ -21,6 +21,8 @@
 
 #include "app/chain_look.h"
 #include "app/presets.h"
+#include "engine/asset_loader.h"
+#include "engine/scene_draw.h"
 #include "physics/collisions.h"
 #include "physics/stage_times.h"
 #include "sim/data_dir.h"
@@ -914,9 +916,93 @@ void Panel::drawSections() {
   }
   section("light", "Lighting", false);
   section("render", "Render", false);
+  drawGoals();
   if (sectionHeader("Scene", false)) {
     FieldWidgets w(*this, "", {"name", "duration"});
     s.reflect(w);
+  }
+}
+
+// The goals (docs/GOALS.md, "In the panel"): the markers' switch (render.goals), each goal's time,
+// point and position as drag widgets (the marker in the view moves as one drags: goals apply
+// live), its residual from the last solve, the guide's on/off, and Solve, which runs `ponyhop
+// solve`'s defaults on the applied scene in a thread and, when done, writes the guide into the
+// scene (which restarts the run with it).
+void Panel::drawGoals() {
+  pollSolve();
+  Scene& s = sim_.edited();
+  if (!sectionHeader("Goals", false)) return;
+  ImGui::Checkbox("Markers in the view", &s.render.goals);
+  remember("goals:markers");
+  if (s.guide) {
+    ImGui::SameLine();
+    ImGui::Checkbox("Guide on", &s.guide->enabled);
+    remember("goals:guide");
+  }
+  if (s.goals.empty()) ImGui::TextDisabled("No goals (add them in the scene file: docs/GOALS.md)");
+  const double now = sim_.simTime();
+  for (size_t i = 0; i < s.goals.size(); ++i) {
+    Goal& g = s.goals[i];
+    const std::string key = "goals." + std::to_string(i);
+    std::string residual = "not solved";
+    if (i < solved_outcomes_.size() && i < solved_goals_.size()) {
+      const Goal& was = solved_goals_[i];
+      const bool same = was.t == g.t && was.position == g.position && was.point == g.point && was.frame == g.frame;
+      char text[96];
+      std::snprintf(text, sizeof text, "%.2f mm%s%s", 1e3 * solved_outcomes_[i].error,
+                    solved_outcomes_[i].met ? " (met)" : " (not met)", same ? "" : ", edited since");
+      residual = text;
+    }
+    const bool near = std::abs(now - g.t) <= SceneDraw::kGoalNear;
+    ImGui::PushID(key.c_str());
+    const std::string title = "Goal " + std::to_string(i) + ": " + g.point + " at " + std::to_string(g.t).substr(0, 5) +
+                              " s, residual " + residual;
+    if (near) ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.45f, 0.95f, 1.0f));
+    ImGui::TextUnformatted(title.c_str());
+    if (near) ImGui::PopStyleColor();
+    remember(key);
+    FieldWidgets w(*this, key + ".", {"t", "position", "frame"});
+    g.reflect(w);
+    ImGui::PopID();
+  }
+  ImGui::BeginDisabled(solving() || s.goals.empty());
+  if (ImGui::Button(solving() ? "Solving..." : "Solve")) {
+    const Scene scene = sim_.applied();
+    solve_started_ = std::chrono::steady_clock::now();
+    solve_ = std::async(std::launch::async, [scene] { return solveGoals(scene, &assimpAssets()); });
+    solve_status_ = "solving (the scene as it was at the press)...";
+    solved_goals_ = scene.goals;
+    solved_outcomes_.clear();
+  }
+  ImGui::EndDisabled();
+  remember("goals:solve");
+  if (solving()) {
+    ImGui::SameLine();
+    const double s_elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - solve_started_).count();
+    ImGui::Text("%.0f s", s_elapsed);
+  }
+  if (!solve_status_.empty()) {
+    ImGui::PushTextWrapPos(0.0f);
+    ImGui::TextDisabled("%s", solve_status_.c_str());
+    ImGui::PopTextWrapPos();
+  }
+}
+
+void Panel::pollSolve() {
+  if (!solve_.valid() || solve_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+  try {
+    GoalSolveReport r = solve_.get();
+    solved_outcomes_ = r.goals;
+    sim_.edited().guide = r.guide;
+    sim_.edited().guide->enabled = true;
+    int met = 0;
+    for (const GoalOutcome& o : r.goals) met += o.met;
+    char text[160];
+    std::snprintf(text, sizeof text, "solved: %d of %zu goals met, %d iterations, effort %.3g N^2 m^2 s, %.1f s CPU",
+                  met, r.goals.size(), r.iterations, r.effort, r.cpu_seconds);
+    solve_status_ = text;
+  } catch (const std::exception& e) {
+    solve_status_ = std::string("solve failed: ") + e.what();
   }
 }
 

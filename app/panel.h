@@ -14,6 +14,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <future>
 #include <map>
 #include <optional>
 #include <string>
@@ -21,6 +22,7 @@
 
 #include "app/ui_sim.h"
 #include "engine/camera.h"
+#include "sim/goal_solve.h"
 
 struct ImGuiContext;
 
@@ -100,6 +102,10 @@ class Panel {
   const std::string& presetMessage() const { return preset_message_; }
 
   LiveSim& sim() { return sim_; }
+  // The Goals section's solve (docs/GOALS.md, "In the panel"): running in the background, and the
+  // last message ("solving...", what it reached, or why not).
+  bool solving() const { return solve_.valid(); }
+  const std::string& solveStatus() const { return solve_status_; }
 
  private:
   friend class FieldWidgets;
@@ -109,6 +115,8 @@ class Panel {
   void drawReadouts();
   void drawPresets();
   void drawSections();
+  void drawGoals();
+  void pollSolve();
   void drawCameraTools();
   void handleKeys();
   void handleViewMouse(const PanelLayout& layout);
@@ -137,6 +145,14 @@ class Panel {
       Eigen::Vector3d::Zero();  // free view: looked-at point (or offset from the followed body)
   enum class Drag { None, Orbit, Pan, Pull } drag_ = Drag::None;
   double grab_depth_ = 0.0;  // m along the view direction, of the grabbed point
+
+  // The goal solve, run on a copy of the applied scene in a thread of its own (the window keeps
+  // drawing); its outcome per goal and the goals it was for (an edit since makes them stale).
+  std::future<GoalSolveReport> solve_;
+  std::string solve_status_;
+  std::vector<GoalOutcome> solved_outcomes_;
+  std::vector<Goal> solved_goals_;
+  std::chrono::steady_clock::time_point solve_started_;
 };
 
 }  // namespace ponyhop

@@ -1,5 +1,6 @@
 #include "engine/scene_draw.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -125,6 +126,7 @@ void SceneDraw::draw(const Sim& sim, Renderer& renderer, const Scene& drawing, u
     drawChain(sim, sim.chains()[i], chainSection(same_chains ? drawing : scene, i), renderer);
   if (drawing.render.colliders) drawColliders(sim, renderer);
   if (drawing.render.active_joints) drawActiveJoints(sim, renderer);
+  if (drawing.render.goals) drawGoals(sim, drawing, renderer);
 }
 
 HairMesh SceneDraw::chainHair(const Sim& sim, const Chain& chain, const ChainSection& look) const {
@@ -258,6 +260,33 @@ void SceneDraw::drawActiveJoints(const Sim& sim, Renderer& renderer) const {
     const Eigen::Vector3d axis = (chain->bottom(world, k) - top).normalized();
     const Eigen::Vector3d u = axis.unitOrthogonal();
     circle(renderer, top, u, axis.cross(u), 1.8 * chain->radii[k], orange);
+  }
+}
+
+// Goal markers (docs/GOALS.md, "Markers"): a wire sphere of three great circles and a cross through
+// it at the goal's target, turned with the head for frame "head"; magenta while the time is within
+// kGoalNear of the goal's, a dim mauve otherwise; and on the frame at the goal's time (within half
+// a frame of render.fps) a yellow line from the goal's point to the target, the miss.
+void SceneDraw::drawGoals(const Sim& sim, const Scene& drawing, Renderer& renderer) const {
+  constexpr double kRadius = 0.015;  // m
+  const Eigen::Vector3f bright(1.0f, 0.2f, 0.9f), faint(0.5f, 0.38f, 0.5f), miss(1.0f, 0.85f, 0.1f);
+  const double t = sim.time();
+  const double half_frame = 0.5 / std::max(drawing.render.fps, 1.0);
+  for (const Goal& goal : drawing.goals) {
+    const Eigen::Vector3d c = goalTargetNow(sim, goal);
+    const Eigen::Matrix3d R = goal.frame == GoalFrame::Head && sim.headBody() >= 0
+                                  ? sim.world().body(sim.headBody()).q.toRotationMatrix()
+                                  : Eigen::Matrix3d::Identity();
+    const Eigen::Vector3d ex = R.col(0), ey = R.col(1), ez = R.col(2);
+    const double dt = std::abs(t - goal.t);
+    const Eigen::Vector3f& colour = dt <= kGoalNear ? bright : faint;
+    circle(renderer, c, ex, ey, kRadius, colour);
+    circle(renderer, c, ey, ez, kRadius, colour);
+    circle(renderer, c, ez, ex, kRadius, colour);
+    for (const Eigen::Vector3d& axis : {ex, ey, ez})
+      renderer.drawLine(c - 1.6 * kRadius * axis, c + 1.6 * kRadius * axis, colour);
+    Eigen::Vector3d point;
+    if (dt < half_frame && goalPointNow(sim, goal, point)) renderer.drawLine(point, c, miss);
   }
 }
 

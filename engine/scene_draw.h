@@ -24,6 +24,8 @@ class SceneDraw {
   // Parts of a scene that draw() can leave out (bits; `ponyhop snapshot` measures how much of the
   // picture a shot's subject covers by drawing it once with and once without).
   enum Part : unsigned { kHead = 1, kChain = 2, kHopper = 4 };
+  // s: render.goals draws a goal's marker bright while the time is this close to the goal's.
+  static constexpr double kGoalNear = 0.25;
   // The parts `sim` has.
   static unsigned parts(const Sim& sim);
   // Draft quality draws fewer hair strands (HairParams::strands_draft).
@@ -37,6 +39,8 @@ class SceneDraw {
   void drawColliders(const Sim& sim, Renderer& renderer) const;
   // render.active_joints: an orange ring about every chain joint that moved in the last step.
   void drawActiveJoints(const Sim& sim, Renderer& renderer) const;
+  // render.goals: each of `drawing`'s goals as a wire sphere and cross at its target (docs/GOALS.md).
+  void drawGoals(const Sim& sim, const Scene& drawing, Renderer& renderer) const;
   bool draft_ = false;
   Renderer* renderer_ = nullptr;
   MeshHandle head_;

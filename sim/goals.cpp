@@ -3,6 +3,7 @@
 #include <cstdlib>
 
 #include "sim/scene.h"
+#include "sim/sim.h"
 
 namespace ponyhop {
 
@@ -74,6 +75,37 @@ void checkGoals(const Scene& scene, std::vector<std::string>& errors) {
       }
     }
   }
+}
+
+bool goalPointNow(const Sim& sim, const Goal& goal, Eigen::Vector3d& out) {
+  GoalPoint p;
+  if (!parseGoalPoint(goal.point, p)) return false;
+  const World& w = sim.world();
+  switch (p.kind) {
+    case GoalPoint::Kind::Tip:
+      if (!sim.chain()) return false;
+      out = sim.chain()->tip(w);
+      return true;
+    case GoalPoint::Kind::Link:
+      if (!sim.chain() || p.link >= int(sim.chain()->links.size())) return false;
+      out = sim.chain()->bottom(w, p.link);
+      return true;
+    case GoalPoint::Kind::Toe:
+      if (!sim.hopper()) return false;
+      out = sim.hopper()->footPoint(w);
+      return true;
+    case GoalPoint::Kind::Body:
+      if (!sim.hopper()) return false;
+      out = w.body(sim.hopper()->model().body).x;
+      return true;
+  }
+  return false;
+}
+
+Eigen::Vector3d goalTargetNow(const Sim& sim, const Goal& goal) {
+  if (goal.frame == GoalFrame::Head && sim.headBody() >= 0)
+    return sim.world().body(sim.headBody()).pointToWorld(goal.position);
+  return goal.position;
 }
 
 }  // namespace ponyhop

@@ -50,6 +50,12 @@ struct GoalPoint {
 bool parseGoalPoint(const std::string& text, GoalPoint& out, std::string* why = nullptr);
 
 struct Scene;
+class Sim;
+// Where goal `goal`'s point is in `sim` now (world, m): the chain's tip or a link's far end, the
+// first hopper's toe or body centre; false when the sim has no such part or the point is not valid.
+bool goalPointNow(const Sim& sim, const Goal& goal, Eigen::Vector3d& out);
+// Where the goal wants it now (world, m): its position, carried by the head's pose for frame "head".
+Eigen::Vector3d goalTargetNow(const Sim& sim, const Goal& goal);
 // The scene's goals and guide against what the scene has (a link of the chain, a hopper, a head
 // for frame "head", the guide's joints): one message per problem, appended to `errors`.
 void checkGoals(const Scene& scene, std::vector<std::string>& errors);

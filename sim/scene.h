@@ -110,6 +110,7 @@ struct RenderParams {
   bool transparent = false;                        // no background: PNGs with alpha (the ground is drawn when `ground`)
   bool colliders = false;                          // draw the collision shapes and the contacts over the picture
   bool active_joints = false;                      // adaptive dynamics: ring the joints that moved in the last step
+  bool goals = false;                              // draw each goal as a marker over the picture (docs/GOALS.md)
 
   template <class V>
   void reflect(V& v) {
@@ -134,6 +135,9 @@ struct RenderParams {
       {.help = "Draw the collision shapes (cyan wireframes) and each contact (a red normal) over the picture"});
     v("active_joints", active_joints,
       {.help = "Adaptive dynamics: ring the joints that moved in the last step (orange) over the picture"});
+    v("goals", goals,
+      {.help = "Draw each goal as a marker over the picture: magenta within 0.25 s of its time, faint otherwise, "
+               "and at its time a yellow line from the goal's point to it"});
   }
 };
 

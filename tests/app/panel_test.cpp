@@ -8,14 +8,18 @@
 
 #include <cmath>
 #include <filesystem>
+#include <thread>
 
 #include "app/ui_headless.h"
 #include "app/ui_sim.h"
+#include "common/out_util.h"
 #include "common/run_util.h"
 #include "engine/asset_loader.h"
 #include "engine/frame_writer.h"
 #include "engine/render_session.h"
+#include "sim/goal_solve.h"
 #include "sim/scene_io.h"
+#include "sim/sim.h"
 
 namespace ponyhop {
 namespace {
@@ -427,6 +431,50 @@ TEST(PanelTest, RenderUiWritesAFrameWithThePanel) {
   const RegionStats panel_px = regionStats(img->rgba, img->width, 640, img->width, 0, 360);
   EXPECT_GT(scene_px.stddev, 5.0);
   EXPECT_GT(panel_px.colours, 12);
+}
+
+// The Goals section (docs/GOALS.md, "In the panel"): a goal's position dragged with its widget moves
+// the goal in the running scene, and Solve runs the goal solve in the background and applies the
+// guide it finds, which then meets the edited goal.
+TEST(PanelTest, EditingAGoalAndPressingSolveAppliesAGuideThatMeetsIt) {
+  Scene s = parseSceneText(R"({"anchor": {}, "chain": {"links": 3, "direction": [1, 0, 0]}})", "three.json");
+  Sim free(s);
+  free.advanceTo(0.25);
+  const Eigen::Vector3d free_tip = free.chain()->tip(free.world());
+  s.goals = {Goal{.t = 0.25, .point = "tip", .position = free_tip + Eigen::Vector3d(0.0, 0.01, 0.01)}};
+  std::filesystem::create_directories(testing::testOut());
+  const std::string path = testing::testOut() + "/goal.json";
+  saveScene(s, path);
+  Harness h(path);
+  h.panel.setSectionOpen("Ponytail: every field", false);
+  h.panel.setSectionOpen("Physics", false);
+  h.panel.setSectionOpen("Goals", true);
+  h.frames(2);
+  EXPECT_FALSE(h.panel.widgetRect("goals:guide").has_value()) << "no guide yet";
+  // Drag the position's middle field (y) to the right: about 1 mm a pixel.
+  const WidgetRect r = h.rect("goals.0.position");
+  const double y0 = h.sim.edited().goals[0].position.y();
+  h.drag(r.cx(), r.cy(), r.cx() + 12.0f, r.cy());
+  const double moved = h.sim.applied().goals[0].position.y() - y0;
+  EXPECT_GT(moved, 0.002) << "the goal moved in the applied scene (goals apply live)";
+  EXPECT_LT(moved, 0.03);
+  h.click("goals:solve");
+  EXPECT_TRUE(h.panel.solving());
+  for (int i = 0; i < 20000 && h.panel.solving(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    h.frame();
+  }
+  ASSERT_FALSE(h.panel.solving());
+  h.frames(2);
+  EXPECT_EQ(h.panel.solveStatus().rfind("solved: 1 of 1 goals met", 0), 0u) << h.panel.solveStatus();
+  ASSERT_TRUE(h.sim.applied().guide);
+  EXPECT_TRUE(h.sim.applied().guide->enabled);
+  EXPECT_FALSE(h.sim.applied().guide->knots.empty());
+  // Checked apart from the panel: the applied scene's guide meets the edited goal.
+  const GoalSolveReport replay = evaluateGoals(h.sim.applied(), nullptr);
+  EXPECT_TRUE(replay.goals[0].met) << replay.goals[0].error;
+  EXPECT_DOUBLE_EQ(h.sim.applied().goals[0].position.y(), y0 + moved);
+  EXPECT_TRUE(h.panel.widgetRect("goals:guide").has_value()) << "the guide's switch shows once there is one";
 }
 
 }  // namespace

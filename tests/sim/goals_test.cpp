@@ -89,6 +89,24 @@ TEST(Goals, BadInputNamesTheField) {
   EXPECT_NE(
       errorOf(R"({"hopper": {}, "guide": {"knots": [{"t": 0}, {"t": 1}]}})").find("guide.knots: needs a chain section"),
       std::string::npos);
+  EXPECT_NE(errorOf(R"({"anchor": {}, "chain": {}, "render": {"goals": "yes"}})").find("render.goals"),
+            std::string::npos);
+}
+
+// What the markers of render.goals are drawn from: the goal's point and its target now.
+TEST(Goals, PointAndTargetNow) {
+  Scene s = parseSceneText(R"({"anchor": {}, "chain": {"links": 3, "direction": [1, 0, 0]},
+      "goals": [{"t": 0.2, "point": "link:0", "position": [0.01, 0.02, -0.03]}]})",
+                           "now.json");
+  s.goals.push_back(s.goals[0]);
+  s.goals[1].point = "toe";  // no hopper: no point
+  Sim sim(s);
+  sim.advanceTo(0.1);
+  Eigen::Vector3d p;
+  ASSERT_TRUE(goalPointNow(sim, s.goals[0], p));
+  EXPECT_EQ(p, sim.chain()->bottom(sim.world(), 0));
+  EXPECT_EQ(goalTargetNow(sim, s.goals[0]), Eigen::Vector3d(0.01, 0.02, -0.03));
+  EXPECT_FALSE(goalPointNow(sim, s.goals[1], p));
 }
 
 TEST(Goals, GuideCurveInterpolatesItsKnotsAndIsZeroOutside) {
