@@ -116,6 +116,23 @@ TEST(Loops, TheHeadIsClearedBeforeTheLoopCloses) {
   EXPECT_LT(sim.maxJointError(), 1e-9);
 }
 
+// Featherstone takes the collider's contacts on a tree only (its contact impulses act in joint
+// space and would open a loop): a looped chain against the head stops at its first contact stage
+// with what to use instead.
+TEST(Loops, FeatherstoneRefusesContactsOnALoopPlainly) {
+  Scene s = loadScene("assets/scenes/ponytail.json", {{"chain.links", "3"}, {"physics.solver", "featherstone"}});
+  JointSection tie;
+  tie.a = {.body = JointBody::Chain, .link = -1};
+  tie.b = {.body = JointBody::Head, .point = Eigen::Vector3d(0.0, -0.07, -0.06)};
+  s.joints.push_back(tie);
+  const CubeAssets assets;
+  Sim sim(s, &assets);
+  sim.advanceTo(0.1);
+  ASSERT_FALSE(sim.ok());
+  EXPECT_NE(sim.status().find("featherstone takes contacts on a tree only"), std::string::npos) << sim.status();
+  EXPECT_NE(sim.status().find("use solver = tree or dense"), std::string::npos) << sim.status();
+}
+
 TEST(Loops, JointEndsAreChecked) {
   const auto err = [](const std::string& text) {
     try {
