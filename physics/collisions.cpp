@@ -64,7 +64,7 @@ Vector6d velocityOf(const RigidBody& b) {
 }  // namespace
 
 Collisions::Collisions(const CollisionParams& params, SolverKind solver)
-    : params_(params), solver_(makeConstraintSolver(solver)) {}
+    : params_(params), solver_(makeConstraintSolver(solver)), kind_(solver) {}
 
 int Collisions::addShape(int body, Shape shape) {
   shapes_.push_back(std::move(shape));
@@ -106,8 +106,13 @@ void Collisions::update(World& world) {
         "collisions: physics.solver = featherstone takes contacts on a tree only (its contact impulses do not "
         "keep closed loops); use solver = tree or dense for this scene");
   }
+  // The same kind of solver factors the same matrix to the same bits: the World's factorization
+  // serves the impulses' build when it was made at this state (docs/PHYSICS.md, "Collisions").
+  world_factored_ =
+      !reduced_ && world.params().solver == kind_ ? world.solverFactoredAt(world.bodies()) : nullptr;
   const Status s = resolve(world.bodies(), world.joints());
   reduced_ = nullptr;
+  world_factored_ = nullptr;
   if (!s.ok()) world.fail("collisions: " + s.message());
 }
 
@@ -383,7 +388,8 @@ void Collisions::buildJacobians(const std::vector<RigidBody>& bodies, const std:
 }
 
 // W_c columns through the joints' Schur complement, and D = J_c W_c.
-bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Constraints& joints) {
+bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Constraints& joints,
+                               const ConstraintSolver* factored) {
   const size_t n = bodies.size();
   const int m = static_cast<int>(jrows_.size());
   if (reduced_) {
@@ -394,7 +400,8 @@ bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Const
   }
   if (!reduced_) joint_system_.evaluate(bodies, joints);
   const bool has_joints = !reduced_ && joint_system_.rows() > 0;
-  if (has_joints && !solver_->factor(bodies, joint_system_)) return false;
+  if (has_joints && !factored && !solver_->factor(bodies, joint_system_)) return false;
+  const ConstraintSolver& joint_solver = factored ? *factored : *solver_;
   // The columns' storage and the joint solves' work space are kept from stage to stage: a
   // steady stage allocates nothing here. w_ never shrinks (the push-out keeps its first rows):
   // a column beyond the rows in use keeps its storage for the next stage's.
@@ -407,8 +414,8 @@ bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Const
     if (dynamicBody(bodies, j.b)) w[j.b] += applyInverseMass(bodies[j.b], j.jb);
     if (has_joints) {
       joint_system_.timesInto(w, joint_rhs_);
-      solver_->solveInto(joint_rhs_, joint_y_);
-      solver_->massWeightedTransposeInto(bodies, joint_system_, joint_y_, joint_corr_);
+      joint_solver.solveInto(joint_rhs_, joint_y_);
+      joint_solver.massWeightedTransposeInto(bodies, joint_system_, joint_y_, joint_corr_);
       for (size_t i = 0; i < n; ++i) w[i] -= joint_corr_[i];
     }
   }
@@ -468,7 +475,7 @@ Status Collisions::resolve(std::vector<RigidBody>& bodies, const Constraints& jo
 
   // 1. Impulses.
   buildJacobians(bodies, rows, false);
-  if (!buildDelassus(bodies, joints)) return Status::error(singularMessage());
+  if (!buildDelassus(bodies, joints, world_factored_)) return Status::error(singularMessage());
   const int m = static_cast<int>(jrows_.size());
   Eigen::VectorXd u0(m), target = Eigen::VectorXd::Zero(m), p = Eigen::VectorXd::Zero(m);
   std::vector<std::pair<int, int>> blocks;

@@ -165,7 +165,10 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
   };
   // Per row block (3 rows for a contact with friction, else 1): the 6-vectors J_a, J_b.
   void buildJacobians(const std::vector<RigidBody>& bodies, const std::vector<Row>& rows, bool normals_only);
-  bool buildDelassus(const std::vector<RigidBody>& bodies, const Constraints& joints);
+  // `factored`: a solver that already holds J_j M^-1 J_j^T factored at these bodies (the World's
+  // after its stabilize), used instead of factoring solver_; null: factor solver_.
+  bool buildDelassus(const std::vector<RigidBody>& bodies, const Constraints& joints,
+                     const ConstraintSolver* factored = nullptr);
 
   CollisionParams params_;
   std::vector<Shape> shapes_;
@@ -221,6 +224,10 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
     return reduced_ ? "the joint-space mass matrix is not positive definite"
                     : "the joints' constraint matrix is singular";
   }
+  SolverKind kind_;
+  // update(): the World's solver when its stabilize factored the joints at the state the stage
+  // starts from (World::solverFactoredAt), for the impulses' Delassus build; null otherwise.
+  const ConstraintSolver* world_factored_ = nullptr;
   ConstraintSystem joint_system_;
 
   // Scratch of one solve.

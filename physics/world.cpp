@@ -530,7 +530,24 @@ void World::stabilize() {
   if (Status s = ponyhop::projectVelocities(bodies_, joints_, system_, *solver_, projection_work_); !s.ok()) {
     return stop("stabilize", s.message(), "redundant or duplicate joints");
   }
+  // projectVelocities factored A at these poses and moved no body.
+  stabilized_generation_ = solver_->generation();
+  stabilized_x_.resize(bodies_.size());
+  stabilized_q_.resize(bodies_.size());
+  for (size_t i = 0; i < bodies_.size(); ++i) {
+    stabilized_x_[i] = bodies_[i].x;
+    stabilized_q_[i] = bodies_[i].q;
+  }
   checkBodies("stabilize", false);
+}
+
+const ConstraintSolver* World::solverFactoredAt(const std::vector<RigidBody>& bodies) const {
+  if (stabilized_generation_ == 0 || solver_->generation() != stabilized_generation_ ||
+      bodies.size() != stabilized_x_.size())
+    return nullptr;
+  for (size_t i = 0; i < bodies.size(); ++i)
+    if (bodies[i].x != stabilized_x_[i] || bodies[i].q.coeffs() != stabilized_q_[i].coeffs()) return nullptr;
+  return solver_.get();
 }
 
 bool World::impactInside() const {

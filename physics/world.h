@@ -137,6 +137,11 @@ class World {
   std::vector<RigidBody>& bodies() { return bodies_; }
   const Constraints& joints() const { return joints_; }
   const ConstraintSolver& solver() const { return *solver_; }
+  // The solver as the last stabilize() left it (J M^-1 J^T factored at the bodies' poses after the
+  // position projection), when nothing has factored it since and every body is still where it was
+  // then, bit for bit; else null. The contact stage runs right after the stabilize of its substep
+  // and solves with it instead of factoring the same matrix again (Collisions::buildDelassus).
+  const ConstraintSolver* solverFactoredAt(const std::vector<RigidBody>& bodies) const;
   // The reduced-coordinate system (physics.solver = featherstone), else null.
   const ArticulatedSystem* reduced() const { return reduced_.get(); }
   ArticulatedSystem* reduced() { return reduced_.get(); }
@@ -254,9 +259,14 @@ class World {
   std::vector<Snapshot> substep_starts_;  // substep()'s snapshot per split depth
   SavedState dt_start_;                   // step(): the dt's start, for RATTLE's redo at the end's count
   RattleWork rattle_work_;                // RATTLE: the step's work space (sized once)
-  ProjectionWork projection_work_;        // stabilize(): the projections' work space (sized once)
-  ShakeWork shake_work_;                  // stabilize() after symplectic Euler: its start and J(q_n)
-  Rk4Work rk4_work_;                      // RK4 (multiplier solvers): the stages (sized once)
+  // stabilize(): the solver's generation after the velocity projection's factorization and the
+  // poses it was factored at (solverFactoredAt()); 0: none.
+  unsigned long stabilized_generation_ = 0;
+  std::vector<Eigen::Vector3d> stabilized_x_;
+  std::vector<Eigen::Quaterniond> stabilized_q_;
+  ProjectionWork projection_work_;  // stabilize(): the projections' work space (sized once)
+  ShakeWork shake_work_;            // stabilize() after symplectic Euler: its start and J(q_n)
+  Rk4Work rk4_work_;                // RK4 (multiplier solvers): the stages (sized once)
   // The bodies moved since the last acceleration-level solve (a RATTLE step, a restore):
   // lambda() runs it on demand.
   bool forces_stale_ = false;

@@ -359,6 +359,34 @@ TEST(Contact, ChainFallingOnTheGroundKeepsItsJointsAndLosesEnergy) {
   }
 }
 
+// The contact stage solves with the World's factorization of the joints instead of its own only
+// while it is the one made at the present state (World::solverFactoredAt): after a stabilized
+// step, not after any body moved by a bit, nor after the solver factored something else.
+TEST(Contact, TheStageReusesTheWorldsFactorizationOnlyAtItsState) {
+  PhysicsParams pp = params(1.0 / 240.0, SolverKind::Tree);
+  pp.integrator = Integrator::RK4;
+  pp.stabilization = Stabilization::Projection;
+  ChainParams chain;
+  chain.links = 4;
+  chain.length = 0.05;
+  chain.radius = 0.01;
+  chain.direction = Vector3d(1, 0, 0);
+  ChainWorld cw = makeChainWorld(pp, chain, AnchorParams{});
+  ASSERT_TRUE(cw.world.ok()) << cw.world.status();
+  EXPECT_EQ(cw.world.solverFactoredAt(cw.world.bodies()), nullptr);  // nothing factored yet
+  cw.world.step();
+  ASSERT_TRUE(cw.world.ok()) << cw.world.status();
+  EXPECT_EQ(cw.world.solverFactoredAt(cw.world.bodies()), &cw.world.solver());
+  std::vector<RigidBody> moved = cw.world.bodies();
+  moved[cw.chain.links[2]].x.x() = std::nextafter(moved[cw.chain.links[2]].x.x(), 1.0);
+  EXPECT_EQ(cw.world.solverFactoredAt(moved), nullptr);
+  moved = cw.world.bodies();
+  moved[cw.chain.links[1]].q.coeffs().w() = std::nextafter(moved[cw.chain.links[1]].q.w(), 2.0);
+  EXPECT_EQ(cw.world.solverFactoredAt(moved), nullptr);
+  cw.world.energy();  // a readout: factors nothing
+  EXPECT_EQ(cw.world.solverFactoredAt(cw.world.bodies()), &cw.world.solver());
+}
+
 TEST(Contact, SwingConeAndTwistLimitHold) {
   // A two-link chain hanging from a fixed anchor, thrown sideways: the first link may swing 20
   // degrees from the vertical, the second 15 from the first; twist within 10 degrees.
