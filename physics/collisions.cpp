@@ -108,8 +108,7 @@ void Collisions::update(World& world) {
   }
   // The same kind of solver factors the same matrix to the same bits: the World's factorization
   // serves the impulses' build when it was made at this state (docs/PHYSICS.md, "Collisions").
-  world_factored_ =
-      !reduced_ && world.params().solver == kind_ ? world.solverFactoredAt(world.bodies()) : nullptr;
+  world_factored_ = !reduced_ && world.params().solver == kind_ ? world.solverFactoredAt(world.bodies()) : nullptr;
   const Status s = resolve(world.bodies(), world.joints());
   reduced_ = nullptr;
   world_factored_ = nullptr;
