@@ -30,6 +30,16 @@ PhysicsParams params(double dt = 1.0 / 240.0, SolverKind solver = SolverKind::De
   return p;
 }
 
+// A chain of `links` links of 5 cm (radius 1 cm) released horizontally along +x.
+ChainParams horizontalChain(int links) {
+  ChainParams chain;
+  chain.links = links;
+  chain.length = 0.05;
+  chain.radius = 0.01;
+  chain.direction = Vector3d(1, 0, 0);
+  return chain;
+}
+
 RigidBody solidSphere(double m, double r, const Vector3d& x) {
   RigidBody b;
   b.name = "ball";
@@ -320,11 +330,7 @@ TEST(Contact, ChainFallingOnTheGroundKeepsItsJointsAndLosesEnergy) {
     PhysicsParams pp = params(1.0 / 240.0, solver);
     pp.substeps = 2;
     if (variant == 3) pp.adaptive_joints = 3;  // of 6: the other three rigid at every step
-    ChainParams chain;
-    chain.links = 6;
-    chain.length = 0.05;
-    chain.radius = 0.01;
-    chain.direction = Vector3d(1, 0, 0);
+    const ChainParams chain = horizontalChain(6);
     ChainWorld cw = makeChainWorld(pp, chain, AnchorParams{});
     ASSERT_TRUE(cw.world.ok()) << cw.world.status();
     // The chain hangs from the origin; the ground is 0.2 m below: the horizontal chain swings
@@ -366,12 +372,7 @@ TEST(Contact, TheStageReusesTheWorldsFactorizationOnlyAtItsState) {
   PhysicsParams pp = params(1.0 / 240.0, SolverKind::Tree);
   pp.integrator = Integrator::RK4;
   pp.stabilization = Stabilization::Projection;
-  ChainParams chain;
-  chain.links = 4;
-  chain.length = 0.05;
-  chain.radius = 0.01;
-  chain.direction = Vector3d(1, 0, 0);
-  ChainWorld cw = makeChainWorld(pp, chain, AnchorParams{});
+  ChainWorld cw = makeChainWorld(pp, horizontalChain(4), AnchorParams{});
   ASSERT_TRUE(cw.world.ok()) << cw.world.status();
   EXPECT_EQ(cw.world.solverFactoredAt(cw.world.bodies()), nullptr);  // nothing factored yet
   cw.world.step();

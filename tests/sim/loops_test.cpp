@@ -100,15 +100,23 @@ TEST(Loops, ARedundantJointIsRefusedPlainly) {
   EXPECT_NE(e.find("redundant"), std::string::npos) << e;
 }
 
-TEST(Loops, TheHeadIsClearedBeforeTheLoopCloses) {
-  // Three links laid out from the cube's -y face into the cube (chain.direction leans +y): the
-  // collider turns them out of it, then the tip is tied to a point beside the face. Assembled
-  // after the clearing, the loop starts closed.
-  Scene s = loadScene("assets/scenes/ponytail.json", {{"chain.links", "3"}});
+// ponytail.json cut to three links (on the test's cube head), the tip tied to a point beside the
+// cube's -y face.
+Scene tiedToTheHead(std::vector<Override> overrides = {}) {
+  overrides.push_back({"chain.links", "3"});
+  Scene s = loadScene("assets/scenes/ponytail.json", overrides);
   JointSection tie;
   tie.a = {.body = JointBody::Chain, .link = -1};
   tie.b = {.body = JointBody::Head, .point = Eigen::Vector3d(0.0, -0.07, -0.06)};
   s.joints.push_back(tie);
+  return s;
+}
+
+TEST(Loops, TheHeadIsClearedBeforeTheLoopCloses) {
+  // Three links laid out from the cube's -y face into the cube (chain.direction leans +y): the
+  // collider turns them out of it, then the tip is tied to a point beside the face. Assembled
+  // after the clearing, the loop starts closed.
+  const Scene s = tiedToTheHead();
   const CubeAssets assets;
   Sim sim(s, &assets);
   EXPECT_LT(sim.maxJointError(), 1e-9) << "the loop starts closed";
@@ -120,11 +128,7 @@ TEST(Loops, TheHeadIsClearedBeforeTheLoopCloses) {
 // space and would open a loop): a looped chain against the head stops at its first contact stage
 // with what to use instead.
 TEST(Loops, FeatherstoneRefusesContactsOnALoopPlainly) {
-  Scene s = loadScene("assets/scenes/ponytail.json", {{"chain.links", "3"}, {"physics.solver", "featherstone"}});
-  JointSection tie;
-  tie.a = {.body = JointBody::Chain, .link = -1};
-  tie.b = {.body = JointBody::Head, .point = Eigen::Vector3d(0.0, -0.07, -0.06)};
-  s.joints.push_back(tie);
+  const Scene s = tiedToTheHead({{"physics.solver", "featherstone"}});
   const CubeAssets assets;
   Sim sim(s, &assets);
   sim.advanceTo(0.1);
