@@ -59,7 +59,7 @@ struct Keys {
                                        double bound_before = INFINITY) const {
     std::vector<double> cuts(times.begin(), times.end());
     for (const HopperCommandKey& k : solvedHopper(*scene).script)
-      if (k.t > 0.0 && k.t < times.back()) cuts.push_back(k.t);
+      if (k.t > 0.0) cuts.push_back(k.t);  // after T too: the scene's own course goes on
     std::sort(cuts.begin(), cuts.end());
     cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
     std::vector<HopperCommandKey> s;

@@ -311,6 +311,7 @@ TEST(HopperGoals, AMarkTheHopperAlreadyLandsOnNeedsNoChange) {
 // the solved scene replays it from the file, bit for bit; guide.enabled = false is the unguided run.
 TEST(HopperGoals, TheToeLandsOnAMarkAndTheSolvedSceneReplaysIt) {
   Scene s = hopperScene();
+  s.hopper->script = {HopperCommandKey{.t = 3.0, .vx = 0.0}};  // the scene's own course: a stop after the goal
   const Eigen::Vector3d free_toe = toeAt(s, 1.4);
   s.goals = {
       Goal{.t = 1.4, .point = "toe", .position = free_toe + Eigen::Vector3d(0.05, 0.03, 0.0), .tolerance = 0.02}};
@@ -319,6 +320,8 @@ TEST(HopperGoals, TheToeLandsOnAMarkAndTheSolvedSceneReplaysIt) {
   EXPECT_GT(r.iterations, 0);
   EXPECT_GT(r.effort, 0.0);
   ASSERT_FALSE(r.guide.script.empty());
+  EXPECT_EQ(r.guide.script.back().t, 3.0) << "after the last goal the scene's own course goes on";
+  EXPECT_EQ(r.guide.script.back().vx, 0.0);
   EXPECT_TRUE(r.guide.knots.empty()) << "no chain: no torques";
   s.guide = r.guide;
   const Scene saved = parseScene(sceneToJson(s), "solved.json");
