@@ -163,10 +163,7 @@ class Shooter {
   int eventChanges() const { return event_changes_; }
   double firstEventChange() const { return first_event_change_; }
 
-  void setGoals(std::vector<GoalPoint> points, std::vector<Goal> goals) {
-    points_ = std::move(points);
-    goals_ = std::move(goals);
-  }
+  void setGoals(std::vector<Goal> goals) { goals_ = std::move(goals); }
   int runs() const { return runs_; }
   // The chain's anchor at goal g's time in the last whole run.
   const Eigen::Vector3d& anchor(size_t g) const { return anchors_[g]; }
@@ -184,26 +181,13 @@ class Shooter {
       first_event_change_ = std::min(first_event_change_, double(at) * sim_.scene().physics.dt);
     }
   }
-  // The world point of goal g now.
+  // The world point of goal g now, and where it should be (sim/goals.h).
   Eigen::Vector3d point(size_t g) const {
-    const World& w = sim_.world();
-    switch (points_[g].kind) {
-      case GoalPoint::Kind::Tip:
-        return sim_.chain()->tip(w);
-      case GoalPoint::Kind::Link:
-        return sim_.chain()->bottom(w, points_[g].link);
-      case GoalPoint::Kind::Toe:
-        return sim_.hopper()->footPoint(w);
-      case GoalPoint::Kind::Body:
-        return w.body(sim_.hopper()->model().body).x;
-    }
-    return Eigen::Vector3d::Zero();
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    goalPointNow(sim_, goals_[g], p);  // the scene's goals are checked against its parts
+    return p;
   }
-  Eigen::Vector3d target(size_t g) const {
-    const Goal& goal = goals_[g];
-    if (goal.frame == GoalFrame::Head) return sim_.world().body(sim_.headBody()).pointToWorld(goal.position);
-    return goal.position;
-  }
+  Eigen::Vector3d target(size_t g) const { return goalTargetNow(sim_, goals_[g]); }
   // The torques' power: sum_j tau_j . (w_link - w_parent), W.
   double power() {
     GuideTorques* guide = sim_.guide();
@@ -228,7 +212,6 @@ class Shooter {
   size_t valid_ = 0;
   std::vector<double> recorded_at_;
   std::vector<Eigen::Vector3d> anchors_;
-  std::vector<GoalPoint> points_;
   std::vector<Goal> goals_;
   int runs_ = 0;
   std::vector<long> events_;  // per step of the recorded runs: substeps * 65536 + active contacts
@@ -321,7 +304,7 @@ Eigen::MatrixXd goalJacobian(const Scene& scene_in, const AssetLoader* assets, i
   Scene scene = scene_in;
   scene.guide = layout.guide(c);
   Shooter shooter(scene, assets, goalTimes(scene));
-  shooter.setGoals(goalPoints(scene), scene.goals);
+  shooter.setGoals(scene.goals);
   std::vector<Eigen::Vector3d> points;
   shooter.runWhole(*scene.guide, std::vector<double>(layout.times.begin(), layout.times.end() - 1), points);
   std::vector<Eigen::Index> all(size_t(layout.size()));
@@ -334,7 +317,7 @@ GoalSolveReport evaluateGoals(const Scene& scene, const AssetLoader* assets) {
   GoalSolveReport report;
   if (scene.guide) report.guide = *scene.guide;
   Shooter shooter(scene, assets, goalTimes(scene));
-  shooter.setGoals(goalPoints(scene), scene.goals);
+  shooter.setGoals(scene.goals);
   std::vector<Eigen::Vector3d> points, targets;
   shooter.runWhole(report.guide, {}, points, &targets, &report.energy, &report.abs_energy);
   fillOutcomes(scene, points, targets, report.goals);
@@ -390,7 +373,7 @@ GoalSolveReport solveGoals(const Scene& scene_in, const AssetLoader* assets, con
   scene.guide = layout.guide(c);
   GoalSolveReport report;
   Shooter shooter(scene, assets, goalTimes(scene));
-  shooter.setGoals(goalPoints(scene), scene.goals);
+  shooter.setGoals(scene.goals);
   const std::vector<GoalPoint> kinds = goalPoints(scene);
 
   std::vector<Eigen::Vector3d> points, targets;
@@ -843,8 +826,6 @@ SpringOutcome springGoals(const Scene& scene_in, const AssetLoader* assets, doub
   scene.guide.reset();
   Sim sim(scene, assets);
   const std::shared_ptr<GoalSprings> ctl = attachGoalSprings(sim, stiffness);
-  const Chain* chain = sim.chain();
-  const std::vector<GoalPoint> kinds = goalPoints(scene);
   std::vector<size_t> order(scene.goals.size());
   for (size_t g = 0; g < order.size(); ++g) order[g] = g;
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return scene.goals[a].t < scene.goals[b].t; });
@@ -859,14 +840,10 @@ SpringOutcome springGoals(const Scene& scene_in, const AssetLoader* assets, doub
       out.abs_work += std::abs(P) * dt;
       sim.step();
     }
-    const World& w = sim.world();
     GoalOutcome& o = out.goals[g];
     const Goal& goal = scene.goals[g];
-    o.target = goal.frame == GoalFrame::Head ? w.body(sim.headBody()).pointToWorld(goal.position) : goal.position;
-    o.reached = kinds[g].kind == GoalPoint::Kind::Tip    ? chain->tip(w)
-                : kinds[g].kind == GoalPoint::Kind::Link ? chain->bottom(w, kinds[g].link)
-                : kinds[g].kind == GoalPoint::Kind::Toe  ? sim.hopper()->footPoint(w)
-                                                         : w.body(sim.hopper()->model().body).x;
+    o.target = goalTargetNow(sim, goal);
+    goalPointNow(sim, goal, o.reached);
     o.error = (o.reached - o.target).norm();
     o.met = o.error <= goal.tolerance;
     if (!sim.ok()) o.why = "the simulation stopped: " + sim.status();

@@ -25,12 +25,7 @@ const HopperParams& solvedHopper(const Scene& scene) {
 // The scene's own command at t (its script's last key at or before t, else its command).
 HopperCommand sceneHopperCommand(const Scene& scene, double t) {
   const HopperParams& p = solvedHopper(scene);
-  HopperCommand c = p.command;
-  for (const HopperCommandKey& k : p.script) {
-    if (k.t > t + 1e-12) break;
-    c = HopperCommand{k.vx, k.vy, k.height, k.heading};
-  }
-  return c;
+  return courseCommandAt(p.script, t, p.command);
 }
 
 // The unknowns: changes (dvx, dvy, dheight) of the scene's own command at K keys, c[3 k + d], each
@@ -94,10 +89,11 @@ struct Keys {
 };
 
 // The power of the first hopper's muscles now (its leg spring with the thrust setpoint and stops,
-// its hip servos: computeHopperForces on a copy of the bodies), W.
-double hopperMusclePower(const Sim& sim) {
+// its hip servos: computeHopperForces on a copy of the bodies, kept in `bodies` from call to
+// call), W.
+double hopperMusclePower(const Sim& sim, std::vector<RigidBody>& bodies) {
   const Hopper* h = sim.hopper();
-  std::vector<RigidBody> bodies = sim.world().bodies();
+  bodies = sim.world().bodies();
   for (RigidBody& b : bodies) {
     b.force.setZero();
     b.torque.setZero();
@@ -113,13 +109,8 @@ double hopperMusclePower(const Sim& sim) {
 class HopperShooter {
  public:
   HopperShooter(const Scene& scene, const AssetLoader* assets, const Keys& keys)
-      : sim_(scene, assets), start_(sim_.snapshot()), scene_(scene), keys_(keys) {
-    for (const Goal& g : scene.goals) {
-      GoalPoint p;
-      parseGoalPoint(g.point, p);
-      points_.push_back(p);
-      times_.push_back(g.t);
-    }
+      : sim_(scene, assets), start_(sim_.snapshot()), goals_(scene.goals), keys_(keys) {
+    for (const Goal& g : goals_) times_.push_back(g.t);
     for (size_t g = 0; g < times_.size(); ++g) order_.push_back(g);
     std::sort(order_.begin(), order_.end(), [&](size_t a, size_t b) { return times_[a] < times_[b]; });
   }
@@ -147,30 +138,27 @@ class HopperShooter {
         while (record && next_key < size_t(keys_.count()) && keys_.times[next_key] < sim_.time() + dt)
           snapshots_[next_key++] = sim_.snapshot();
         if (work) {
-          const double P = hopperMusclePower(sim_);
+          const double P = hopperMusclePower(sim_, muscle_bodies_);
           *work += P * dt;
           *abs_work += std::abs(P) * dt;
         }
         sim_.step();
       }
-      const World& w = sim_.world();
-      const Hopper* h = sim_.hopper();
-      points[g] = points_[g].kind == GoalPoint::Kind::Toe ? h->footPoint(w) : w.body(h->model().body).x;
-      if (!sim_.ok() || w.body(h->model().body).x.z() < 0.3) fine = false;
+      goalPointNow(sim_, goals_[g], points[g]);
+      if (!sim_.ok() || sim_.world().body(sim_.hopper()->model().body).x.z() < 0.3) fine = false;
     }
     while (record && next_key < size_t(keys_.count())) snapshots_[next_key++] = sim_.snapshot();
     return fine;
   }
-  // The first goal (in time order) at or after key k's time: the earliest a change of key k shows.
   int runs() const { return runs_; }
   const std::string& failure() const { return sim_.status(); }
 
  private:
   Sim sim_;
   SimSnapshot start_;
-  const Scene& scene_;
+  const std::vector<Goal> goals_;
   const Keys& keys_;
-  std::vector<GoalPoint> points_;
+  std::vector<RigidBody> muscle_bodies_;  // hopperMusclePower()'s copy of the bodies
   std::vector<double> times_;
   std::vector<size_t> order_;
   std::vector<SimSnapshot> snapshots_;
@@ -199,14 +187,8 @@ double hopperCommandEffort(const Scene& scene, const std::vector<HopperCommandKe
     const double a = cuts[i], b = cuts[i + 1];
     if (b <= a) continue;
     const HopperCommand own = sceneHopperCommand(scene, a);
-    HopperCommand cmd = solvedHopper(scene).command;
-    bool any = false;
-    for (const HopperCommandKey& k : script) {
-      if (k.t > a + 1e-12) break;
-      cmd = HopperCommand{k.vx, k.vy, k.height, k.heading};
-      any = true;
-    }
-    if (!any) cmd = own;  // before the course's first key the scene's own command holds
+    // Before the course's first key the scene's own command holds.
+    const HopperCommand cmd = courseCommandAt(script, a, own);
     e += (b - a) * ((cmd.vx - own.vx) * (cmd.vx - own.vx) + (cmd.vy - own.vy) * (cmd.vy - own.vy) +
                     (cmd.height - own.height) * (cmd.height - own.height));
   }

@@ -246,14 +246,7 @@ Status Hopper::setCommand(const HopperCommand& command) {
   return {};
 }
 
-HopperCommand Hopper::commandAt(double t) const {
-  HopperCommand c = mem_.command;
-  for (const HopperCommandKey& k : params_.script) {
-    if (k.t > t + 1e-12) break;
-    c = HopperCommand{k.vx, k.vy, k.height, k.heading};
-  }
-  return c;
-}
+HopperCommand Hopper::commandAt(double t) const { return courseCommandAt(params_.script, t, mem_.command); }
 
 double Hopper::mass() const { return params_.body_mass + params_.upper_mass + params_.foot_mass; }
 

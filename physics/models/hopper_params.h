@@ -51,6 +51,18 @@ struct HopperCommandKey {
   }
 };
 
+// The command of a course at time t: its last key with key.t <= t, else `before` (the course has
+// no key yet).
+inline HopperCommand courseCommandAt(const std::vector<HopperCommandKey>& course, double t,
+                                     const HopperCommand& before) {
+  HopperCommand c = before;
+  for (const HopperCommandKey& k : course) {
+    if (k.t > t + 1e-12) break;
+    c = HopperCommand{k.vx, k.vy, k.height, k.heading};
+  }
+  return c;
+}
+
 struct HopperParams {
   // Body: a massive box-like body; the hip sits below its centre of mass.
   double body_mass = 10.0;                      // kg
