@@ -112,6 +112,8 @@ class HopperShooter {
       : sim_(scene, assets), start_(sim_.snapshot()), goals_(scene.goals), keys_(keys) {
     for (const Goal& g : goals_) times_.push_back(g.t);
     for (size_t g = 0; g < times_.size(); ++g) order_.push_back(g);
+    targets_.resize(goals_.size());
+    for (size_t g = 0; g < goals_.size(); ++g) targets_[g] = goals_[g].position;
     std::sort(order_.begin(), order_.end(), [&](size_t a, size_t b) { return times_[a] < times_[b]; });
   }
 
@@ -145,6 +147,7 @@ class HopperShooter {
         sim_.step();
       }
       goalPointNow(sim_, goals_[g], points[g]);
+      targets_[g] = goalTargetNow(sim_, goals_[g]);  // a head-frame goal rides on the keyframed head
       if (!sim_.ok() || sim_.world().body(sim_.hopper()->model().body).x.z() < 0.3) fine = false;
     }
     while (record && next_key < size_t(keys_.count())) snapshots_[next_key++] = sim_.snapshot();
@@ -152,6 +155,10 @@ class HopperShooter {
   }
   int runs() const { return runs_; }
   const std::string& failure() const { return sim_.status(); }
+  // Where goal g wants its point at its time (world, m): its position, or for frame "head" that
+  // position carried by the head's keyframed pose then (no command moves the head, so every run
+  // agrees; set by each run).
+  const Eigen::Vector3d& target(size_t g) const { return targets_[g]; }
 
  private:
   Sim sim_;
@@ -160,6 +167,7 @@ class HopperShooter {
   const Keys& keys_;
   std::vector<RigidBody> muscle_bodies_;  // hopperMusclePower()'s copy of the bodies
   std::vector<double> times_;
+  std::vector<Eigen::Vector3d> targets_;  // per goal: target(g)
   std::vector<size_t> order_;
   std::vector<SimSnapshot> snapshots_;
   int runs_ = 0;
@@ -256,13 +264,13 @@ GoalSolveReport solveHopperGoals(const Scene& scene_in, const AssetLoader* asset
     for (size_t g = 0; g < G; ++g) {
       const Goal& goal = scene.goals[g];
       if (goal.t > until + 1e-12) continue;
-      r.segment<3>(3 * Eigen::Index(g)) = std::sqrt(goal.weight) / goal.tolerance * (p[g] - goal.position);
+      r.segment<3>(3 * Eigen::Index(g)) = std::sqrt(goal.weight) / goal.tolerance * (p[g] - shooter.target(g));
     }
     return r;
   };
   const auto allMet = [&](const std::vector<Eigen::Vector3d>& p) {
     for (size_t g = 0; g < G; ++g)
-      if (scene.goals[g].t <= until + 1e-12 && (p[g] - scene.goals[g].position).norm() > scene.goals[g].tolerance)
+      if (scene.goals[g].t <= until + 1e-12 && (p[g] - shooter.target(g)).norm() > scene.goals[g].tolerance)
         return false;
     return true;
   };
@@ -339,7 +347,7 @@ GoalSolveReport solveHopperGoals(const Scene& scene_in, const AssetLoader* asset
       ++report.iterations;
       double worst = 0.0;
       for (size_t g = 0; g < G; ++g)
-        if (scene.goals[g].t <= until + 1e-12) worst = std::max(worst, (points[g] - scene.goals[g].position).norm());
+        if (scene.goals[g].t <= until + 1e-12) worst = std::max(worst, (points[g] - shooter.target(g)).norm());
       std::snprintf(line, sizeof line,
                     "window to t = %.3g s, iteration %d: largest goal error %.1f mm, effort %.4g m^2/s, damping %.2g",
                     until, it + 1, worst * 1000.0, hopperCommandEffort(scene, keys.script(c), T), mu);
@@ -371,7 +379,7 @@ GoalSolveReport solveHopperGoals(const Scene& scene_in, const AssetLoader* asset
   report.goals.resize(G);
   for (size_t g = 0; g < G; ++g) {
     GoalOutcome& o = report.goals[g];
-    o.target = scene.goals[g].position;
+    o.target = shooter.target(g);
     o.reached = points[g];
     o.error = (o.reached - o.target).norm();
     o.met = o.error <= scene.goals[g].tolerance;

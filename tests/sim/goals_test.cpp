@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "cube_head.h"
 #include "sim/goal_solve.h"
 #include "sim/scene_io.h"
 #include "sim/sim.h"
@@ -346,6 +347,29 @@ TEST(HopperGoals, AGoalSpringPullsTheToeAndCostsMoreThanTheCommands) {
   // The muscles' work beyond the scene's own course (it can be less: here -5.9 J of |power|).
   EXPECT_NE(r.abs_energy, 0.0) << "the muscles' extra work is measured";
   EXPECT_LT(std::abs(r.abs_energy), 0.5 * spring.abs_work);
+}
+
+// A mark in the head's frame rides on the keyframed head: the solve compares the toe with where
+// the head carries the mark at the goal's time, not with the head-frame numbers as a world point.
+TEST(HopperGoals, AMarkInTheHeadsFrameIsWhereTheHeadCarriesIt) {
+  const CubeAssets cube;
+  Scene s = parseSceneText(
+      R"({"physics": {"dt": 0.001, "integrator": "rk4", "stabilization": "projection"},
+          "hopper": {"position": [0, 0, 1.05], "command": {"vx": 0.5}},
+          "head": {"animation": {"keys": [{"t": 0, "position": [0, 0, 1.6], "rotation": [0, 0, 0]},
+                                          {"t": 2, "position": [0.4, 0.1, 1.7], "rotation": [0, 0, 60]}]}}})",
+      "hop_head.json");
+  Sim sim(s, &cube);
+  sim.advanceTo(1.4);
+  const Eigen::Vector3d toe = sim.hopper()->footPoint(sim.world());
+  const RigidBody& head = sim.world().body(sim.headBody());
+  const Eigen::Vector3d in_head = head.q.conjugate() * (toe - head.x);
+  ASSERT_GT((in_head - toe).norm(), 0.5) << "the two frames must differ for the test to mean anything";
+  s.goals = {Goal{.t = 1.4, .point = "toe", .position = in_head, .frame = GoalFrame::Head, .tolerance = 0.02}};
+  const GoalSolveReport r = solveGoals(s, &cube, {.knots = 3});
+  EXPECT_TRUE(r.all_met) << r.goals[0].error;
+  EXPECT_EQ(r.iterations, 0) << "the unguided landing is already on the mark";
+  EXPECT_LT((r.goals[0].target - toe).norm(), 1e-9);
 }
 
 TEST(HopperGoals, AMarkOutOfReachIsReportedWithWhatStoppedIt) {
