@@ -126,6 +126,75 @@ char statedUpAxis(const aiScene& scene) {
   return 0;
 }
 
+// A skinned mesh is drawn in its skeleton's rest pose: each vertex where its bones put it (the sum
+// over its bones of weight x bone node's global transform x offset matrix), as a viewer shows the
+// file with no animation playing. PreTransformVertices, which follows, places a mesh by its own
+// node's transform alone; for most files the two agree (the skeleton rests in the bind pose) and
+// the mesh is left untouched, bit for bit. Where they differ (DirectX's BCN_Epileptic.X: the head,
+// torso and legs each come out displaced and turned, head down), the rest pose is written back in
+// the mesh node's frame, so that PreTransformVertices puts it where the bones do.
+void poseSkinnedMeshes(aiScene& scene) {
+  std::vector<const aiNode*> node_of(scene.mNumMeshes, nullptr);
+  std::vector<const aiNode*> stack{scene.mRootNode};
+  while (!stack.empty()) {
+    const aiNode* n = stack.back();
+    stack.pop_back();
+    for (unsigned i = 0; i < n->mNumMeshes; ++i)
+      if (n->mMeshes[i] < scene.mNumMeshes && !node_of[n->mMeshes[i]]) node_of[n->mMeshes[i]] = n;
+    for (unsigned c = 0; c < n->mNumChildren; ++c) stack.push_back(n->mChildren[c]);
+  }
+  const auto global = [](const aiNode* n) {
+    aiMatrix4x4 g;
+    for (; n; n = n->mParent) g = n->mTransformation * g;
+    return g;
+  };
+  for (unsigned mi = 0; mi < scene.mNumMeshes; ++mi) {
+    aiMesh* am = scene.mMeshes[mi];
+    if (am->mNumBones == 0 || !node_of[mi] || am->mNumVertices == 0) continue;
+    const aiMatrix4x4 node = global(node_of[mi]);
+    std::vector<aiVector3D> pos(am->mNumVertices, aiVector3D(0, 0, 0)), nor(am->mNumVertices, aiVector3D(0, 0, 0));
+    std::vector<float> weight(am->mNumVertices, 0.0f);
+    bool usable = true;
+    for (unsigned b = 0; b < am->mNumBones && usable; ++b) {
+      const aiBone* bone = am->mBones[b];
+      const aiNode* bn = scene.mRootNode->FindNode(bone->mName);
+      if (!bn) {
+        usable = false;  // a bone with no node: the file's own placement is all there is
+        break;
+      }
+      const aiMatrix4x4 M = global(bn) * bone->mOffsetMatrix;
+      const aiMatrix3x3 R(M);
+      for (unsigned k = 0; k < bone->mNumWeights; ++k) {
+        const aiVertexWeight& w = bone->mWeights[k];
+        if (w.mVertexId >= am->mNumVertices || !(w.mWeight > 0.0f)) continue;
+        pos[w.mVertexId] += (M * am->mVertices[w.mVertexId]) * w.mWeight;
+        if (am->mNormals) nor[w.mVertexId] += (R * am->mNormals[w.mVertexId]) * w.mWeight;
+        weight[w.mVertexId] += w.mWeight;
+      }
+    }
+    if (!usable) continue;
+    // Does the rest pose differ from the node's placement? (Beyond float round-off: 1e-4 of the
+    // mesh's size.)
+    aiVector3D lo(1e30f, 1e30f, 1e30f), hi(-1e30f, -1e30f, -1e30f);
+    float moved = 0.0f;
+    for (unsigned v = 0; v < am->mNumVertices; ++v) {
+      const aiVector3D placed = node * am->mVertices[v];
+      lo = aiVector3D(std::min(lo.x, placed.x), std::min(lo.y, placed.y), std::min(lo.z, placed.z));
+      hi = aiVector3D(std::max(hi.x, placed.x), std::max(hi.y, placed.y), std::max(hi.z, placed.z));
+      if (weight[v] > 0.0f) moved = std::max(moved, (pos[v] / weight[v] - placed).Length());
+    }
+    if (!(moved > 1e-4f * (hi - lo).Length())) continue;
+    aiMatrix4x4 to_node = node;
+    to_node.Inverse();
+    const aiMatrix3x3 to_node_r(to_node);
+    for (unsigned v = 0; v < am->mNumVertices; ++v) {
+      if (!(weight[v] > 0.0f)) continue;  // no bone holds it: where its node puts it
+      am->mVertices[v] = to_node * (pos[v] / weight[v]);
+      if (am->mNormals) am->mNormals[v] = (to_node_r * nor[v]).NormalizeSafe();
+    }
+  }
+}
+
 // assimp itself, in whatever process calls it.
 bool importMesh(const std::string& path, MeshData& out, std::string* err) {
   Assimp::Importer importer;
@@ -144,7 +213,12 @@ bool importMesh(const std::string& path, MeshData& out, std::string* err) {
   // bakes in and resets) tells whether the importer turned the file's axes.
   const aiScene* scene = importer.ReadFile(path, 0);
   char file_up = 0;
-  if (scene && scene->mRootNode) file_up = statedUpAxis(*scene);
+  if (scene && scene->mRootNode) {
+    file_up = statedUpAxis(*scene);
+    // The importer's own scene, changed in place before its post-processing (the Importer owns it
+    // and hands it out const only to keep callers from changing it behind the post-processing).
+    poseSkinnedMeshes(const_cast<aiScene&>(*scene));
+  }
   if (scene) scene = importer.ApplyPostProcessing(flags);
   if (!scene || !scene->mRootNode || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
     // An incomplete scene comes with no error string (Half-Life's manT.mdl holds textures only).

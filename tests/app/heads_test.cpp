@@ -221,6 +221,23 @@ TEST(HeadsTexture, AnUnnamedSkinIsFoundBesideTheModelAndAMissingNamedOneIsSaidOn
   }
 }
 
+// A skinned file is drawn in its skeleton's rest pose: DirectX's BCN_Epileptic.X (three meshes
+// placed by their bones) comes out as the same man as its XGL copy, the same proportions along
+// his three axes. By the meshes' nodes alone his head, torso and legs came apart.
+TEST(HeadsLoad, ASkinnedCharacterIsDrawnInItsRestPose) {
+  const auto proportions = [](const std::string& path) {
+    MeshData m;
+    std::string err;
+    EXPECT_TRUE(loadMesh(path, m, &err)) << err;
+    Eigen::Vector3f e = m.bbox.sizes();
+    std::sort(e.data(), e.data() + 3);
+    return Eigen::Vector3f(e / e.z());
+  };
+  const Eigen::Vector3f x = proportions(kModels + "X/BCN_Epileptic.X");
+  const Eigen::Vector3f xgl = proportions(kModels + "XGL/BCN_Epileptic.zgl");
+  EXPECT_LT((x - xgl).cwiseAbs().maxCoeff(), 0.02f) << x.transpose() << " against " << xgl.transpose();
+}
+
 // A file assimp reads without a mesh in it (Half-Life's manT.mdl: its textures only) is refused
 // with a reason, not an empty one.
 TEST(HeadsLoad, AFileWithoutAMeshSaysWhy) {
@@ -287,11 +304,11 @@ const WholeCase kWhole[] = {
     {"faerie", "MD2/faerie.md2", Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitX()},
     // 3ds Max (ASE): a mannequin in a T pose, y up after import, looking along +z.
     {"mocap_rom", "ASE/MotionCaptureROM.ase", Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()},
-    // DirectX: modelled head down along -z (its feet come out on top), looking along +y; found by
-    // the neck search from the other end and turned over.
+    // DirectX, skinned: head, torso and legs are three meshes placed by their bones (the rest pose;
+    // by their nodes alone they came out apart and head down), y up, looking along +z.
     // Its own braid hangs from the back of its skull: the anchor lands at the braid's root, at
     // mid-height (4 % of the head's height below its centre).
-    {"bcn_epileptic", "X/BCN_Epileptic.X", -Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitY(), -0.1},
+    {"bcn_epileptic", "X/BCN_Epileptic.X", Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ(), -0.1},
     // The same man as XGL, standing head up: the file says nothing, z up by its shape, and the
     // face along -y as z-up files are taken to look (his feet agree).
     {"bcn_epileptic_xgl", "XGL/BCN_Epileptic.zgl", Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitY(), -0.1},
