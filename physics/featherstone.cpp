@@ -1681,7 +1681,7 @@ Status ArticulatedSystem::step(double t, double h, Integrator integrator, std::v
       Coordinates* r = r_;
       rates(c0_, u0_, r[0]);
       // The first three stages' bodies are overwritten by the next: their constraint forces are
-      // not computed (the same bodies after the step, bit for bit; 4-7 % of an RK4 step).
+      // not computed (the same bodies after the step, bit for bit; 2-3 % of an RK4 step).
       if (!fresh) {
         if (Status st = derivative(t, c0_, u0_, bodies, hooks, k[0], written, false); !st.ok() || stopped_) return st;
       }
