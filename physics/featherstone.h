@@ -219,8 +219,11 @@ class ArticulatedSystem {
   // written: the bodies are as writeState() left them (unit quaternions, used as they are) and
   // only what ABA reads is needed (a spherical joint's S is left out: ABA runs on r_i and R_p).
   void jointKinematics(const std::vector<RigidBody>& bodies, std::vector<Kinematics>& out, bool written = false) const;
-  // ABA into udot (sized dofs); tau may be null. written: as for jointKinematics.
-  void aba(std::vector<RigidBody>& bodies, const Eigen::VectorXd* tau, Eigen::VectorXd& udot, bool written = false);
+  // ABA into udot (sized dofs); tau may be null. written: as for jointKinematics. forces: the
+  // bodies' constraint forces as well (the joint forces F^J, one more pass); an RK4 stage whose
+  // bodies the next stage overwrites leaves them out (only the last stage's reach the World).
+  void aba(std::vector<RigidBody>& bodies, const Eigen::VectorXd* tau, Eigen::VectorXd& udot, bool written = false,
+           bool forces = true);
   template <int D>
   void abaInward(size_t r, const Eigen::VectorXd* tau);
   template <int D>
@@ -228,7 +231,7 @@ class ArticulatedSystem {
   // u' at (t, c, u). written: the bodies already hold exactly (t, c, u) (the first stage of a
   // step after the last one wrote them): forward kinematics is not repeated.
   Status derivative(double t, const Coordinates& c, const Eigen::VectorXd& u, std::vector<RigidBody>& bodies,
-                    const ReducedHooks& hooks, Eigen::VectorXd& udot, bool written = false);
+                    const ReducedHooks& hooks, Eigen::VectorXd& udot, bool written = false, bool forces = true);
   // The loop joints' rows at the bodies as they are (eval of each), largest joint error.
   double evaluateLoops(const std::vector<RigidBody>& bodies);
   // After ABA's outward pass: the loop multipliers, u' and the node accelerations and joint forces

@@ -127,6 +127,31 @@ TEST(PhysicsFeatherstone, AbaAccelerationsEqualTheMultiplierSolvers) {
   }
 }
 
+// After a step the bodies' accelerations, applied forces and constraint forces come from one
+// evaluation (RK4: the last stage; the stages before it leave the constraint forces out), so
+// Newton holds body by body: m a = f + f_c.
+TEST(PhysicsFeatherstone, StepLeavesForcesOfOneEvaluation) {
+  for (Integrator integrator : {Integrator::RK4, Integrator::SymplecticEuler}) {
+    PhysicsParams pp = exactPhysics(SolverKind::Featherstone, 1.0 / 240.0);
+    pp.integrator = integrator;
+    pp.stabilization = Stabilization::None;
+    World world = makeSystem(0, pp);
+    ASSERT_TRUE(world.ok()) << world.status();
+    stirVelocities(world, 5u);
+    for (int s = 0; s < 5; ++s) {
+      world.step();
+      ASSERT_TRUE(world.ok()) << world.status();
+      for (int i = 0; i < world.bodyCount(); ++i) {
+        const RigidBody& b = world.body(i);
+        if (!b.isDynamic()) continue;
+        const Eigen::Vector3d residual = b.mass * b.a - b.force - b.constraint_force;
+        EXPECT_LT(residual.norm(), 1e-9 * (1.0 + b.constraint_force.norm() + b.force.norm()))
+            << enumName(integrator) << " step " << s << " body " << i;
+      }
+    }
+  }
+}
+
 TEST(PhysicsFeatherstone, RneaInvertsAbaAndCrbaAgrees) {
   for (int which : {0, 1, 2}) {
     World world = makeSystem(which, SolverKind::Featherstone);
