@@ -26,6 +26,7 @@ struct AdaptiveRun {
   double active_mean = 0.0;
   int active_max = 0;
   double substeps = 0.0;  // mean substeps per dt (max_step_rotation splits a dt when the joints turn fast)
+  double rotation = 2.0;  // max_step_rotation (deg): the reference takes a smaller one
   std::string stopped;    // the world's message when it stopped
 };
 
@@ -34,9 +35,11 @@ struct AdaptiveRun {
 // (max_step_rotation): a reduced model concentrates the motion in its few active joints, which
 // then turn faster than the full chain's (at a fixed 1/960 s without substeps the shaken 64-link
 // chain ran away at budgets 4 to 16; the full one did not).
-ChainWorld benchChain(int links, const std::string& anchor, double dt, int budget, double tolerance) {
+ChainWorld benchChain(int links, const std::string& anchor, double dt, int budget, double tolerance,
+                      double max_step_rotation) {
   PhysicsParams pp;
   pp.dt = dt;
+  pp.max_step_rotation = max_step_rotation;
   pp.solver = SolverKind::Featherstone;
   pp.integrator = Integrator::RK4;
   pp.adaptive_joints = budget;
@@ -53,7 +56,7 @@ ChainWorld benchChain(int links, const std::string& anchor, double dt, int budge
 }
 
 void runOnce(int links, const std::string& anchor, const AdaptiveBenchOptions& o, AdaptiveRun& run, bool record) {
-  ChainWorld cw = benchChain(links, anchor, 1.0 / o.dt_denominator, run.budget, run.tolerance);
+  ChainWorld cw = benchChain(links, anchor, 1.0 / o.dt_denominator, run.budget, run.tolerance, run.rotation);
   const long steps = std::lround(o.seconds * o.dt_denominator);
   const double e0 = cw.world.energy();
   std::vector<Eigen::Vector3d> tip;
@@ -85,6 +88,22 @@ void runOnce(int links, const std::string& anchor, const AdaptiveBenchOptions& o
   }
 }
 
+// RMS of the tip's distance between two runs over the steps [0, end), and the largest.
+std::pair<double, double> tipGap(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b,
+                                 size_t end) {
+  double sum = 0.0, worst = 0.0;
+  const size_t m = std::min({a.size(), b.size(), end});
+  for (size_t i = 0; i < m; ++i) {
+    const double e = (a[i] - b[i]).norm();
+    sum += e * e;
+    worst = std::max(worst, e);
+  }
+  return {m > 0 ? std::sqrt(sum / static_cast<double>(m)) : 0.0, worst};
+}
+
+// % of the chain's 1 m, two digits.
+std::string percent(double metres) { return fmt(100.0 * metres, "%.2g") + " %"; }
+
 }  // namespace
 
 int runAdaptiveBench(const AdaptiveBenchOptions& o) {
@@ -99,14 +118,19 @@ int runAdaptiveBench(const AdaptiveBenchOptions& o) {
      << "A chain of N links, 1 m long in all and 0.2 kg, solver featherstone, RK4 at dt = 1/" << o.dt_denominator
      << " s with the default automatic substeps (max_step_rotation 2 deg), " << fmt(o.seconds, "%g")
      << " s simulated. fixed: released from horizontal (energy drift is meaningful); shake: hanging from the "
-        "shaking anchor. Error: the tip's distance from the full run's tip at the same time (every dt) (RMS and max "
-        "over the "
-        "run; % of the chain's 1 m length). Cost: CPU seconds of World::step per simulated second, the least of "
+        "shaking anchor. Error: the tip's distance from the full run's tip at the same time (every dt), RMS over "
+        "the first 0.5 s, the first 1 s and the whole run, and the largest over the whole run, in % of the chain's "
+        "1 m. conv.: the same against a converged full run (max_step_rotation "
+     << fmt(o.reference_rotation, "%g")
+     << " deg, not timed; its row is the full run's own time-step error). Cost: CPU seconds of World::step per "
+        "simulated second, the least of "
      << o.repeats
      << " runs, the variants of a case interleaved. Active joints: per step, mean and max. Substeps: per dt, mean.\n\n"
      << "Load average before: " << load_before << ".\n\n"
-     << "| N | anchor | variant | tip RMS err (m) | max err (m) | RMS / length | energy drift (J) | CPU s per sim. s "
-        "| full / this | active mean | active max | substeps |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+     << "| N | anchor | variant | RMS 0-0.5 s | RMS 0-1 s | RMS 0-" << fmt(o.seconds, "%g")
+     << " s | max | conv. RMS 0-1 s | conv. RMS 0-" << fmt(o.seconds, "%g")
+     << " s | energy drift (J) | CPU s per sim. s | full / this | active mean | active max | substeps |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   int status = 0;
   for (int n : o.links) {
     for (const std::string& anchor : o.anchors) {
@@ -125,30 +149,40 @@ int runAdaptiveBench(const AdaptiveBenchOptions& o) {
       for (int r = 0; r < o.repeats; ++r) {
         for (AdaptiveRun& run : runs) runOnce(n, anchor, o, run, r == 0);
       }
+      AdaptiveRun reference = variant("converged", 0, 0.0);
+      reference.rotation = o.reference_rotation;
+      if (o.reference_rotation > 0.0) runOnce(n, anchor, o, reference, true);
       const AdaptiveRun& full = runs.front();
+      const size_t half = static_cast<size_t>(std::lround(0.5 * o.dt_denominator));
+      const size_t one = static_cast<size_t>(o.dt_denominator);
+      const size_t all = std::numeric_limits<size_t>::max();
       for (const AdaptiveRun& run : runs) {
-        double sum = 0.0, worst = 0.0;
-        const size_t m = std::min(run.tip.size(), full.tip.size());
-        for (size_t i = 0; i < m; ++i) {
-          const double e = (run.tip[i] - full.tip[i]).norm();
-          sum += e * e;
-          worst = std::max(worst, e);
-        }
-        const double rms = m > 0 ? std::sqrt(sum / static_cast<double>(m)) : 0.0;
-        md << "| " << n << " | " << anchor << " | " << run.variant << " | " << fmt(rms) << " | " << fmt(worst) << " | "
-           << fmt(100.0 * rms, "%.2g") << " % | " << (anchor == "fixed" ? fmt(run.drift) : std::string("-")) << " | "
-           << fmt(run.cpu) << " | " << fmt(full.cpu / run.cpu, "%.2f") << " | " << fmt(run.active_mean, "%.1f") << " | "
-           << run.active_max << " | " << fmt(run.substeps, "%.2f") << " |";
+        const auto [rms_half, max_half] = tipGap(run.tip, full.tip, half);
+        const auto [rms_one, max_one] = tipGap(run.tip, full.tip, one);
+        const auto [rms, worst] = tipGap(run.tip, full.tip, all);
+        const bool conv = !reference.tip.empty();
+        const double conv_one = conv ? tipGap(run.tip, reference.tip, one).first : 0.0;
+        const double conv_all = conv ? tipGap(run.tip, reference.tip, all).first : 0.0;
+        md << "| " << n << " | " << anchor << " | " << run.variant << " | " << percent(rms_half) << " | "
+           << percent(rms_one) << " | " << percent(rms) << " | " << percent(worst) << " | "
+           << (conv ? percent(conv_one) : std::string("-")) << " | " << (conv ? percent(conv_all) : std::string("-"))
+           << " | " << (anchor == "fixed" ? fmt(run.drift) : std::string("-")) << " | " << fmt(run.cpu) << " | "
+           << fmt(full.cpu / run.cpu, "%.2f") << " | " << fmt(run.active_mean, "%.1f") << " | " << run.active_max
+           << " | " << fmt(run.substeps, "%.2f") << " |";
         if (!run.stopped.empty()) {
           md << " stopped: " << run.stopped;
           status = 1;
         }
         md << "\n";
-        std::fprintf(
-            stderr,
-            "bench adaptive: N=%d %s %-14s rms %.3g m, max %.3g m, %.3g cpu s/s, active %.1f/%d, substeps %.2f%s\n", n,
-            anchor.c_str(), run.variant.c_str(), rms, worst, run.cpu, run.active_mean, run.active_max, run.substeps,
-            run.stopped.empty() ? "" : " (stopped)");
+        std::fprintf(stderr,
+                     "bench adaptive: N=%d %s %-14s rms %.3g / %.3g / %.3g m (0.5 s, 1 s, all), conv. %.3g / %.3g m, "
+                     "%.3g cpu s/s, active %.1f/%d, substeps %.2f%s\n",
+                     n, anchor.c_str(), run.variant.c_str(), rms_half, rms_one, rms, conv_one, conv_all, run.cpu,
+                     run.active_mean, run.active_max, run.substeps, run.stopped.empty() ? "" : " (stopped)");
+      }
+      if (!reference.stopped.empty()) {
+        md << "\nThe converged reference stopped: " << reference.stopped << "\n";
+        status = 1;
       }
       md.flush();
     }

@@ -1,7 +1,8 @@
 // `ponyhop bench --adaptive-only`: adaptive dynamics (physics.adaptive_joints,
 // physics.adaptive_tolerance; docs/SOLVERS.md) against the full featherstone step on long chains,
-// at the same dt: the tip's error, the energy drift, the CPU cost per simulated second and the
-// joints that moved. Its table goes to OUT/adaptive.md (docs/bench/adaptive.md).
+// at the same dt: the tip's error (against that full run and against a converged one), the energy
+// drift, the CPU cost per simulated second and the joints that moved. Its table goes to OUT/adaptive.md
+// (docs/bench/adaptive.md).
 #pragma once
 
 #include <string>
@@ -17,6 +18,10 @@ struct AdaptiveBenchOptions {
   double seconds = 2.0;                              // simulated per run
   int dt_denominator = 960;                          // dt = 1 / this
   int repeats = 2;                                   // timed runs per variant, interleaved; the least kept
+  // The converged reference: the full step with max_step_rotation this small (deg), not timed; its
+  // distance from the full run at the bench's own settings is that run's own time-step error.
+  // 0: no reference (its columns say "-").
+  double reference_rotation = 0.5;
   std::string out = "docs/bench";
   std::string command_line;
 };

@@ -904,6 +904,16 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 65536));
   cmd->add_option("--adaptive-seconds", args->adaptive.seconds, "Simulated seconds per run of --adaptive-only (2)")
       ->check(CLI::Range(0.01, 600.0));
+  cmd->add_option("--adaptive-anchors", args->adaptive.anchors, "Anchors of --adaptive-only (default fixed,shake)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"fixed", "shake"}));
+  cmd->add_option("--adaptive-tolerances", args->adaptive.tolerances,
+                  "Thresholds (J) of --adaptive-only's error form (default 1e-9,1e-7,1e-5; 0 = none)")
+      ->delimiter(',')
+      ->check(CLI::Range(0.0, 1e6));
+  cmd->add_option("--adaptive-reference", args->adaptive.reference_rotation,
+                  "max_step_rotation (deg) of --adaptive-only's converged reference, not timed (0.5; 0 = none)")
+      ->check(CLI::Range(0.0, 10.0));
   cmd->add_flag("--loops-only", args->loops_only,
                 "Only closed loops (the four-bar, the hair loop): closure, energy, cost, agreement; writes "
                 "OUT/loops.md (--dts, --repeats, --quick apply)");
@@ -914,6 +924,8 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
         if (!s.empty()) s += ",";
         if constexpr (std::is_same_v<std::decay_t<decltype(x)>, std::string>)
           s += x;
+        else if constexpr (std::is_floating_point_v<std::decay_t<decltype(x)>>)
+          s += fmt(x, "%g");
         else
           s += std::to_string(x);
       }
@@ -951,7 +963,10 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
         a.out = args->out;
         if (args->repeats > 0) a.repeats = args->repeats;
         a.command_line = args->command_line + " --adaptive-only --adaptive-links " + list(a.links) +
-                         " --adaptive-budgets " + list(a.budgets) + " --adaptive-seconds " + fmt(a.seconds, "%g");
+                         " --adaptive-budgets " + list(a.budgets) + " --adaptive-seconds " + fmt(a.seconds, "%g") +
+                         " --adaptive-anchors " + list(a.anchors) + " --adaptive-tolerances " + list(a.tolerances) +
+                         " --adaptive-reference " + fmt(a.reference_rotation, "%g");
+        std::erase_if(a.tolerances, [](double t) { return t <= 0.0; });
         exit_code = runAdaptiveBench(a);
         return;
       }

@@ -1167,12 +1167,15 @@ int ArticulatedSystem::choicePeriod() const {
   return std::clamp(joint_count_ / (4 * k), 1, 16);
 }
 
-// Candidates: the joints whose depth (joints from the root) is a multiple of n / (2 k), about 2 k
-// of them, so every rigid stretch is at least n / (2 k) links long (docs/SOLVERS.md, "Adaptive
-// dynamics", "Why the candidates are spaced"): no composite of one short link between two long
-// ones, whose fast turn set the substeps and whose stiff mode made RK4 unstable at the full
-// chain's substep.
-int ArticulatedSystem::candidateStride() const { return budget_ > 0 ? std::max(1, joint_count_ / (2 * budget_)) : 1; }
+// Candidates: the joints whose depth (joints from the root) is a multiple of n / k, about k of
+// them, so every rigid stretch is at least n / k links long (docs/SOLVERS.md, "Adaptive
+// dynamics", "Why the candidates are spaced"). A chain in motion everywhere then moves as the
+// even split into k stretches; the score drops the joints at rest and chooses among the
+// candidates when there are more than k (n / k not whole, trees). Spacing n / (2 k), which left
+// the score to pick k of 2 k, made uneven stretches (short ones between long ones): 2 to 4x the
+// tip error of the even split over the first second and up to 13x its substeps (a short
+// stretch between heavy ones whips).
+int ArticulatedSystem::candidateStride() const { return budget_ > 0 ? std::max(1, joint_count_ / budget_) : 1; }
 
 int ArticulatedSystem::activeJoints() const {
   int n = 0;
