@@ -31,7 +31,8 @@ Status ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, const 
   if (system.rows() > 0) {
     // b = -J'q' - J_d M^-1 F_ext - J_k acc_k - (2 alpha C' + beta^2 C)
     system.timesInto(acc, jx_);
-    rhs_ = -system.bias() - jx_;
+    rhs_ = -jx_;
+    if (!gains.velocity_level) rhs_ -= system.bias();
     if (gains.alpha != 0.0) {
       system.timesInto(vel, jx_);
       rhs_ -= 2.0 * gains.alpha * jx_;

@@ -27,6 +27,9 @@ namespace ponyhop {
 struct BaumgarteGains {
   double alpha = 0.0;  // 1/s, C' gain (2 alpha)
   double beta = 0.0;   // 1/s, C gain (beta^2)
+  // Velocity level (stabilization = velocity, alpha = 1 / (2h), beta^2 = erp / h^2): the term
+  // J' v is left out, so that a symplectic Euler step of h lands on J v' = -erp C / h.
+  bool velocity_level = false;
 };
 
 class ConstraintSolver {

@@ -19,6 +19,7 @@ using checks::finiteAndBounded;
 class World::ForceStagesScheme : public World::IntegratorScheme {
  public:
   void takeStep(World& w, double h) override {
+    w.force_step_ = h;                       // the step the joint-force stage is for (stabilization = velocity)
     w.updateKinematicBodies(w.state_.time);  // prescribed bodies: pose, velocity, acceleration at t
     w.followTeleports(h);                    // a prescribed body that jumps within the step carries its chain along
     w.applyExternalForces();                 // gravity, joint damping, bending springs, air drag

@@ -23,10 +23,12 @@ struct EnumNames<SolverKind> {
   static constexpr std::array<std::string_view, 3> names{"dense", "tree", "featherstone"};
 };
 
-enum class Stabilization { None, Baumgarte, Projection };
+// velocity: symplectic Euler's joints at velocity level, as game engines (ODE, Box2D, Bullet)
+// hold them: each step's multipliers make J v' = -erp C / h instead of J a = -J' v (docs/PHYSICS.md).
+enum class Stabilization { None, Baumgarte, Projection, Velocity };
 template <>
 struct EnumNames<Stabilization> {
-  static constexpr std::array<std::string_view, 3> names{"none", "baumgarte", "projection"};
+  static constexpr std::array<std::string_view, 4> names{"none", "baumgarte", "projection", "velocity"};
 };
 
 struct PhysicsParams {
@@ -41,8 +43,11 @@ struct PhysicsParams {
   SolverKind solver = SolverKind::Tree;
   Stabilization stabilization = Stabilization::Projection;
   // Baumgarte: C'' + 2 alpha C' + beta^2 C = 0 (alpha in 1/s, beta in 1/s).
-  double baumgarte_alpha = 10.0;             // 1/s
-  double baumgarte_beta = 10.0;              // 1/s
+  double baumgarte_alpha = 10.0;  // 1/s
+  double baumgarte_beta = 10.0;   // 1/s
+  // stabilization = velocity: the share of the joints' position error a step corrects (ODE's
+  // error reduction parameter).
+  double erp = 0.2;
   Eigen::Vector3d gravity{0.0, 0.0, -9.81};  // m/s^2, world frame (z up)
   // Automatic substeps: each dt starts with enough substeps that the fastest body turns at most
   // this much per substep. RATTLE: at the end of the dt too, else the dt is taken again with the
@@ -68,11 +73,16 @@ struct PhysicsParams {
       {.min = 1, .max = 1000, .help = "Steps taken per dt", .log = true, .soft_min = 1, .soft_max = 64});
     v("integrator", integrator, {.help = "Time integration method"});
     v("solver", solver, {.help = "How constraint forces are solved"});
-    v("stabilization", stabilization, {.help = "Correction of joint drift"});
+    v("stabilization", stabilization,
+      {.help = "Correction of joint drift (velocity: symplectic Euler's joints at velocity level, as game engines)"});
     v("baumgarte_alpha", baumgarte_alpha,
       {.unit = "1/s", .min = 0, .max = 1e4, .help = "Baumgarte velocity gain (C'' + 2aC' + b^2C = 0)"});
     v("baumgarte_beta", baumgarte_beta,
       {.unit = "1/s", .min = 0, .max = 1e4, .help = "Baumgarte position gain (C'' + 2aC' + b^2C = 0)"});
+    v("erp", erp,
+      {.min = 0,
+       .max = 1,
+       .help = "stabilization = velocity: share of the joint error corrected per step (ODE's ERP)"});
     v("gravity", gravity, {.unit = "m/s^2", .min = -1000, .max = 1000, .help = "Gravity, world frame (z up)"});
     v("max_step_rotation", max_step_rotation,
       {.unit = "deg", .min = 0, .max = 180, .help = "Largest turn of a body per substep; sets the substeps (0 = off)"});

@@ -12,6 +12,14 @@ Status validate(const PhysicsParams& p, const std::string& prefix) {
                          "': solver 'featherstone' integrates in joint space with rk4 or symplectic_euler ('" +
                          std::string(enumName(p.integrator)) + "' belongs to the multiplier formulation)");
   }
+  if (p.stabilization == Stabilization::Velocity &&
+      (p.integrator != Integrator::SymplecticEuler || p.solver == SolverKind::Featherstone)) {
+    return Status::error(prefix +
+                         ".stabilization = 'velocity': joints at velocity level are symplectic Euler's in "
+                         "the multiplier solvers (integrator 'symplectic_euler', solver 'dense' or 'tree'; "
+                         "here integrator '" +
+                         std::string(enumName(p.integrator)) + "', solver '" + std::string(enumName(p.solver)) + "')");
+  }
   if ((p.adaptive_joints > 0 || p.adaptive_tolerance > 0.0) && p.solver != SolverKind::Featherstone) {
     return Status::error(prefix + (p.adaptive_joints > 0 ? ".adaptive_joints" : ".adaptive_tolerance") +
                          ": adaptive dynamics runs on solver 'featherstone' only (physics.solver = '" +

@@ -457,6 +457,10 @@ void World::solveJointForces() {
   system_.evaluate(bodies_, joints_);
   BaumgarteGains gains;
   if (params_.stabilization == Stabilization::Baumgarte) gains = {params_.baumgarte_alpha, params_.baumgarte_beta};
+  if (params_.stabilization == Stabilization::Velocity && force_step_ > 0.0) {
+    // J a = -J v / h - erp C / h^2, so that v' = v + h a has J v' = -erp C / h (docs/PHYSICS.md).
+    gains = {0.5 / force_step_, std::sqrt(params_.erp) / force_step_, true};
+  }
   if (Status s = solver_->solveJointForces(bodies_, system_, gains); !s.ok()) {
     return stop("joint forces", s.message(),
                 "redundant or duplicate joints, a joint between two prescribed bodies, or a zero mass or inertia");

@@ -272,7 +272,8 @@ class World {
   bool forces_stale_ = false;
   State state_scratch_;  // watchStability() and integrate()
   Accelerations acc_scratch_;
-  bool gathered_ = false;  // watchStability() filled the scratch just before integrate()
+  bool gathered_ = false;    // watchStability() filled the scratch just before integrate()
+  double force_step_ = 0.0;  // s, the substep the force stages ran for (stabilization = velocity)
 
   // Diagnostics.
   StageClock clock_;  // per-stage timing (stageTimes())

@@ -635,6 +635,13 @@ void validateScene(const Scene& scene_in, const std::string& source) {
       if (Status s = validate(scene.hoppers[i], "hoppers." + std::to_string(i)); !s.ok()) errors.push_back(s.message());
     }
   }
+  if (const PhysicsParams& p = scene.physics; p.stabilization == Stabilization::Velocity) {
+    // Velocity-level joints: symplectic Euler's in the multiplier solvers (physics/validate.cpp),
+    // said with the file's other problems rather than when the world is built.
+    if (!(p.adaptive_joints > 0 || p.adaptive_tolerance > 0.0)) {
+      if (Status s = validate(p, "physics"); !s.ok()) errors.push_back(s.message());
+    }
+  }
   if (const PhysicsParams& p = scene.physics; p.adaptive_joints > 0 || p.adaptive_tolerance > 0.0) {
     // Adaptive dynamics (docs/SOLVERS.md): the reduced solver only, and no more joints than the
     // chain has (a scene on that solver has no other joints: the hoppers need contact rows).

@@ -336,6 +336,27 @@ TEST(SceneIo, AdaptiveDynamicsRefusesBadBudgetsAndTheMultiplierSolvers) {
             "");
 }
 
+// Velocity-level joints (stabilization = velocity) are symplectic Euler's in the multiplier
+// solvers; erp is a share, 0 to 1. Each message names the field.
+TEST(SceneIo, VelocityLevelJointsTakeSymplecticEulerAndAShare) {
+  const std::string rk4 = errorOf(
+      json::parse(R"({"anchor": {}, "chain": {}, "physics": {"integrator": "rk4", "stabilization": "velocity"}})"));
+  EXPECT_NE(rk4.find("physics.stabilization = 'velocity': joints at velocity level are symplectic Euler's"),
+            std::string::npos)
+      << rk4;
+  const std::string reduced = errorOf(json::parse(
+      R"({"anchor": {}, "chain": {},
+          "physics": {"solver": "featherstone", "integrator": "symplectic_euler", "stabilization": "velocity"}})"));
+  EXPECT_NE(reduced.find("physics.stabilization = 'velocity'"), std::string::npos) << reduced;
+  const std::string share = errorOf(json::parse(
+      R"({"anchor": {}, "chain": {},
+          "physics": {"integrator": "symplectic_euler", "stabilization": "velocity", "erp": 1.5}})"));
+  EXPECT_NE(share.find("physics.erp"), std::string::npos) << share;
+  EXPECT_EQ(errorOf(json::parse(R"({"anchor": {}, "chain": {},
+          "physics": {"integrator": "symplectic_euler", "stabilization": "velocity", "erp": 0.5}})")),
+            "");
+}
+
 // A collision section names collisions the scene can build: the ponytail against a head (on any
 // solver: featherstone too).
 TEST(SceneIo, CollisionSectionNeedsAChainOnAHead) {
