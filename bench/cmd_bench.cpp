@@ -167,6 +167,7 @@ std::string cannotRun(const Method& m) {
   PhysicsParams p;  // the combinations no solver can run are refused by validate(), as for a scene
   enumFromName(m.solver, p.solver);
   enumFromName(m.integrator, p.integrator);
+  enumFromName(m.stabilization, p.stabilization);
   return validate(p).message();  // "" when it can
 }
 
