@@ -405,17 +405,32 @@ bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Const
   // steady stage allocates nothing here. w_ never shrinks (the push-out keeps its first rows):
   // a column beyond the rows in use keeps its storage for the next stage's.
   if (w_.size() < static_cast<size_t>(m)) w_.resize(m);
+  // M^-1 of every column's impulse and joint correction (applyInverseMass and the solver's
+  // massWeightedTransposeInto, written out) with each body's R I^-1 R^T made once per build rather
+  // than once per body and column: the same products, so the same values.
+  if (!reduced_) {
+    inverse_inertia_.resize(n);
+    for (size_t i = 0; i < n; ++i)
+      if (bodies[i].isDynamic()) inverse_inertia_[i] = bodies[i].worldInverseInertia();
+  }
+  const auto inverse_mass = [&](size_t i, const Vector6d& x) {
+    Vector6d out;
+    out.head<3>() = x.head<3>() / bodies[i].mass;
+    out.tail<3>() = inverse_inertia_[i] * x.tail<3>();
+    return out;
+  };
   for (int k = 0; k < m && !reduced_; ++k) {
     const JRow& j = jrows_[k];
     std::vector<Vector6d>& w = w_[k];
     w.assign(n, Vector6d::Zero());
-    if (dynamicBody(bodies, j.a)) w[j.a] += applyInverseMass(bodies[j.a], j.ja);
-    if (dynamicBody(bodies, j.b)) w[j.b] += applyInverseMass(bodies[j.b], j.jb);
+    if (dynamicBody(bodies, j.a)) w[j.a] += inverse_mass(j.a, j.ja);
+    if (dynamicBody(bodies, j.b)) w[j.b] += inverse_mass(j.b, j.jb);
     if (has_joints) {
       joint_system_.timesInto(w, joint_rhs_);
       joint_solver.solveInto(joint_rhs_, joint_y_);
-      joint_solver.massWeightedTransposeInto(bodies, joint_system_, joint_y_, joint_corr_);
-      for (size_t i = 0; i < n; ++i) w[i] -= joint_corr_[i];
+      joint_corr_.assign(n, Vector6d::Zero());
+      joint_system_.addTransposeTimes(joint_y_, bodies, joint_corr_);
+      for (size_t i = 0; i < n; ++i) w[i] -= bodies[i].isDynamic() ? inverse_mass(i, joint_corr_[i]) : joint_corr_[i];
     }
   }
   // D_ik = J_i W_k, symmetrized against the round-off (D is symmetric positive semidefinite):
