@@ -233,7 +233,8 @@ double SignedDistanceGrid::trilinear(const Eigen::Vector3d& p, Eigen::Vector3d* 
     const double lo = rel[a] > 0.0 ? rel[a] : 0.0;  // max(rel, 0): 0 when equal, like maxsd
     clamped[a] = lo < top ? lo : top;
     inside = inside && rel[a] == clamped[a];
-    i0[a] = std::min(static_cast<int>(std::floor(clamped[a])), dims_[a] - 2);
+    // clamped >= 0, where truncation is the floor (std::floor is a call without SSE4.1).
+    i0[a] = std::min(static_cast<int>(clamped[a]), dims_[a] - 2);
     f[a] = clamped[a] - i0[a];
   }
   // The cell's 8 nodes from its lowest one by the strides of y and z (x is contiguous).
