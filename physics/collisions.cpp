@@ -129,7 +129,9 @@ std::vector<Collisions::Row> Collisions::detect(const std::vector<RigidBody>& bo
   const double collide_reach = reach + params_.margin;
   clearances_.resize(pairs_.size());
   const std::vector<Eigen::Vector3d>* cores = nullptr;  // asked for once, at the first grid pair
-  size_t core = 0;  // the pair's core ends in coresAt(): two per pair of a rounded shape and a grid
+  size_t core = 0;       // the pair's core ends in coresAt(): two per pair of a rounded shape and a grid
+  int grid_placed = -1;  // the grid shape placed in grid_placement (-1: none yet)
+  PlacedShape grid_placement;
   for (size_t k = 0; k < pairs_.size(); ++k) {
     const Pair& pr = pairs_[k];
     int ri = 0, gi = 0;
@@ -159,8 +161,16 @@ std::vector<Collisions::Row> Collisions::detect(const std::vector<RigidBody>& bo
       }
       clearance.certify = collide_reach + kClearanceSlack;
     }
-    collide(place(shapes_[pr.a], A.x, A.q), place(shapes_[pr.b], B.x, B.q), collide_reach, points, queries,
-            grid ? &clearance : nullptr);
+    // The grid's placement is the same for every pair of its (the ponytail's 9): made once.
+    const auto placed = [&](int shape, const RigidBody& body) {
+      if (shapes_[shape].type != ShapeType::Sdf) return place(shapes_[shape], body.x, body.q);
+      if (shape != grid_placed) {
+        grid_placement = place(shapes_[shape], body.x, body.q);
+        grid_placed = shape;
+      }
+      return grid_placement;
+    };
+    collide(placed(pr.a, A), placed(pr.b, B), collide_reach, points, queries, grid ? &clearance : nullptr);
     if (grid) {
       Clearance& last = clearances_[k];
       last.valid =
@@ -331,9 +341,9 @@ void Collisions::coresInGrids(const std::vector<RigidBody>& bodies, std::vector<
 // clearance plus half the thinnest radius never reaches the surface.
 // Asked once per state (the impact check's and the stage's question are the same one).
 bool Collisions::movedTooFar(const std::vector<RigidBody>& bodies) const {
-  const std::vector<Eigen::Vector3d>& cores = coresAt(bodies);
   AtState& s = at(bodies);
   if (s.too_far >= 0) return s.too_far == 1;
+  const std::vector<Eigen::Vector3d>& cores = coresAt(bodies);
   size_t k = 0;
   s.too_far = 0;
   for (const Pair& pr : pairs_) {
