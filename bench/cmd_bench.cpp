@@ -430,9 +430,12 @@ struct CollisionCostRow {
   std::string clip;
   bool on = false;
   double build_s = 0.0;  // s, building the Sim (with collisions: the head's distance grid too)
-  // CPU us per step of Sim::step, per round; of which the contact stage (the stage clock on thread CPU:
-  // impulses and push-outs; the impact check's searches and the splits are in the step, not here).
-  std::vector<double> us_per_step, contact_us;
+  // CPU us per step of Sim::step, per round, with no stage clock read (on and off alike); the
+  // contact stage (on: the stage clock on thread CPU, impulses and push-outs; the impact check's
+  // searches and the splits are in the step, not here), from a further run of the round with that
+  // clock read, and that run's whole step (the clock's own reads included: two a substep, each a
+  // system call of about 0.2 us, which the ratio must not charge to the collider).
+  std::vector<double> us_per_step, contact_us, timed_us;
   std::vector<double> ratio;  // on: per round, us_per_step / the same round's off
   int steps = 0;
   int max_contacts = 0;    // contacts and active limits after a step, at most
@@ -448,7 +451,8 @@ struct CollisionCostRow {
 namespace {
 
 // One run of a clip with the collider on or off into its row: the step's CPU time, the stage's.
-void runCollisionRound(const std::string& scene_path, double seconds, CollisionCostRow& r) {
+// `stage_clock` (on only): the contact stage is timed, and the step goes to timed_us instead.
+void runCollisionRound(const std::string& scene_path, double seconds, CollisionCostRow& r, bool stage_clock = false) {
   // Every round builds its grid, from the triangles: the build time is measured (neither the last
   // grid nor one stored by PONYHOP_GRID_CACHE, sim/grid_cache.h, once that has been looked up).
   useGridCacheFromEnvironment();
@@ -461,9 +465,9 @@ void runCollisionRound(const std::string& scene_path, double seconds, CollisionC
   Sim sim(scene, &assimpAssets());
   r.build_s = std::max(r.build_s, std::chrono::duration<double>(Clock::now() - t0).count());
   // The contact stage on the step's clock, so that contact / rest compares two thread CPU times;
-  // no other stage reads a clock (off reads none), so both sides time the same step.
+  // no other stage reads a clock. The runs the ratio compares read none (on and off alike).
   sim.world().setStageClock(StageClock::Source::ThreadCpu, StageClock::bit(Stage::Contact));
-  if (!r.on) sim.world().setStageTiming(false);
+  if (!stage_clock) sim.world().setStageTiming(false);
   sim.world().resetStageTimes();
   r.steps = 0;
   const double c0 = threadCpuSeconds();
@@ -482,8 +486,12 @@ void runCollisionRound(const std::string& scene_path, double seconds, CollisionC
     r.sweeps = static_cast<double>(c->stats().sweeps) / std::max(1, r.steps);
     r.capped = c->stats().capped;
   }
-  r.us_per_step.push_back(1e6 * cpu / std::max(1, r.steps));
-  r.contact_us.push_back(1e6 * sim.world().stageTimes()[Stage::Contact] / std::max(1, r.steps));
+  if (stage_clock) {
+    r.timed_us.push_back(1e6 * cpu / std::max(1, r.steps));
+    r.contact_us.push_back(1e6 * sim.world().stageTimes()[Stage::Contact] / std::max(1, r.steps));
+  } else {
+    r.us_per_step.push_back(1e6 * cpu / std::max(1, r.steps));
+  }
 }
 
 // "median (smallest-largest)" of the values, each with `format`.
@@ -502,6 +510,7 @@ std::vector<CollisionCostRow> benchCollisionCost(const std::string& scene_path, 
       runCollisionRound(scene_path, seconds, round % 2 ? on : off);
       runCollisionRound(scene_path, seconds, round % 2 ? off : on);
       on.ratio.push_back(on.us_per_step.back() / off.us_per_step.back());
+      runCollisionRound(scene_path, seconds, on, true);  // the contact stage's share
     }
     for (const CollisionCostRow* r : {&off, &on}) {
       std::fprintf(stderr,
@@ -531,11 +540,13 @@ void appendCollisionCost(const std::string& path, const std::string& scene, doub
     << " s of each clip with its `collision` section (on) and without it (off), the scene's own method, in "
     << std::max(1, rounds)
     << " interleaved rounds (off then on, on then off, ...). Per step: the CPU time of `Sim::step` (the thread's: a "
-       "preempted bench is not charged), and of it the contact stage (on the same clock, the only stage timed: "
-       "impulses and push-outs; the impact check's searches and the substeps it splits are in the step, not in the "
-       "stage); the "
+       "preempted bench is not charged) with no stage clock read on either side; the contact stage (impulses and "
+       "push-outs; the impact check's searches and the substeps it splits are in the step, not in the stage) from a "
+       "third run of each round with the stage clock on the same CPU clock (its reads, a system call each, are left "
+       "out of the ratio); the "
        "median over the rounds and, in brackets, the smallest and largest. On / off: each round's ratio of the two "
-       "(median and spread); contact / rest: the stage against the rest of the step (medians). Build: the slowest "
+       "(median and spread); contact / rest: the stage against the rest of the timed run's step (medians). Build: "
+       "the slowest "
        "round's scene construction (on: the head's distance grid as well). Per step, of the last round: the "
        "distance-field evaluations of the narrow phase (queries) and the projected Gauss-Seidel sweeps (impulses and "
        "push-outs); capped: solves that stopped at their sweep cap before their tolerance. Deepest contact: the "
@@ -547,7 +558,7 @@ void appendCollisionCost(const std::string& path, const std::string& scene, doub
        "status |\n"
     << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const CollisionCostRow& r : rows) {
-    const double step = median(r.us_per_step), stage = median(r.contact_us);
+    const double step = r.timed_us.empty() ? 0.0 : median(r.timed_us), stage = median(r.contact_us);
     f << "| " << r.clip << " | " << (r.on ? "on" : "off") << " | " << spreadOf(r.us_per_step, "%.1f") << " | "
       << (r.on ? spreadOf(r.contact_us, "%.1f") : "") << " | " << (r.on ? spreadOf(r.ratio, "%.2f") : "") << " | "
       << (r.on && step > stage ? fmt(stage / (step - stage), "%.2f") : "") << " | " << fmt(r.build_s, "%.2f") << " | "

@@ -129,7 +129,9 @@ std::vector<Collisions::Row> Collisions::detect(const std::vector<RigidBody>& bo
   const double collide_reach = reach + params_.margin;
   clearances_.resize(pairs_.size());
   const std::vector<Eigen::Vector3d>* cores = nullptr;  // asked for once, at the first grid pair
-  size_t core = 0;  // the pair's core ends in coresAt(): two per pair of a rounded shape and a grid
+  size_t core = 0;       // the pair's core ends in coresAt(): two per pair of a rounded shape and a grid
+  int grid_placed = -1;  // the grid shape placed in grid_placement (-1: none yet)
+  PlacedShape grid_placement;
   for (size_t k = 0; k < pairs_.size(); ++k) {
     const Pair& pr = pairs_[k];
     int ri = 0, gi = 0;
@@ -159,8 +161,16 @@ std::vector<Collisions::Row> Collisions::detect(const std::vector<RigidBody>& bo
       }
       clearance.certify = collide_reach + kClearanceSlack;
     }
-    collide(place(shapes_[pr.a], A.x, A.q), place(shapes_[pr.b], B.x, B.q), collide_reach, points, queries,
-            grid ? &clearance : nullptr);
+    // The grid's placement is the same for every pair of its (the ponytail's 9): made once.
+    const auto placed = [&](int shape, const RigidBody& body) {
+      if (shapes_[shape].type != ShapeType::Sdf) return place(shapes_[shape], body.x, body.q);
+      if (shape != grid_placed) {
+        grid_placement = place(shapes_[shape], body.x, body.q);
+        grid_placed = shape;
+      }
+      return grid_placement;
+    };
+    collide(placed(pr.a, A), placed(pr.b, B), collide_reach, points, queries, grid ? &clearance : nullptr);
     if (grid) {
       Clearance& last = clearances_[k];
       last.valid =
@@ -331,9 +341,9 @@ void Collisions::coresInGrids(const std::vector<RigidBody>& bodies, std::vector<
 // clearance plus half the thinnest radius never reaches the surface.
 // Asked once per state (the impact check's and the stage's question are the same one).
 bool Collisions::movedTooFar(const std::vector<RigidBody>& bodies) const {
-  const std::vector<Eigen::Vector3d>& cores = coresAt(bodies);
   AtState& s = at(bodies);
   if (s.too_far >= 0) return s.too_far == 1;
+  const std::vector<Eigen::Vector3d>& cores = coresAt(bodies);
   size_t k = 0;
   s.too_far = 0;
   for (const Pair& pr : pairs_) {
@@ -405,17 +415,32 @@ bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Const
   // steady stage allocates nothing here. w_ never shrinks (the push-out keeps its first rows):
   // a column beyond the rows in use keeps its storage for the next stage's.
   if (w_.size() < static_cast<size_t>(m)) w_.resize(m);
+  // M^-1 of every column's impulse and joint correction (applyInverseMass and the solver's
+  // massWeightedTransposeInto, written out) with each body's R I^-1 R^T made once per build rather
+  // than once per body and column: the same products, so the same values.
+  if (!reduced_) {
+    inverse_inertia_.resize(n);
+    for (size_t i = 0; i < n; ++i)
+      if (bodies[i].isDynamic()) inverse_inertia_[i] = bodies[i].worldInverseInertia();
+  }
+  const auto inverse_mass = [&](size_t i, const Vector6d& x) {
+    Vector6d out;
+    out.head<3>() = x.head<3>() / bodies[i].mass;
+    out.tail<3>() = inverse_inertia_[i] * x.tail<3>();
+    return out;
+  };
   for (int k = 0; k < m && !reduced_; ++k) {
     const JRow& j = jrows_[k];
     std::vector<Vector6d>& w = w_[k];
     w.assign(n, Vector6d::Zero());
-    if (dynamicBody(bodies, j.a)) w[j.a] += applyInverseMass(bodies[j.a], j.ja);
-    if (dynamicBody(bodies, j.b)) w[j.b] += applyInverseMass(bodies[j.b], j.jb);
+    if (dynamicBody(bodies, j.a)) w[j.a] += inverse_mass(j.a, j.ja);
+    if (dynamicBody(bodies, j.b)) w[j.b] += inverse_mass(j.b, j.jb);
     if (has_joints) {
       joint_system_.timesInto(w, joint_rhs_);
       joint_solver.solveInto(joint_rhs_, joint_y_);
-      joint_solver.massWeightedTransposeInto(bodies, joint_system_, joint_y_, joint_corr_);
-      for (size_t i = 0; i < n; ++i) w[i] -= joint_corr_[i];
+      joint_corr_.assign(n, Vector6d::Zero());
+      joint_system_.addTransposeTimes(joint_y_, bodies, joint_corr_);
+      for (size_t i = 0; i < n; ++i) w[i] -= bodies[i].isDynamic() ? inverse_mass(i, joint_corr_[i]) : joint_corr_[i];
     }
   }
   // D_ik = J_i W_k, symmetrized against the round-off (D is symmetric positive semidefinite):

@@ -236,10 +236,11 @@ class Collisions final : public ContactSet, public std::enable_shared_from_this<
     Vector6d ja, jb;
   };
   std::vector<JRow> jrows_;
-  std::vector<std::vector<Vector6d>> w_;  // per row: W_c column (per body); rows in use first
-  Eigen::VectorXd joint_rhs_, joint_y_;   // a column's joint solve: J_j M^-1 J_c^T, its multipliers
-  std::vector<Vector6d> joint_corr_;      // and their mass-weighted correction
-  Eigen::MatrixXd delassus_, normal_d_;   // D; the push-out's normal rows of it (swapped in)
+  std::vector<std::vector<Vector6d>> w_;          // per row: W_c column (per body); rows in use first
+  Eigen::VectorXd joint_rhs_, joint_y_;           // a column's joint solve: J_j M^-1 J_c^T, its multipliers
+  std::vector<Vector6d> joint_corr_;              // and their mass-weighted correction
+  std::vector<Eigen::Matrix3d> inverse_inertia_;  // per body: R I^-1 R^T at the Delassus build's state
+  Eigen::MatrixXd delassus_, normal_d_;           // D; the push-out's normal rows of it (swapped in)
   mutable AtState at_;
   mutable bool at_valid_ = false;
   bool grid_only_ = false;  // every pair is against a distance grid (the push-out remeasures)

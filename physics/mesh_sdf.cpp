@@ -219,53 +219,6 @@ Status SignedDistanceGrid::assign(const Eigen::Vector3d& origin, const Eigen::Ve
   return {};
 }
 
-double SignedDistanceGrid::trilinear(const Eigen::Vector3d& p, Eigen::Vector3d* grad) const {
-  const Eigen::Vector3d rel = (p - origin_) / cell_;
-  const Eigen::Vector3d top = (dims_ - Eigen::Vector3i::Ones()).cast<double>();
-  const Eigen::Vector3d clamped = rel.cwiseMax(0.0).cwiseMin(top);
-  Eigen::Vector3i i0;
-  Eigen::Vector3d f;
-  for (int a = 0; a < 3; ++a) {
-    i0(a) = std::min(static_cast<int>(std::floor(clamped(a))), dims_(a) - 2);
-    f(a) = clamped(a) - i0(a);
-  }
-  // The cell's 8 nodes from its lowest one by the strides of y and z (x is contiguous).
-  const size_t sy = static_cast<size_t>(dims_.x()), sz = sy * static_cast<size_t>(dims_.y());
-  const float* v = values_.data() + index(i0.x(), i0.y(), i0.z());
-  double c[2][2][2];
-  for (int dk = 0; dk < 2; ++dk)
-    for (int dj = 0; dj < 2; ++dj)
-      for (int di = 0; di < 2; ++di) c[di][dj][dk] = v[di + dj * sy + dk * sz];
-  const double x = f.x(), y = f.y(), z = f.z();
-  const auto lerp = [](double a, double b, double t) { return a + t * (b - a); };
-  const double c00 = lerp(c[0][0][0], c[1][0][0], x), c10 = lerp(c[0][1][0], c[1][1][0], x);
-  const double c01 = lerp(c[0][0][1], c[1][0][1], x), c11 = lerp(c[0][1][1], c[1][1][1], x);
-  const double c0 = lerp(c00, c10, y), c1 = lerp(c01, c11, y);
-  double value = lerp(c0, c1, z);
-  // Beyond the grid: plus the distance to it (inside, rel == clamped and nothing is added: the
-  // common case skips the square root).
-  const bool inside = rel == clamped;
-  const Eigen::Vector3d outside = inside ? Eigen::Vector3d::Zero() : Eigen::Vector3d((rel - clamped) * cell_);
-  const double out = inside ? 0.0 : outside.norm();
-  if (grad) {
-    if (out > 0.0) {
-      *grad = outside / out;  // beyond the grid: away from it
-    } else {
-      const double gx = lerp(lerp(c[1][0][0] - c[0][0][0], c[1][1][0] - c[0][1][0], y),
-                             lerp(c[1][0][1] - c[0][0][1], c[1][1][1] - c[0][1][1], y), z);
-      const double gy = lerp(lerp(c[0][1][0] - c[0][0][0], c[1][1][0] - c[1][0][0], x),
-                             lerp(c[0][1][1] - c[0][0][1], c[1][1][1] - c[1][0][1], x), z);
-      const double gz = c1 - c0;
-      Eigen::Vector3d g(gx, gy, gz);
-      const double n = g.norm();
-      *grad = n > 0.0 ? Eigen::Vector3d(g / n) : Eigen::Vector3d::UnitZ();
-    }
-  }
-  return value + out;
-}
-
-double SignedDistanceGrid::distance(const Eigen::Vector3d& p) const { return trilinear(p, nullptr); }
-
 Eigen::Vector3d SignedDistanceGrid::gradient(const Eigen::Vector3d& p) const {
   Eigen::Vector3d g;
   trilinear(p, &g);

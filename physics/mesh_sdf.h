@@ -24,6 +24,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -77,6 +79,58 @@ class SignedDistanceGrid {
   double lipschitz_ = 0.0;
   std::vector<float> values_;
 };
+
+// Inline, so that distance() (the searches' samples, no gradient) is compiled without the
+// gradient's branch. Written out per axis on scalars (the Eigen 3-vector version spent a third of its time in
+// temporaries); every value is the same operation in the same order as before, so the results are
+// the same bit for bit: clamping as max(rel, 0) then min(., top), the cell's origin node, the
+// fractions, seven lerps and, on request, the interpolant's gradient.
+inline double SignedDistanceGrid::trilinear(const Eigen::Vector3d& p, Eigen::Vector3d* grad) const {
+  double rel[3], clamped[3], f[3];
+  int i0[3];
+  bool inside = true;
+  for (int a = 0; a < 3; ++a) {
+    rel[a] = (p[a] - origin_[a]) / cell_;
+    const double top = static_cast<double>(dims_[a] - 1);
+    const double lo = rel[a] > 0.0 ? rel[a] : 0.0;  // max(rel, 0): 0 when equal, like maxsd
+    clamped[a] = lo < top ? lo : top;
+    inside = inside && rel[a] == clamped[a];
+    // clamped >= 0, where truncation is the floor (std::floor is a call without SSE4.1).
+    i0[a] = std::min(static_cast<int>(clamped[a]), dims_[a] - 2);
+    f[a] = clamped[a] - i0[a];
+  }
+  // The cell's 8 nodes from its lowest one by the strides of y and z (x is contiguous).
+  const size_t sy = static_cast<size_t>(dims_.x()), sz = sy * static_cast<size_t>(dims_.y());
+  const float* v = values_.data() + index(i0[0], i0[1], i0[2]);
+  const double c000 = v[0], c100 = v[1], c010 = v[sy], c110 = v[sy + 1];
+  const double c001 = v[sz], c101 = v[sz + 1], c011 = v[sz + sy], c111 = v[sz + sy + 1];
+  const double x = f[0], y = f[1], z = f[2];
+  const auto lerp = [](double a, double b, double t) { return a + t * (b - a); };
+  const double c00 = lerp(c000, c100, x), c10 = lerp(c010, c110, x);
+  const double c01 = lerp(c001, c101, x), c11 = lerp(c011, c111, x);
+  const double c0 = lerp(c00, c10, y), c1 = lerp(c01, c11, y);
+  const double value = lerp(c0, c1, z);
+  // Inside the grid (the common case) nothing is added and no square root is taken; beyond it,
+  // plus the distance to it.
+  if (inside) {
+    if (grad) {
+      const double gx = lerp(lerp(c100 - c000, c110 - c010, y), lerp(c101 - c001, c111 - c011, y), z);
+      const double gy = lerp(lerp(c010 - c000, c110 - c100, x), lerp(c011 - c001, c111 - c101, x), z);
+      const double gz = c1 - c0;
+      const Eigen::Vector3d g(gx, gy, gz);
+      const double n = g.norm();
+      *grad = n > 0.0 ? Eigen::Vector3d(g / n) : Eigen::Vector3d::UnitZ();
+    }
+    return value;
+  }
+  const Eigen::Vector3d outside =
+      Eigen::Vector3d(rel[0] - clamped[0], rel[1] - clamped[1], rel[2] - clamped[2]) * cell_;
+  const double out = outside.norm();
+  if (grad) *grad = outside / out;  // beyond the grid: away from it
+  return value + out;
+}
+
+inline double SignedDistanceGrid::distance(const Eigen::Vector3d& p) const { return trilinear(p, nullptr); }
 
 // Where the line {x_u = pu, x_v = pv} along axis a (u = a + 1, v = a + 2, mod 3) crosses the
 // triangle p0 p1 p2: true and the crossing's coordinate along a in `at`, or false.

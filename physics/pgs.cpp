@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
+#include <vector>
 
 namespace ponyhop {
 
@@ -14,14 +16,18 @@ namespace {
 // direction is found to `precision` (rad), first near the direction of `last` (the contact's
 // impulse at the sweep before). Returns false when no case fits (degenerate blocks): the caller
 // keeps the row-wise update.
+// `ldlt`: A's factorization, made by the first call that needs it and kept for the next sweeps
+// (A does not change within a solve).
 bool solveContact(const Eigen::Matrix3d& a, const Eigen::Vector3d& b, double mu, double precision,
-                  const Eigen::Vector3d& last, Eigen::Vector3d& p) {
+                  const Eigen::Vector3d& last, Eigen::Vector3d& p,
+                  std::optional<Eigen::LDLT<Eigen::Matrix3d>>& cached) {
   if (b(0) >= 0.0) {  // separating without an impulse
     p.setZero();
     return true;
   }
   Eigen::Vector3d stick = Eigen::Vector3d::Zero();
-  const Eigen::LDLT<Eigen::Matrix3d> ldlt(a);
+  if (!cached) cached.emplace(a);
+  const Eigen::LDLT<Eigen::Matrix3d>& ldlt = *cached;
   if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
     stick = ldlt.solve(-b);
     if (stick(0) >= 0.0 && stick.tail<2>().norm() <= mu * stick(0)) {
@@ -199,6 +205,7 @@ PgsResult projectedGaussSeidel(const Eigen::MatrixXd& d, const Eigen::VectorXd& 
   // The slip a sticking contact may keep, squared (compared with |u_t|^2 / D_tt^2).
   const double slip2 = (10.0 * settings.tolerance * scale) * (10.0 * settings.tolerance * scale);
   PgsResult result;
+  std::vector<std::optional<Eigen::LDLT<Eigen::Matrix3d>>> factored(blocks.size());
   int sweep = 0;
   for (; sweep < settings.max_sweeps; ++sweep) {
     double change = 0.0;
@@ -210,7 +217,7 @@ PgsResult projectedGaussSeidel(const Eigen::MatrixXd& d, const Eigen::VectorXd& 
         Eigen::Vector3d b = u.segment<3>(n) - a * own;
         b(0) -= target(n);
         Eigen::Vector3d solved;
-        if (solveContact(a, b, mu[c], direction_precision, own, solved)) {
+        if (solveContact(a, b, mu[c], direction_precision, own, solved, factored[c])) {
           for (int k = 0; k < 3; ++k) change = std::max(change, update(n + k, solved(k)));
           continue;
         }

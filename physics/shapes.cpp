@@ -196,6 +196,25 @@ struct Counted {
   }
 };
 
+// Counted's function when b is a grid: the pose's rotation taken once per search rather than per
+// sample, and the grid asked directly. The same expressions as signedDistance's, so the same
+// values bit for bit.
+struct GridCounted {
+  const Core& c;
+  const SignedDistanceGrid& g;
+  Eigen::Matrix3d r;
+  Eigen::Vector3d t;
+  long* queries;
+  GridCounted(const Core& core, const PlacedShape& b, long* q)
+      : c(core), g(*b.shape->sdf), r(b.pose.linear()), t(b.pose.translation()), queries(q) {}
+  double operator()(double s) const {
+    if (queries) ++*queries;
+    const Eigen::Vector3d x = c.at(s);
+    const Eigen::Vector3d local = r.transpose() * (x - t);
+    return g.distance(local) - c.radius(s);
+  }
+};
+
 // The smallest f(s) = D_b(p(s)) - r(s) over s for a rounded a when b is a grid, or a gap of at
 // least `reach` when there is none below it. f is not convex. It is sampled at n + 1 points at
 // most half a cell apart, and the samples bound everything between them: the grid's interpolant
@@ -215,13 +234,22 @@ struct Counted {
 double gridSearch(const Core& c, const PlacedShape& b, double reach, long* queries, double ends[2], bool* none,
                   GridClearance* clearance) {
   const SignedDistanceGrid& g = *b.shape->sdf;
-  const Counted f{c, b, queries};
+  const GridCounted f(c, b, queries);
   const double len = (c.b - c.a).norm();
   const int n = std::max(2, static_cast<int>(std::ceil(2.0 * len / g.cell())));
   const Eigen::Matrix3d r = b.pose.linear();
   const double slope = coreSlope(g, r.transpose() * (c.a - b.pose.translation()),
                                  r.transpose() * (c.b - b.pose.translation()), c.ra, c.rb);
-  std::vector<double> fs(static_cast<size_t>(n) + 1, std::numeric_limits<double>::quiet_NaN());
+  // The samples: on the stack for links of up to 127 spacings (every scene's), else on the heap.
+  constexpr int kStackSamples = 128;
+  double stack_fs[kStackSamples];
+  std::vector<double> heap_fs;
+  double* fs = stack_fs;
+  if (n + 1 > kStackSamples) {
+    heap_fs.resize(static_cast<size_t>(n) + 1);
+    fs = heap_fs.data();
+  }
+  std::fill(fs, fs + n + 1, std::numeric_limits<double>::quiet_NaN());
   fs[0] = f(0.0);
   fs[n] = f(1.0);
   ends[0] = fs[0];
