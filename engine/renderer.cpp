@@ -127,6 +127,7 @@ bool Renderer::Impl::buildPrograms(std::string* err) {
       {&prog_ground_up, "ground (upsampled)", kGroundUpVS, kGroundUpFS},
       {&prog_ground_near, "ground (near)", kGroundVS, kGroundFS, kGroundNearDefine},
       {&prog_ground_near_lit, "ground (near, lit)", kGroundVS, kGroundFS, kGroundNearLitDefine},
+      {&prog_ground_lit, "ground (lit)", kGroundVS, kGroundFS, kGroundLitDefine},
       {&prog_ground_shadow_class, "ground shadow (classify)", kFullscreenVS, kGroundShadowFS, kShadowClassifyDefine},
       {&prog_post_class, "post AA (edges)", kFullscreenVS, kPostAaFS, kPostEdgesDefine}};
   for (const P& p : progs) {

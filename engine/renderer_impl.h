@@ -145,6 +145,7 @@ struct Renderer::Impl {
   GLuint prog_ground_up = 0;            // the half-resolution ground, upsampled (kGroundUpFS)
   GLuint prog_ground_near = 0;          // kGroundFS where nothing fades (GROUND_NEAR)
   GLuint prog_ground_near_lit = 0;      // ... and nothing is shadowed (GROUND_LIT)
+  GLuint prog_ground_lit = 0;           // kGroundFS where nothing is shadowed (the ring)
   GLuint prog_ground_shadow_class = 0;  // the ground shadow's first pass (shadowClass)
   GLuint prog_post_class = 0;           // the post filter's first pass (edge or not)
   // Static geometry.

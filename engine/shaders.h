@@ -41,6 +41,7 @@ inline constexpr const char* kHairOnlySplitDefine =
 // Compiled into kGroundFS: the ground nearer than the fade (no fade), and also where it is lit.
 inline constexpr const char* kGroundNearDefine = "#define GROUND_NEAR 1\n";
 inline constexpr const char* kGroundNearLitDefine = "#define GROUND_NEAR 1\n#define GROUND_LIT 1\n";
+inline constexpr const char* kGroundLitDefine = "#define GROUND_LIT 1\n";
 // Compiled into kGroundShadowFS: the classifying first pass (shadowClass()).
 inline constexpr const char* kShadowClassifyDefine = "#define SHADOW_CLASSIFY 1\n";
 // Compiled into kPostAaFS: its first pass (flat pixels copied, edges marked).

@@ -812,3 +812,39 @@ TEST(Renderer, TheGroundKeptBetweenFramesIsTheGroundDrawnAnew) {
                 std::abs(luminance(kept[3], x, y) - luminance(lit, x, y)) > 3.0;
   EXPECT_GT(shadow, 200) << "no shadow on the ground";
 }
+
+// The ground's ring (from the square inside the fade's start out to the fade's end) is drawn
+// without the shadow lookup outside the shadow's pixel rectangle, as the square inside it is: a
+// shadow that falls in the ring must still be there, at one sample (the half-resolution ground)
+// and four (the ground after the objects).
+TEST(Renderer, AShadowInTheGroundsRingIsDrawn) {
+  REQUIRE_GL();
+  const Camera cam = testCamera();
+  // The fade starts 2 D + 1 m from the point looked at; the square inside it has half that over
+  // sqrt(2). The shadow's centre 4 m beyond the point looked at, along the view: in the ring
+  // (outside the square, before the fade starts).
+  const double D = (cam.target - cam.eye).norm();
+  const double fade_start = 2.0 * D + 1.0, inner = fade_start / std::sqrt(2.0);
+  Eigen::Vector3d fwd = cam.target - cam.eye;
+  fwd.z() = 0.0;
+  fwd.normalize();
+  const Eigen::Vector3d hit = Eigen::Vector3d(cam.target.x(), cam.target.y(), 0.0) + fwd * 4.0;
+  ASSERT_GT(std::max(std::abs(hit.x() - cam.target.x()), std::abs(hit.y() - cam.target.y())), inner + 0.2);
+  ASSERT_LT((hit - Eigen::Vector3d(cam.target.x(), cam.target.y(), 0.0)).norm(), fade_start - 0.2);
+  const Eigen::Vector3d d = LightParams().direction.normalized();
+  const Eigen::Vector3d centre = hit - d * (0.5 / -d.z());  // 0.5 m above the ground, towards the light
+  constexpr double kR = 0.15;
+  const auto sphere = [&](Renderer& r) { r.drawSphere(centre, kR, red()); };
+  const auto nothing = [](Renderer&) {};
+  for (int samples : {1, 4}) {
+    const auto shadowed = render(cam, testParams(samples), sphere);
+    const auto lit = render(cam, testParams(samples), nothing);
+    save("ring_shadow_" + std::to_string(samples) + ".png", shadowed);
+    const Eigen::Vector2d c = project(cam, centre), p = project(cam, hit);
+    const double r_px = (project(cam, centre + cam.view().block<1, 3>(1, 0).transpose() * kR) - c).norm();
+    ASSERT_GT((p - c).norm(), r_px + 3.0) << "the sphere hides its shadow's centre";
+    ASSERT_TRUE(p.x() > 2 && p.y() > 2 && p.x() < kW - 3 && p.y() < kH - 3);
+    const double dl = luminance(lit, int(p.x()), int(p.y())) - luminance(shadowed, int(p.x()), int(p.y()));
+    EXPECT_GT(dl, 20.0) << "no shadow in the ring at " << samples << " sample(s), pixel " << p.transpose();
+  }
+}
