@@ -10,7 +10,7 @@ FUZZ_SECONDS ?= 60
 SOAK_SECONDS ?= 600
 JOBS       ?= $(shell nproc)
 PONYHOP    := $(BUILD)/ponyhop
-DEMO_SCENES ?= ponytail ponytail_toss pigtails hair_loop hopper hopper_fall hopper_terrain
+DEMO_SCENES ?= ponytail ponytail_toss pigtails hair_loop long_hair rope hopper hopper_fall hopper_terrain
 DEMO_FRAMES ?= 300
 
 PREFIX     ?= /usr/local
