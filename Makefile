@@ -12,7 +12,8 @@ JOBS       ?= $(shell nproc)
 PONYHOP    := $(BUILD)/ponyhop
 DEMO_SCENES ?= ponytail ponytail_toss pigtails hair_loop long_hair rope hopper hopper_fall hopper_terrain
 DEMO_FRAMES ?= 300
-# The rope draws 1024 links a frame (about 0.15 s a frame at the default size): its first 3 s.
+# The rope draws 1024 links a frame (about 0.3 s a frame at the default size, video included): its
+# first 3 s, the release and the first swings.
 DEMO_FRAMES_rope ?= 90
 
 PREFIX     ?= /usr/local
