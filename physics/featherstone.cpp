@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <tuple>
@@ -1098,11 +1099,89 @@ Eigen::MatrixXd ArticulatedSystem::massMatrix(const std::vector<RigidBody>& bodi
   return h;
 }
 
-// Contact impulses in joint space: tau = Phi^T J^T (each row's wrench carried from its body to
-// every joint above it, F_p = X^T F), y = H^-1 tau, then the twists Phi y outward (V_i = X_i V_p +
-// S_i y_i, a prescribed parent still). Dense H: O(n^3) per contact stage with rows, O(n) per row.
+// Contact impulses in joint space, one row at a time by the articulated inertias (Featherstone
+// 2008, ch. 7; Mirtich 1996, "impulse propagation"): the response to a unit impulse is the ABA at
+// zero speed with the impulse as the only force. Once per call, inward: the articulated inertias
+// I^A_i = M_i + sum_c X_c^T (I^A_c - U_c D_c^-1 U_c^T) X_c, U = I^A S, D = S^T U (no bias: the
+// response is linear in the impulse). Per row: p^A = -F on the row's bodies, carried inward along
+// their paths to the root only (p^A is zero off them), u = -S^T p^A, p^a = p^A + U D^-1 u; then
+// outward over every node, du_i = D^-1 (u_i - U^T A'), A = A' + S du (A' = X A_p, a prescribed
+// parent still). O(n) per call plus O(n) per row, against the dense H's O(n^3) Cholesky and
+// O(n^2) per row: exactly Phi H^-1 Phi^T J^T in exact arithmetic (physics_tests compare them).
 bool ArticulatedSystem::impulseResponse(const std::vector<RigidBody>& bodies, const std::vector<ImpulseRow>& rows,
                                         std::vector<std::vector<Vector6d>>& out) const {
+  const size_t n = nodes_.size();
+  const size_t m = rows.size();
+  if (out.size() < m) out.resize(m);
+  ImpulseWork& w = impulse_work_;
+  w.node_of.assign(bodies.size(), -1);
+  for (size_t i = 0; i < n; ++i) w.node_of[nodes_[i].body] = static_cast<int>(i);
+  jointKinematics(bodies, w.kin);
+  w.ia.resize(n);
+  w.U.resize(n);
+  w.dinv.resize(n);
+  for (size_t i = 0; i < n; ++i) w.ia[i] = spatialInertia(bodies[nodes_[i].body]);
+  for (size_t r = n; r-- > 0;) {
+    const Node& nd = nodes_[r];
+    const auto S = w.kin[r].S.leftCols(nd.dofs);
+    w.U[r].leftCols(nd.dofs).noalias() = w.ia[r] * S;
+    const Small d = S.transpose() * w.U[r].leftCols(nd.dofs);
+    const Eigen::LLT<Small> llt(d);
+    if (llt.info() != Eigen::Success) return false;
+    w.dinv[r].topLeftCorner(nd.dofs, nd.dofs) = llt.solve(Small::Identity(nd.dofs, nd.dofs));
+    if (nd.parent_node < 0) continue;
+    const auto U = w.U[r].leftCols(nd.dofs);
+    const Matrix6 ia_a = w.ia[r] - U * w.dinv[r].topLeftCorner(nd.dofs, nd.dofs) * U.transpose();
+    w.ia[nd.parent_node] += shiftInertia(w.kin[r].d, ia_a);
+  }
+  w.pa.assign(n, Vector6d::Zero());
+  w.u.assign(n, Vector6d::Zero());
+  w.acc.resize(n);
+  for (size_t k = 0; k < m; ++k) {
+    const ImpulseRow& row = rows[k];
+    // The paths from the row's bodies to the root, deepest first (parents come before children).
+    w.path.clear();
+    for (const auto& [body, wrench] :
+         {std::pair<int, Vector6d>{row.a, row.ja}, std::pair<int, Vector6d>{row.b, row.jb}}) {
+      if (body < 0 || body >= static_cast<int>(bodies.size()) || w.node_of[body] < 0) continue;
+      w.pa[w.node_of[body]] -= wrench;
+      for (int j = w.node_of[body]; j >= 0; j = nodes_[j].parent_node) w.path.push_back(j);
+    }
+    std::sort(w.path.begin(), w.path.end(), std::greater<>());
+    w.path.erase(std::unique(w.path.begin(), w.path.end()), w.path.end());
+    for (int r : w.path) {
+      const Node& nd = nodes_[r];
+      const auto S = w.kin[r].S.leftCols(nd.dofs);
+      w.u[r].head(nd.dofs).noalias() = -(S.transpose() * w.pa[r]);
+      if (nd.parent_node < 0) continue;
+      const Vector6d pa_a =
+          w.pa[r] + w.U[r].leftCols(nd.dofs) * (w.dinv[r].topLeftCorner(nd.dofs, nd.dofs) * w.u[r].head(nd.dofs));
+      addShiftedForce(w.kin[r].d, pa_a, w.pa[nd.parent_node]);
+    }
+    std::vector<Vector6d>& twists = out[k];
+    twists.assign(bodies.size(), Vector6d::Zero());
+    for (size_t i = 0; i < n; ++i) {
+      const Node& nd = nodes_[i];
+      const Vector6d a = nd.parent_node >= 0 ? shiftMotion(w.kin[i].d, w.acc[nd.parent_node]) : Vector6d::Zero();
+      const SmallVec du =
+          w.dinv[i].topLeftCorner(nd.dofs, nd.dofs) * (w.u[i].head(nd.dofs) - w.U[i].leftCols(nd.dofs).transpose() * a);
+      w.acc[i] = a + w.kin[i].S.leftCols(nd.dofs) * du;
+      twists[nd.body] = w.acc[i];
+    }
+    for (int r : w.path) {
+      w.pa[r].setZero();
+      w.u[r].setZero();
+    }
+  }
+  return true;
+}
+
+// The same by the dense H (the reference physics_tests compare impulseResponse() with): tau =
+// Phi^T J^T (each row's wrench carried from its body to every joint above it, F_p = X^T F),
+// y = H^-1 tau, then the twists Phi y outward (V_i = X_i V_p + S_i y_i, a prescribed parent still).
+// O(n^3) per call (H's Cholesky) and O(n^2) per row.
+bool ArticulatedSystem::impulseResponseDense(const std::vector<RigidBody>& bodies, const std::vector<ImpulseRow>& rows,
+                                             std::vector<std::vector<Vector6d>>& out) const {
   const size_t n = nodes_.size();
   const int m = static_cast<int>(rows.size());
   if (out.size() < rows.size()) out.resize(rows.size());

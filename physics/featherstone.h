@@ -111,14 +111,18 @@ class ArticulatedSystem {
   // world or a prescribed body takes nothing). out[k][body] = Phi H^-1 Phi^T J_k^T, the velocity
   // change of every body (zero for bodies outside the tree) for row k, over all joints (a joint
   // rigid under adaptive dynamics takes the impulse like any other: the next step's choice sees the
-  // speeds). H is the CRBA's at the bodies as they are, factored once per call. False when H is
-  // not positive definite.
+  // speeds). By the articulated inertias at the bodies as they are (impulse propagation): O(n) once
+  // per call and O(n) per row, no dense H. False when a joint's D = S^T I^A S is not positive
+  // definite.
   struct ImpulseRow {
     int a = kWorldBody, b = kWorldBody;
     Vector6d ja = Vector6d::Zero(), jb = Vector6d::Zero();
   };
   bool impulseResponse(const std::vector<RigidBody>& bodies, const std::vector<ImpulseRow>& rows,
                        std::vector<std::vector<Vector6d>>& out) const;
+  // The same by a dense Cholesky of H (O(n^3)): the tests' reference.
+  bool impulseResponseDense(const std::vector<RigidBody>& bodies, const std::vector<ImpulseRow>& rows,
+                            std::vector<std::vector<Vector6d>>& out) const;
   // The bodies put back on the joints after someone moved them (a contact's push-out): the joint
   // coordinates and speeds read from them, then the bodies written (kinematic bodies must be at
   // the current time).
@@ -351,6 +355,16 @@ class ArticulatedSystem {
   Eigen::LLT<Eigen::MatrixXd> loop_llt_;
   Eigen::LLT<Eigen::Matrix3d> loop_llt3_;  // K's factor when loop_rows_ == 3 (one spherical loop joint)
   Eigen::VectorXd loop_rhs_, loop_lambda_, loop_step_;
+  // Work space of impulseResponse() (kept between contact stages: a steady stage allocates little).
+  struct ImpulseWork {
+    std::vector<int> node_of, path;
+    std::vector<Kinematics> kin;
+    std::vector<Matrix6> ia;
+    std::vector<Matrix6> U;     // I^A S (first dofs columns)
+    std::vector<Matrix6> dinv;  // D^-1 (top-left dofs x dofs)
+    std::vector<Vector6d> pa, u, acc;
+  };
+  mutable ImpulseWork impulse_work_;
 };
 
 }  // namespace ponyhop
