@@ -410,6 +410,25 @@ double deepestLink(const Sim& sim, const TriangleDistance& exact) {
 // (measured: 0.98 mm clear). With the head held still (so that the head's own turn does not move
 // the links), the first step moves no link by more than gravity does (measured 0.03 mm; the pop
 // was a jump of 11 mm in one 4 ms step).
+// The head's own triangles in its body frame, for the exact distance.
+TriangleDistance exactHead(const Sim& sim) {
+  std::vector<Vector3d> v;
+  for (const auto& p : sim.head()->mesh.positions) v.push_back(sim.head()->mesh_to_body * p.cast<double>());
+  return TriangleDistance(v, sim.head()->mesh.indices, 0.01, 0.016);
+}
+std::vector<Vector3d> linkCentres(const Sim& sim) {
+  std::vector<Vector3d> x;
+  for (int id : sim.chain()->links) x.push_back(sim.world().body(id).x);
+  return x;
+}
+// How far any link's centre has moved from `before` (m).
+double largestJump(const Sim& sim, const std::vector<Vector3d>& before) {
+  const std::vector<Vector3d> now = linkCentres(sim);
+  double jump = 0.0;
+  for (size_t i = 0; i < before.size(); ++i) jump = std::max(jump, (now[i] - before[i]).norm());
+  return jump;
+}
+
 TEST(CleanFirstFrame, NoLinkStartsInTheHeadAndNothingPops) {
   std::optional<TriangleDistance> exact;
   for (const bool still : {false, true}) {
@@ -417,19 +436,12 @@ TEST(CleanFirstFrame, NoLinkStartsInTheHeadAndNothingPops) {
     if (still) set.push_back({"head.animation.clip", ""});
     Sim sim(loadScene("assets/scenes/ponytail.json", set), &assimpAssets());
     ASSERT_TRUE(sim.ok() && sim.head() && sim.chain() && sim.collisions());
-    if (!exact) {
-      std::vector<Vector3d> v;
-      for (const auto& p : sim.head()->mesh.positions) v.push_back(sim.head()->mesh_to_body * p.cast<double>());
-      exact.emplace(v, sim.head()->mesh.indices, 0.01, 0.016);
-    }
+    if (!exact) exact.emplace(exactHead(sim));
     const double start = deepestLink(sim, *exact);
     EXPECT_LT(start, 0.0) << "a link but the first starts inside the head";
-    std::vector<Vector3d> before;
-    for (int id : sim.chain()->links) before.push_back(sim.world().body(id).x);
+    const std::vector<Vector3d> before = linkCentres(sim);
     ASSERT_TRUE(sim.step()) << sim.status();
-    double jump = 0.0;
-    for (size_t i = 0; i < before.size(); ++i)
-      jump = std::max(jump, (sim.world().body(sim.chain()->links[i]).x - before[i]).norm());
+    const double jump = largestJump(sim, before);
     std::printf(
         "ponytail%s: at t = 0 the deepest link point is %.3f mm inside (negative: clear), the first step "
         "moves a link %.3f mm\n",
@@ -449,16 +461,10 @@ TEST(CleanFirstFrame, LongHairStartsOutsideTheHead) {
   Sim sim(loadScene("assets/scenes/long_hair.json", {{"head.animation.clip", ""}}), &assimpAssets());
   ASSERT_TRUE(sim.ok() && sim.head() && sim.chain() && sim.collisions()) << sim.status();
   ASSERT_EQ(sim.chain()->links.size(), 64u);
-  std::vector<Vector3d> v;
-  for (const auto& p : sim.head()->mesh.positions) v.push_back(sim.head()->mesh_to_body * p.cast<double>());
-  const TriangleDistance exact(v, sim.head()->mesh.indices, 0.01, 0.016);
-  const double start = deepestLink(sim, exact);
-  std::vector<Vector3d> before;
-  for (int id : sim.chain()->links) before.push_back(sim.world().body(id).x);
+  const double start = deepestLink(sim, exactHead(sim));
+  const std::vector<Vector3d> before = linkCentres(sim);
   for (int k = 0; k < 3; ++k) ASSERT_TRUE(sim.step()) << sim.status();
-  double jump = 0.0;
-  for (size_t i = 0; i < before.size(); ++i)
-    jump = std::max(jump, (sim.world().body(sim.chain()->links[i]).x - before[i]).norm());
+  const double jump = largestJump(sim, before);
   std::printf(
       "long_hair: at t = 0 the deepest link point is %.3f mm inside (negative: clear); 3 steps move a "
       "link %.3f mm\n",
