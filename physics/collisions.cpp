@@ -424,10 +424,7 @@ bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Const
       if (bodies[i].isDynamic()) inverse_inertia_[i] = bodies[i].worldInverseInertia();
   }
   const auto inverse_mass = [&](size_t i, const Vector6d& x) {
-    Vector6d out;
-    out.head<3>() = x.head<3>() / bodies[i].mass;
-    out.tail<3>() = inverse_inertia_[i] * x.tail<3>();
-    return out;
+    return applyInverseMass(bodies[i], inverse_inertia_[i], x);
   };
   for (int k = 0; k < m && !reduced_; ++k) {
     const JRow& j = jrows_[k];

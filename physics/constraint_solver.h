@@ -83,12 +83,16 @@ class ConstraintSolver {
   Eigen::VectorXd rhs_, jx_;
 };
 
-// M^-1 x for one body's 6-vector (1/m on the linear part, I_world^-1 on the angular part).
-inline Vector6d applyInverseMass(const RigidBody& b, const Vector6d& x) {
+// M^-1 x for one body's 6-vector (1/m on the linear part, I_world^-1 on the angular part), with
+// its world inverse inertia R I^-1 R^T already made (a caller that needs it for many vectors).
+inline Vector6d applyInverseMass(const RigidBody& b, const Eigen::Matrix3d& inverse_inertia, const Vector6d& x) {
   Vector6d out;
   out.head<3>() = x.head<3>() / b.mass;
-  out.tail<3>() = b.worldInverseInertia() * x.tail<3>();
+  out.tail<3>() = inverse_inertia * x.tail<3>();
   return out;
+}
+inline Vector6d applyInverseMass(const RigidBody& b, const Vector6d& x) {
+  return applyInverseMass(b, b.worldInverseInertia(), x);
 }
 
 }  // namespace ponyhop
