@@ -437,7 +437,10 @@ bool Collisions::buildDelassus(const std::vector<RigidBody>& bodies, const Const
       joint_solver.solveInto(joint_rhs_, joint_y_);
       joint_corr_.assign(n, Vector6d::Zero());
       joint_system_.addTransposeTimes(joint_y_, bodies, joint_corr_);
-      for (size_t i = 0; i < n; ++i) w[i] -= bodies[i].isDynamic() ? inverse_mass(i, joint_corr_[i]) : joint_corr_[i];
+      // A kinematic body (the keyframed head) does not move: addTransposeTimes gives it no
+      // reaction, so its entry stays the zero the column started with.
+      for (size_t i = 0; i < n; ++i)
+        if (bodies[i].isDynamic()) w[i] -= inverse_mass(i, joint_corr_[i]);
     }
   }
   // D_ik = J_i W_k, symmetrized against the round-off (D is symmetric positive semidefinite):
