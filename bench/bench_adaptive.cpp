@@ -1,5 +1,6 @@
 #include "bench/bench_adaptive.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -127,6 +128,31 @@ std::vector<int> bestRigidFit(const std::vector<Eigen::Vector3d>& w, int k) {
   starts.push_back(0);
   std::reverse(starts.begin(), starts.end());
   return starts;
+}
+
+std::vector<double> hangingChainFrequencies(int links, int modes, double length, double g) {
+  const int n = links;
+  const double l = length / n, m = 1.0 / n;  // the mass cancels: unit total mass
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 0; k < n; ++k) {
+    for (int i = 0; i < k; ++i) J(k, i) = 1.0;
+    J(k, k) = 0.5;
+  }
+  const Eigen::MatrixXd M = m * l * l * (J.transpose() * J + Eigen::MatrixXd::Identity(n, n) / 12.0);
+  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < n; ++i) K(i, i) = m * g * l * ((n - 1 - i) + 0.5);
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K, M, Eigen::EigenvaluesOnly);
+  std::vector<double> out;
+  for (int k = 0; k < std::min(n, modes); ++k) out.push_back(std::sqrt(es.eigenvalues()(k)));
+  return out;
+}
+
+std::vector<double> continuumChainFrequencies(double length, double g) {
+  const double zeros[] = {2.404825558, 5.520078110, 8.653727913, 11.79153444, 14.93091771, 18.07106397,
+                          21.21163663, 24.35247153, 27.49347913, 30.63460647, 33.77582021, 36.91709835};
+  std::vector<double> out;
+  for (double z : zeros) out.push_back(0.5 * z * std::sqrt(g / length));
+  return out;
 }
 
 namespace {
@@ -387,6 +413,31 @@ int runAdaptiveBench(const AdaptiveBenchOptions& o) {
       }
       md.flush();
     }
+  }
+  if (std::find(o.oracles.begin(), o.oracles.end(), "chain") != o.oracles.end()) {
+    // A chain of k pieces is another pendulum: its linear modes against the continuum's.
+    const std::vector<double> cont = continuumChainFrequencies();
+    md << "\nLinear modes of a hanging chain of n thin rods (1 m, hangingChainFrequencies()): each mode's "
+          "angular frequency against the continuum's (j0m / 2) sqrt(g / L), in %; the continuum's in rad/s.\n\n| n |";
+    for (size_t m = 0; m < cont.size(); ++m) md << " mode " << m + 1 << " |";
+    md << "\n|---|";
+    for (size_t m = 0; m < cont.size(); ++m) md << "---|";
+    md << "\n";
+    std::vector<int> ns(o.budgets.begin(), o.budgets.end());
+    ns.insert(ns.end(), o.links.begin(), o.links.end());
+    std::sort(ns.begin(), ns.end());
+    ns.erase(std::unique(ns.begin(), ns.end()), ns.end());
+    for (int k : ns) {
+      const std::vector<double> w = hangingChainFrequencies(k, static_cast<int>(cont.size()));
+      md << "| " << k << " |";
+      for (size_t m = 0; m < cont.size(); ++m) {
+        md << " " << (m < w.size() ? fmt(100.0 * (w[m] / cont[m] - 1.0), "%+.2f") + " %" : std::string("-")) << " |";
+      }
+      md << "\n";
+    }
+    md << "| continuum |";
+    for (double c : cont) md << " " << fmt(c, "%.2f") << " |";
+    md << "\n";
   }
   md << "\nLoad average after: " << loadAverage() << ".\n";
   std::fprintf(stderr, "bench: adaptive dynamics -> %s\n", path.c_str());

@@ -41,6 +41,17 @@ struct AdaptiveBenchOptions {
 // least squares (sum over each stretch of |w_j - its mean|^2); k is capped at w's size.
 std::vector<int> bestRigidFit(const std::vector<Eigen::Vector3d>& w, int k);
 
+// Small planar oscillations of a chain of `links` uniform thin rods (length L, mass M in all)
+// hanging under gravity g about the vertical (docs/bench/adaptive.md, "A chain of k pieces is
+// another pendulum"): M'' th + K th = 0 with th_i link i's angle from the vertical (i = 0 at the
+// anchor), link l's centre at x_l = (L / n) (sum_{i<l} th_i + th_l / 2), so
+// M = m (L/n)^2 (J^T J + 1/12), J_li = 1 for i < l, 1/2 for i = l, and K = diag(m g (L/n) (n - i - 1/2)).
+// The first `modes` angular frequencies (rad/s), lowest first.
+std::vector<double> hangingChainFrequencies(int links, int modes, double length = 1.0, double g = 9.81);
+// The continuum's (the hanging chain of Bernoulli and Euler): (j_{0,m} / 2) sqrt(g / L), j_{0,m}
+// the zeros of the Bessel function J0, for m = 1 to 12.
+std::vector<double> continuumChainFrequencies(double length = 1.0, double g = 9.81);
+
 // Runs the section and writes OUT/adaptive.md; 0 when every run finished.
 int runAdaptiveBench(const AdaptiveBenchOptions& options);
 

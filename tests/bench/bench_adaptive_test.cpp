@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -31,6 +32,27 @@ TEST(BenchAdaptive, RigidFitFindsTheStretchesOfEqualAngularVelocity) {
   EXPECT_EQ(bestRigidFit(w, 2), (std::vector<int>{0, 3}));
   EXPECT_EQ(bestRigidFit(w, 1), (std::vector<int>{0}));
   EXPECT_EQ(bestRigidFit(w, 40).size(), 12u);  // capped at one stretch per link
+}
+
+// The linear modes of a hanging chain of thin rods tend to the continuum's (j0m / 2) sqrt(g / L):
+// 512 rods within 0.15 % for the first 12 modes, about 4x closer than 256; 16 rods mistune the 5th mode by 6.3 % and
+// the 12th by 42 % (docs/bench/adaptive.md, "A chain of k pieces is another pendulum"), 64 rods the 12th by 4.8 %: the
+// error grows about as (m / n)^2.
+TEST(BenchAdaptive, AChainOfRodsHasTheContinuumsModesWhenFine) {
+  const std::vector<double> cont = continuumChainFrequencies();
+  ASSERT_EQ(cont.size(), 12u);
+  const std::vector<double> fine = hangingChainFrequencies(512, 12), half = hangingChainFrequencies(256, 12);
+  ASSERT_EQ(fine.size(), 12u);
+  for (size_t m = 0; m < 12; ++m) {
+    EXPECT_NEAR(fine[m] / cont[m], 1.0, 1.5e-3) << "mode " << m + 1;
+    EXPECT_LT(std::abs(fine[m] / cont[m] - 1.0), 0.3 * std::abs(half[m] / cont[m] - 1.0) + 1e-9) << "mode " << m + 1;
+  }
+  const std::vector<double> coarse = hangingChainFrequencies(16, 12), mid = hangingChainFrequencies(64, 12);
+  EXPECT_NEAR(coarse[0] / cont[0], 1.0, 1e-3);
+  EXPECT_NEAR(coarse[4] / cont[4] - 1.0, 0.063, 0.002);
+  EXPECT_NEAR(coarse[11] / cont[11] - 1.0, 0.42, 0.01);
+  EXPECT_NEAR(mid[11] / cont[11] - 1.0, 0.048, 0.002);
+  EXPECT_EQ(hangingChainFrequencies(4, 12).size(), 4u);
 }
 
 // The cells of the row that starts with `head` (after it), or empty.
