@@ -167,8 +167,9 @@ class ArticulatedSystem {
   // it): a chooser replaces the candidates and the score. At the start of every step (period 1) it
   // gets the time, the system (depths, speeds), and the full model's joint accelerations u' at the
   // current state (the ABA with every joint free: the rigid joints, at zero relative speed, are in
-  // the full model's state), and fills `active` per node (free roots move whatever it says). The
-  // lock and the composite step are the shipped ones. Needs setAdaptive() on; empty: the score.
+  // the full model's state), and fills `active` per node (free roots move whatever it says; the
+  // budget is not applied to its set). The lock and the composite step are the shipped ones.
+  // Needs setAdaptive() on; empty: the score.
   using Chooser = std::function<void(double t, const ArticulatedSystem& system, const Eigen::VectorXd& full_udot,
                                      std::vector<char>& active)>;
   void setChooser(Chooser chooser) { chooser_ = std::move(chooser); }
