@@ -1,5 +1,6 @@
 #include "bench/bench_adaptive.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -7,9 +8,11 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 
 #include "bench/bench_report.h"
+#include "physics/featherstone.h"
 #include "physics/models/chain.h"
 
 namespace ponyhop {
@@ -28,6 +31,16 @@ struct AdaptiveRun {
   double substeps = 0.0;  // mean substeps per dt (max_step_rotation splits a dt when the joints turn fast)
   double rotation = 2.0;  // max_step_rotation (deg): the reference takes a smaller one
   std::string stopped;    // the world's message when it stopped
+  std::string oracle;     // a diagnostic choice (AdaptiveBenchOptions::oracles), empty for the shipped one
+  int links = 0;          // "chain": the full step on a chain of this many links (0: the case's N)
+};
+
+// What the oracles read from the full run: per dt, the joint speeds u and the links' world angular
+// velocities in depth order (the state at the end of step i, time (i + 1) dt).
+struct OracleReference {
+  double dt = 0.0;
+  std::vector<Eigen::VectorXd> u;
+  std::vector<std::vector<Eigen::Vector3d>> w;
 };
 
 // A chain of N links, 1 m long in all (hair to the waist), 0.2 kg; fixed: released from
@@ -55,8 +68,196 @@ ChainWorld benchChain(int links, const std::string& anchor, double dt, int budge
   return makeChainWorld(pp, cp, ap);
 }
 
-void runOnce(int links, const std::string& anchor, const AdaptiveBenchOptions& o, AdaptiveRun& run, bool record) {
+// The chain's nodes in depth order (the bench's systems are chains: one node per depth).
+std::vector<int> chainNodes(const ArticulatedSystem& sys) {
+  std::vector<int> out(sys.nodeCount(), -1);
+  for (int i = 0; i < sys.nodeCount(); ++i) {
+    const int d = sys.nodeDepth(i);
+    if (d >= sys.nodeCount() || out[d] >= 0) throw std::runtime_error("bench adaptive: an oracle needs a chain");
+    out[d] = i;
+  }
+  return out;
+}
+
+// The joints at the depths given (in depth order) active.
+void activateDepths(const std::vector<int>& nodes, const std::vector<int>& depths, std::vector<char>& active) {
+  for (int d : depths) active[nodes[d]] = 1;
+}
+
+// k stretches as even as whole links allow: joint j at depth floor(j n / k) (the shipped stride
+// n / k when it is whole).
+std::vector<int> evenDepths(int n, int k) {
+  std::vector<int> out;
+  for (int j = 0; j < std::min(n, k); ++j) out.push_back(static_cast<int>(static_cast<long>(j) * n / k));
+  return out;
+}
+
+}  // namespace
+
+// A dynamic programme over (stretches, end), each stretch's cost from prefix sums: O(k n^2).
+std::vector<int> bestRigidFit(const std::vector<Eigen::Vector3d>& w, int k) {
+  const int n = static_cast<int>(w.size());
+  k = std::min(k, n);
+  std::vector<Eigen::Vector3d> sum(n + 1, Eigen::Vector3d::Zero());
+  std::vector<double> sq(n + 1, 0.0);
+  for (int j = 0; j < n; ++j) {
+    sum[j + 1] = sum[j] + w[j];
+    sq[j + 1] = sq[j] + w[j].squaredNorm();
+  }
+  const auto cost = [&](int a, int b) { return sq[b] - sq[a] - (sum[b] - sum[a]).squaredNorm() / (b - a); };
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<std::vector<double>> f(k + 1, std::vector<double>(n + 1, inf));
+  std::vector<std::vector<int>> from(k + 1, std::vector<int>(n + 1, -1));
+  for (int b = 1; b <= n; ++b) f[1][b] = cost(0, b);
+  for (int m = 2; m <= k; ++m) {
+    for (int b = m; b <= n; ++b) {
+      for (int a = m - 1; a < b; ++a) {
+        const double c = f[m - 1][a] + cost(a, b);
+        if (c < f[m][b]) {
+          f[m][b] = c;
+          from[m][b] = a;
+        }
+      }
+    }
+  }
+  std::vector<int> starts;
+  for (int m = k, b = n; m >= 2; --m) {
+    b = from[m][b];
+    starts.push_back(b);
+  }
+  starts.push_back(0);
+  std::reverse(starts.begin(), starts.end());
+  return starts;
+}
+
+std::vector<double> hangingChainFrequencies(int links, int modes, double length, double g) {
+  const int n = links;
+  const double l = length / n, m = 1.0 / n;  // the mass cancels: unit total mass
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 0; k < n; ++k) {
+    for (int i = 0; i < k; ++i) J(k, i) = 1.0;
+    J(k, k) = 0.5;
+  }
+  const Eigen::MatrixXd M = m * l * l * (J.transpose() * J + Eigen::MatrixXd::Identity(n, n) / 12.0);
+  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < n; ++i) K(i, i) = m * g * l * ((n - 1 - i) + 0.5);
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K, M, Eigen::EigenvaluesOnly);
+  std::vector<double> out;
+  for (int k = 0; k < std::min(n, modes); ++k) out.push_back(std::sqrt(es.eigenvalues()(k)));
+  return out;
+}
+
+std::vector<double> continuumChainFrequencies(double length, double g) {
+  const double zeros[] = {2.404825558, 5.520078110, 8.653727913, 11.79153444, 14.93091771, 18.07106397,
+                          21.21163663, 24.35247153, 27.49347913, 30.63460647, 33.77582021, 36.91709835};
+  std::vector<double> out;
+  for (double z : zeros) out.push_back(0.5 * z * std::sqrt(g / length));
+  return out;
+}
+
+namespace {
+
+// graded-P's P, or 0 when `oracle` is not graded-P with a number P > 0.
+double gradedExponent(const std::string& oracle) {
+  if (oracle.rfind("graded-", 0) != 0 || oracle.size() == 7) return 0.0;
+  char* end = nullptr;
+  const double p = std::strtod(oracle.c_str() + 7, &end);
+  return *end == '\0' && std::isfinite(p) && p > 0.0 ? p : 0.0;
+}
+
+void checkOracle(const std::string& oracle) {
+  for (const char* name : {"acc", "ref-speed", "ref-fit", "even", "chain"}) {
+    if (oracle == name) return;
+  }
+  if (gradedExponent(oracle) > 0.0) return;
+  throw std::runtime_error("--adaptive-oracles: unknown oracle \"" + oracle +
+                           "\" (allowed: acc, ref-speed, ref-fit, even, chain, graded-P with a number P > 0)");
+}
+
+// The diagnostic choice `oracle` for budget k on an n-link chain (docs/bench/adaptive.md, "Oracles").
+ArticulatedSystem::Chooser makeChooser(const std::string& oracle, int k, int n, const OracleReference* ref) {
+  auto nodes = std::make_shared<std::vector<int>>();
+  const auto top = [k](std::vector<std::pair<double, int>>& v, std::vector<char>& active) {
+    const size_t m = std::min(v.size(), static_cast<size_t>(k));
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(m), v.end(), [](const auto& a, const auto& b) {
+      return a.first > b.first || (a.first == b.first && a.second < b.second);
+    });
+    for (size_t i = 0; i < m; ++i) active[v[i].second] = 1;
+  };
+  if (oracle.rfind("ref-", 0) == 0 && (!ref || ref->u.empty())) {
+    throw std::runtime_error("bench adaptive: oracle " + oracle + " has no full run to read");
+  }
+  // The full run's state nearest time t (-1: the initial state, at rest).
+  const auto refIndex = [ref](double t) {
+    return std::min(static_cast<long>(ref->u.size()) - 1, std::lround(t / ref->dt) - 1);
+  };
+  if (oracle == "acc") {
+    return [nodes, top](double, const ArticulatedSystem& sys, const Eigen::VectorXd& udot, std::vector<char>& active) {
+      std::vector<std::pair<double, int>> v;
+      for (int i = 0; i < sys.nodeCount(); ++i) {
+        if (sys.nodeIsJoint(i)) v.emplace_back(udot.segment(sys.nodeDof(i), sys.nodeDofs(i)).norm(), i);
+      }
+      top(v, active);
+    };
+  }
+  if (oracle == "ref-speed") {
+    return [nodes, top, ref, refIndex, n, k](double t, const ArticulatedSystem& sys, const Eigen::VectorXd&,
+                                             std::vector<char>& active) {
+      if (nodes->empty()) *nodes = chainNodes(sys);
+      const long r = refIndex(t);
+      if (r < 0) return activateDepths(*nodes, evenDepths(n, k), active);
+      std::vector<std::pair<double, int>> v;
+      for (int i = 0; i < sys.nodeCount(); ++i) {
+        if (sys.nodeIsJoint(i)) v.emplace_back(ref->u[r].segment(sys.nodeDof(i), sys.nodeDofs(i)).norm(), i);
+      }
+      top(v, active);
+    };
+  }
+  if (oracle == "ref-fit") {
+    // The programme costs k n^2: at N = 1024 it is redone every 16 dt (every dt below 256 links).
+    auto last = std::make_shared<std::pair<long, std::vector<int>>>(-2, std::vector<int>{});
+    const long period = n <= 256 ? 1 : n / 64;
+    return [nodes, last, period, ref, refIndex, n, k](double t, const ArticulatedSystem& sys, const Eigen::VectorXd&,
+                                                      std::vector<char>& active) {
+      if (nodes->empty()) *nodes = chainNodes(sys);
+      const long r = refIndex(t);
+      if (r < 0) return activateDepths(*nodes, evenDepths(n, k), active);
+      if (last->first < 0 || r - last->first >= period) *last = {r, bestRigidFit(ref->w[r], k)};
+      activateDepths(*nodes, last->second, active);
+    };
+  }
+  std::vector<int> depths;
+  if (oracle == "even") {
+    depths = evenDepths(n, k);
+  } else {
+    // graded-P (checkOracle() has read P): k joints, fewer when two round to the same depth.
+    const double p = gradedExponent(oracle);
+    for (int j = 0; j < k; ++j) {
+      const int d = static_cast<int>(std::lround(n * (1.0 - std::pow(1.0 - static_cast<double>(j) / k, p))));
+      if (depths.empty() || d > depths.back()) depths.push_back(std::min(d, n - 1));
+    }
+  }
+  return [nodes, depths](double, const ArticulatedSystem& sys, const Eigen::VectorXd&, std::vector<char>& active) {
+    if (nodes->empty()) *nodes = chainNodes(sys);
+    activateDepths(*nodes, depths, active);
+  };
+}
+
+void runOnce(int links, const std::string& anchor, const AdaptiveBenchOptions& o, AdaptiveRun& run, bool record,
+             OracleReference* make_ref = nullptr, const OracleReference* ref = nullptr) {
+  if (run.links > 0) links = run.links;
   ChainWorld cw = benchChain(links, anchor, 1.0 / o.dt_denominator, run.budget, run.tolerance, run.rotation);
+  if (!run.oracle.empty()) {
+    cw.world.evaluate();  // builds the reduced system
+    if (!cw.world.reduced()) throw std::runtime_error("bench adaptive: no reduced system");
+    cw.world.reduced()->setChooser(makeChooser(run.oracle, run.budget, links, ref));
+  }
+  std::vector<int> ref_nodes;
+  if (make_ref) {
+    cw.world.evaluate();
+    make_ref->dt = 1.0 / o.dt_denominator;
+    ref_nodes = chainNodes(*cw.world.reduced());
+  }
   const long steps = std::lround(o.seconds * o.dt_denominator);
   const double e0 = cw.world.energy();
   std::vector<Eigen::Vector3d> tip;
@@ -71,6 +272,13 @@ void runOnce(int links, const std::string& anchor, const AdaptiveBenchOptions& o
     cpu += threadCpuSeconds() - c0;
     if (!record) continue;
     tip.push_back(cw.chain.tip(cw.world));
+    if (make_ref) {
+      const ArticulatedSystem& sys = *cw.world.reduced();
+      make_ref->u.push_back(sys.velocities());
+      std::vector<Eigen::Vector3d> w;
+      for (int node : ref_nodes) w.push_back(cw.world.bodies()[sys.nodeBody(node)].w);
+      make_ref->w.push_back(std::move(w));
+    }
     substeps += cw.world.lastSubsteps();
     drift = std::max(drift, std::abs(cw.world.energy() - e0));
     const int active = cw.world.reduced() ? cw.world.reduced()->activeJoints() : 0;
@@ -107,6 +315,7 @@ std::string percent(double metres) { return fmt(100.0 * metres, "%.2g") + " %"; 
 }  // namespace
 
 int runAdaptiveBench(const AdaptiveBenchOptions& o) {
+  for (const std::string& oracle : o.oracles) checkOracle(oracle);
   std::filesystem::create_directories(o.out);
   const std::string path = o.out + "/adaptive.md";
   std::ofstream md(path);
@@ -146,8 +355,26 @@ int runAdaptiveBench(const AdaptiveBenchOptions& o) {
         if (b < n) runs.push_back(variant("budget " + std::to_string(b), b, 0.0));
       }
       for (double t : o.tolerances) runs.push_back(variant("tol " + fmt(t, "%g") + " J", 0, t));
+      bool need_ref = false;
+      for (const std::string& oracle : o.oracles) {
+        for (int b : o.budgets) {
+          if (b >= n) continue;
+          AdaptiveRun r = variant(oracle + " " + std::to_string(b), oracle == "chain" ? 0 : b, 0.0);
+          if (oracle == "chain") {
+            r.links = b;
+          } else {
+            r.oracle = oracle;
+          }
+          need_ref = need_ref || oracle.rfind("ref-", 0) == 0;
+          runs.push_back(std::move(r));
+        }
+      }
+      OracleReference ref;
       for (int r = 0; r < o.repeats; ++r) {
-        for (AdaptiveRun& run : runs) runOnce(n, anchor, o, run, r == 0);
+        for (AdaptiveRun& run : runs) {
+          const bool first = &run == &runs.front();
+          runOnce(n, anchor, o, run, r == 0, first && r == 0 && need_ref ? &ref : nullptr, &ref);
+        }
       }
       AdaptiveRun reference = variant("converged", 0, 0.0);
       reference.rotation = o.reference_rotation;
@@ -186,6 +413,31 @@ int runAdaptiveBench(const AdaptiveBenchOptions& o) {
       }
       md.flush();
     }
+  }
+  if (std::find(o.oracles.begin(), o.oracles.end(), "chain") != o.oracles.end()) {
+    // A chain of k pieces is another pendulum: its linear modes against the continuum's.
+    const std::vector<double> cont = continuumChainFrequencies();
+    md << "\nLinear modes of a hanging chain of n thin rods (1 m, hangingChainFrequencies()): each mode's "
+          "angular frequency against the continuum's (j0m / 2) sqrt(g / L), in %; the continuum's in rad/s.\n\n| n |";
+    for (size_t m = 0; m < cont.size(); ++m) md << " mode " << m + 1 << " |";
+    md << "\n|---|";
+    for (size_t m = 0; m < cont.size(); ++m) md << "---|";
+    md << "\n";
+    std::vector<int> ns(o.budgets.begin(), o.budgets.end());
+    ns.insert(ns.end(), o.links.begin(), o.links.end());
+    std::sort(ns.begin(), ns.end());
+    ns.erase(std::unique(ns.begin(), ns.end()), ns.end());
+    for (int k : ns) {
+      const std::vector<double> w = hangingChainFrequencies(k, static_cast<int>(cont.size()));
+      md << "| " << k << " |";
+      for (size_t m = 0; m < cont.size(); ++m) {
+        md << " " << (m < w.size() ? fmt(100.0 * (w[m] / cont[m] - 1.0), "%+.2f") + " %" : std::string("-")) << " |";
+      }
+      md << "\n";
+    }
+    md << "| continuum |";
+    for (double c : cont) md << " " << fmt(c, "%.2f") << " |";
+    md << "\n";
   }
   md << "\nLoad average after: " << loadAverage() << ".\n";
   std::fprintf(stderr, "bench: adaptive dynamics -> %s\n", path.c_str());

@@ -926,6 +926,10 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--adaptive-reference", args->adaptive.reference_rotation,
                   "max_step_rotation (deg) of --adaptive-only's converged reference, not timed (0.5; 0 = none)")
       ->check(CLI::Range(0.0, 10.0));
+  cmd->add_option("--adaptive-oracles", args->adaptive.oracles,
+                  "Diagnostic choices of --adaptive-only at each budget: acc, ref-speed, ref-fit, even, graded-P, "
+                  "chain (docs/bench/adaptive.md, \"Oracles\"; default none)")
+      ->delimiter(',');
   cmd->add_flag("--loops-only", args->loops_only,
                 "Only closed loops (the four-bar, the hair loop): closure, energy, cost, agreement; writes "
                 "OUT/loops.md (--dts, --repeats, --quick apply)");
@@ -978,6 +982,7 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
                          " --adaptive-budgets " + list(a.budgets) + " --adaptive-seconds " + fmt(a.seconds, "%g") +
                          " --adaptive-anchors " + list(a.anchors) + " --adaptive-tolerances " + list(a.tolerances) +
                          " --adaptive-reference " + fmt(a.reference_rotation, "%g");
+        if (!a.oracles.empty()) a.command_line += " --adaptive-oracles " + list(a.oracles);
         std::erase_if(a.tolerances, [](double t) { return t <= 0.0; });
         exit_code = runAdaptiveBench(a);
         return;

@@ -1242,6 +1242,7 @@ void ArticulatedSystem::setAdaptive(int budget, double tolerance) {
 // at most about the composites' (so the cost per step is O(k) amortized), capped at 16 steps
 // so that a joint that starts to matter waits at most that long.
 int ArticulatedSystem::choicePeriod() const {
+  if (chooser_) return 1;
   const int k = budget_ > 0 ? budget_ : std::max(activeJoints(), 1);
   return std::clamp(joint_count_ / (4 * k), 1, 16);
 }
@@ -1360,6 +1361,24 @@ void ArticulatedSystem::lock(std::vector<RigidBody>& bodies, const std::vector<c
 Status ArticulatedSystem::chooseActive(double t, double h, std::vector<RigidBody>& bodies, const ReducedHooks& hooks,
                                        bool& written, bool& fresh) {
   score_h_ = h;
+  if (chooser_) {
+    // Diagnostics: the full model's u' (every joint free) for the chooser, then its set.
+    order_.clear();
+    for (size_t i = 0; i < nodes_.size(); ++i) {
+      if (rigid_[i]) order_.push_back(static_cast<int>(i));
+      rigid_[i] = 0;
+    }
+    const Status st = derivative(t, coords_, u_, bodies, hooks, k_[0], written);
+    for (int i : order_) rigid_[i] = 1;
+    if (!st.ok() || stopped_) return st;
+    written = true;
+    fresh = false;  // k_[0] is the full model's, not the chosen set's
+    for (size_t i = 0; i < nodes_.size(); ++i) active_[i] = 0;
+    chooser_(t, *this, k_[0], active_);
+    for (size_t i = 0; i < nodes_.size(); ++i) active_[i] = nodes_[i].type == Type::Free || active_[i] ? 1 : 0;
+    lock(bodies, active_);
+    return {};
+  }
   if (Status st = derivative(t, coords_, u_, bodies, hooks, k_[0], written); !st.ok() || stopped_) return st;
   written = true;  // the bodies hold (t, y) now
   fresh = true;

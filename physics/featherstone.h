@@ -163,6 +163,20 @@ class ArticulatedSystem {
   // momentum is unchanged and its kinetic energy (relative to a prescribed base) cannot rise. The
   // bodies are written at the new speeds; kinematic bodies must be at the current time.
   void lock(std::vector<RigidBody>& bodies, const std::vector<char>& active);
+  // Diagnostics only (the bench's oracles, docs/bench/adaptive.md, "Oracles"; no scene field sets
+  // it): a chooser replaces the candidates and the score. At the start of every step (period 1) it
+  // gets the time, the system (depths, speeds), and the full model's joint accelerations u' at the
+  // current state (the ABA with every joint free: the rigid joints, at zero relative speed, are in
+  // the full model's state), and fills `active` per node (free roots move whatever it says; the
+  // budget is not applied to its set). The lock and the composite step are the shipped ones.
+  // Needs setAdaptive() on; empty: the score.
+  using Chooser = std::function<void(double t, const ArticulatedSystem& system, const Eigen::VectorXd& full_udot,
+                                     std::vector<char>& active)>;
+  void setChooser(Chooser chooser) { chooser_ = std::move(chooser); }
+  int nodeDepth(int node) const { return depth_[node]; }  // joints between the node's and its root (0 at a root)
+  int nodeDof(int node) const { return nodes_[node].dof; }
+  int nodeDofs(int node) const { return nodes_[node].dofs; }
+  bool nodeIsJoint(int node) const { return nodes_[node].type != Type::Free; }
 
  private:
   enum class Type { Free, Spherical, Prismatic };
@@ -341,6 +355,7 @@ class ArticulatedSystem {
   std::vector<std::pair<int, int>> sub_prescribed_;  // (real body, its copy in sub_bodies_)
   bool composites_formed_ = false;
   int until_choice_ = 0;  // steps until the next choice
+  Chooser chooser_;       // diagnostics: replaces the candidates and the score (setChooser())
   // Closed loops (sized by build()).
   std::vector<LoopJoint> loops_;
   int loop_rows_ = 0;

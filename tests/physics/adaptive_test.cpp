@@ -268,6 +268,47 @@ TEST(PhysicsAdaptive, SpacedCandidatesStepNoFinerThanTheFullChainAndAddNoEnergy)
   EXPECT_LE(reduced.rise, full.rise);
 }
 
+// The bench's oracles (docs/bench/adaptive.md, "Oracles") choose through setChooser(): the
+// shipped lock and composite step with the chooser's set. A chooser that names the even split
+// moves the same joints as the shipped choice and follows its path; one that names every joint is
+// the full solver; the set it names is the set that moves (free roots aside), every step.
+TEST(PhysicsAdaptive, AChooserSetsTheActiveJoints) {
+  const int steps = 96;
+  const auto path = [&](int budget, const ArticulatedSystem::Chooser& chooser, std::vector<char>* seen = nullptr) {
+    ChainWorld cw = chainWorld(12, budget, 0.0, Eigen::Vector3d::UnitX());
+    cw.world.evaluate();
+    cw.world.reduced()->setChooser(chooser);
+    std::vector<Eigen::Vector3d> out;
+    for (int i = 0; i < steps && cw.world.ok(); ++i) {
+      cw.world.step();
+      out.push_back(cw.chain.tip(cw.world));
+      if (seen) {
+        const std::vector<char> active = cw.world.reduced()->activeNodes();
+        EXPECT_EQ(active, *seen) << "step " << i;
+      }
+    }
+    EXPECT_TRUE(cw.world.ok()) << cw.world.status();
+    return out;
+  };
+  const auto depths = [](std::vector<int> chosen) {
+    return [chosen](double, const ArticulatedSystem& sys, const Eigen::VectorXd& udot, std::vector<char>& active) {
+      EXPECT_EQ(udot.size(), sys.dofs());
+      for (int i = 0; i < sys.nodeCount(); ++i) {
+        for (int d : chosen) active[i] = active[i] || sys.nodeDepth(i) == d;
+      }
+    };
+  };
+  std::vector<char> even(12, 0);
+  even[0] = even[4] = even[8] = 1;
+  const std::vector<Eigen::Vector3d> shipped = path(3, nullptr), chosen = path(3, depths({0, 4, 8}), &even);
+  EXPECT_LT(maxGap(shipped, chosen), 1e-9);
+  std::vector<char> all(12, 1);
+  EXPECT_LT(maxGap(tipPath(12, 0, 0.0, steps), path(11, depths({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}), &all)), 1e-12);
+  std::vector<char> top(12, 0);
+  top[0] = top[1] = top[2] = 1;
+  path(3, depths({0, 1, 2}), &top);
+}
+
 TEST(PhysicsAdaptive, RefusesABudgetAboveTheJointsAndTheMultiplierSolvers) {
   ChainWorld cw = chainWorld(4, 5, 0.0, Eigen::Vector3d::UnitX());
   cw.world.step();
