@@ -212,6 +212,8 @@ void Renderer::Impl::planPasses(FramePlan& f) const {
   // the bottom) left to the background, 2 rows above the horizon's (the bilinear footprint: no
   // tap below it reaches a texel with ground); h: no split (transparent, the eye below the
   // ground, a rolled, upside-down or straight-down view, the horizon out of the frame).
+  // grid_ground: with the sky row, the ground as a grid lit at its corners instead of the
+  // half-resolution pass and its upsampling (docs/RENDERING.md, Passes, "The grid ground").
   f.sky_row = f.h;
   if (f.half_ground && !params.transparent && cam.eye.z() > params.ground_height &&
       cam.up.normalized().z() > 1.0 - 1e-9) {  // upright: neither rolled nor upside down

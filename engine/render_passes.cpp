@@ -550,9 +550,9 @@ void Renderer::Impl::upsampleGroundPass(const FramePlan& f, RenderStats& st) {
 }
 
 // Into the bound target (main_color_tex's size), inside `clip`: the grid ground below grid_top,
-// the background's own pass above it. The grid's cells are drawn by kGridFS but in the ground
-// shadow's pixel rectangle (groundShadowRect), where kGroundFS runs per pixel on the same cells
-// with the shadow lookup (everywhere when that rectangle cannot be bounded).
+// the background's own pass above it. The grid's cells are drawn by prog_grid but in the ground
+// shadow's pixel rectangle (groundShadowRect), where prog_grid_shadow (GRID_SHADOWED) looks the
+// shadow up per pixel (everywhere when that rectangle cannot be bounded).
 void Renderer::Impl::drawGridGround(const FramePlan& f, const PixelRect& clip, RenderStats& st) {
   const int w = f.w, h = f.h;
   glDisable(GL_DEPTH_TEST);
