@@ -30,14 +30,20 @@
 #include "sim/scene_io.h"
 
 namespace ponyhop {
+
+// PONYHOP_DEMO_SCENES is the Makefile's DEMO_SCENES, read at configure time (bench/CMakeLists.txt).
+std::vector<std::string> benchRenderDefaultScenes() {
+  std::vector<std::string> scenes;
+  std::istringstream names(PONYHOP_DEMO_SCENES);
+  for (std::string name; names >> name;) scenes.push_back("assets/scenes/" + name + ".json");
+  scenes.push_back("assets/scenes/ponytail_hopper.json");
+  return scenes;
+}
+
 namespace {
 
-// The scenes `make demo` renders (the Makefile's DEMO_SCENES), and the ponytail on the hopper.
 struct BenchRenderArgs {
-  std::vector<std::string> scenes{"assets/scenes/ponytail.json",       "assets/scenes/ponytail_toss.json",
-                                  "assets/scenes/pigtails.json",       "assets/scenes/hair_loop.json",
-                                  "assets/scenes/hopper.json",         "assets/scenes/hopper_fall.json",
-                                  "assets/scenes/hopper_terrain.json", "assets/scenes/ponytail_hopper.json"};
+  std::vector<std::string> scenes = benchRenderDefaultScenes();
   std::vector<std::string> sizes{"1280x720", "1920x1080"};
   int frames = 20;
   std::vector<std::string> sets;  // applied to every configuration, before its own

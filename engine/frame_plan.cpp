@@ -212,6 +212,8 @@ void Renderer::Impl::planPasses(FramePlan& f) const {
   // the bottom) left to the background, 2 rows above the horizon's (the bilinear footprint: no
   // tap below it reaches a texel with ground); h: no split (transparent, the eye below the
   // ground, a rolled, upside-down or straight-down view, the horizon out of the frame).
+  // grid_ground: with the sky row, the ground as a grid lit at its corners instead of the
+  // half-resolution pass and its upsampling (docs/RENDERING.md, Passes, "The grid ground").
   f.sky_row = f.h;
   if (f.half_ground && !params.transparent && cam.eye.z() > params.ground_height &&
       cam.up.normalized().z() > 1.0 - 1e-9) {  // upright: neither rolled nor upside down
@@ -223,6 +225,22 @@ void Renderer::Impl::planPasses(FramePlan& f) const {
       if (c.w() > 1e-9) {
         const double row = (c.y() / c.w() * 0.5 + 0.5) * f.h;
         if (row > -4.0 && row < f.h - 4.0) f.sky_row = std::clamp(int(std::ceil(row)) + 2, 0, f.h);
+        // The grid ground: every ground point seen in a row at or above grid_top is at least R
+        // ahead of the eye (a row is a distance ahead when the camera does not roll), so at
+        // least fade_end from the point looked at: faded out, the background's colour. Its
+        // grid's corners are all on the ground, 2 rows or more below the horizon.
+        const Eigen::Vector3d fwd_unit = fwd.normalized();
+        Eigen::Vector3d off = cam.eye - cam.target;
+        off.z() = 0.0;
+        const double R = f.fade_end + off.norm() + 1e-3 * f.fade_end;
+        const Eigen::Vector3d q(cam.eye.x() + R * fwd_unit.x(), cam.eye.y() + R * fwd_unit.y(), params.ground_height);
+        const Eigen::Vector4d cq = f.view_proj.cast<double>() * q.homogeneous();
+        if (cq.w() > 1e-9) {
+          const double row_r = (cq.y() / cq.w() * 0.5 + 0.5) * f.h;
+          const double top = std::min(std::ceil(row_r), std::floor(row) - 2.0);
+          f.grid_ground = true;
+          f.grid_top = int(std::clamp(top, 0.0, double(f.h)));
+        }
       }
     }
   }

@@ -549,6 +549,135 @@ void Renderer::Impl::upsampleGroundPass(const FramePlan& f, RenderStats& st) {
   ++st.draw_calls;
 }
 
+// Into the bound target (main_color_tex's size), inside `clip`: the grid ground below grid_top,
+// the background's own pass above it. The grid's cells are drawn by prog_grid but in the ground
+// shadow's pixel rectangle (groundShadowRect), where prog_grid_shadow (GRID_SHADOWED) looks the
+// shadow up per pixel (everywhere when that rectangle cannot be bounded).
+void Renderer::Impl::drawGridGround(const FramePlan& f, const PixelRect& clip, RenderStats& st) {
+  const int w = f.w, h = f.h;
+  glDisable(GL_DEPTH_TEST);
+  glEnable(GL_SCISSOR_TEST);
+  glBindVertexArray(empty_vao);
+  if (const PixelRect r = clip & PixelRect{0, f.grid_top, w, h}; !r.empty()) {
+    setFrameUniforms(prog_bg, f);
+    glUniform2f(loc(prog_bg, "u_viewport"), float(w), float(h));
+    glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    ++st.draw_calls;
+  }
+  const PixelRect below = clip & PixelRect{0, 0, w, f.grid_top};
+  if (!below.empty()) {
+    // 64-pixel cells: the lighting, the fade and the background are smooth at that scale (on the
+    // hopper at 1280x720, 64- and 128-pixel cells' frames are within 0.013 of 32-pixel cells' in
+    // `ponyhop diff`'s YIQ distance, about 2 of 255 steps), and llvmpipe's cost per triangle
+    // counts: 32-pixel cells made the hopper's final frame about 1 ms dearer than 64-pixel ones.
+    constexpr int kCell = 64;
+    const int cols = (w + kCell - 1) / kCell, rows = (f.grid_top + kCell - 1) / kCell;
+    const int all_rows = (h + kCell - 1) / kCell;
+    if (!grid_vao) {
+      glGenVertexArrays(1, &grid_vao);
+      glGenBuffers(1, &grid_ebo);
+    }
+    glBindVertexArray(grid_vao);
+    if (cols != grid_cols || all_rows != grid_rows) {
+      grid_cols = cols;
+      grid_rows = all_rows;
+      std::vector<uint32_t> idx;
+      idx.reserve(size_t(cols) * size_t(all_rows) * 6);
+      const uint32_t stride = uint32_t(cols + 1);
+      for (uint32_t j = 0; j < uint32_t(all_rows); ++j)
+        for (uint32_t i = 0; i < uint32_t(cols); ++i) {
+          const uint32_t a = j * stride + i;
+          for (uint32_t v : {a, a + 1, a + stride, a + stride, a + 1, a + stride + 1}) idx.push_back(v);
+        }
+      glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, grid_ebo);
+      glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(idx.size() * sizeof(uint32_t)), idx.data(), GL_STATIC_DRAW);
+    }
+    const Eigen::Matrix4f inv = f.view_proj.inverse();
+    const Camera& cam = camera;
+    for (GLuint p : {prog_grid, prog_grid_shadow}) {
+      setFrameUniforms(p, f);
+      setMat4(p, "u_invViewProj", inv);
+      glUniform1f(loc(p, "u_gridCell"), float(kCell));
+      glUniform1f(loc(p, "u_gridTop"), float(f.grid_top));
+      glUniform1i(loc(p, "u_gridCols"), cols);
+      glUniform1f(loc(p, "u_groundZ"), float(params.ground_height));
+      glUniform1i(loc(p, "u_transparent"), 0);
+      setVec3(p, "u_groundAlbedo", srgbToLinear(params.ground_color.cast<float>()));
+      glUniform1f(loc(p, "u_gridSpacing"), float(std::max(params.grid_spacing, 0.0)));
+      glUniform3f(loc(p, "u_fadeCenter"), float(cam.target.x()), float(cam.target.y()), 0.0f);
+      glUniform2f(loc(p, "u_fade"), float(f.fade_start), float(f.fade_end));
+      glUniform1i(loc(p, "u_groundShadow"), 2);
+    }
+    PixelRect sr{};
+    bool whole = false;
+    const bool boxed = f.shadows_on && groundShadowRect(f.view_proj, w, h, sr, whole);
+    // Each part scissored, drawing only the rows of cells it reaches (each corner is shaded
+    // once a draw).
+    const auto draw = [&](GLuint p, const PixelRect& part) {
+      const PixelRect r = part & below;
+      if (r.empty()) return;
+      const int j0 = r.y0 / kCell, j1 = std::min((r.y1 + kCell - 1) / kCell, rows);
+      if (j1 <= j0) return;
+      glUseProgram(p);
+      glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+      glDrawElements(GL_TRIANGLES, GLsizei(j1 - j0) * cols * 6, GL_UNSIGNED_INT,
+                     reinterpret_cast<const void*>(size_t(j0) * size_t(cols) * 6 * sizeof(uint32_t)));
+      ++st.draw_calls;
+    };
+    if (boxed) bindShadowTextures(true);
+    if (boxed && whole) {
+      draw(prog_grid_shadow, below);
+    } else if (boxed) {
+      draw(prog_grid_shadow, sr);
+      const PixelRect around[4] = {
+          {0, 0, w, sr.y0}, {0, sr.y1, w, h}, {0, sr.y0, sr.x0, sr.y1}, {sr.x1, sr.y0, w, sr.y1}};
+      for (const PixelRect& a : around) draw(prog_grid, a);
+    } else {
+      draw(prog_grid, below);
+    }
+  }
+  glDisable(GL_SCISSOR_TEST);
+  glBindVertexArray(0);
+}
+
+// The ground and the background at full size, under the objects, as a grid lit at its corners
+// (FramePlan::grid_ground), into the main target. While groundKey() stays the same (a fixed
+// camera and light), it is kept in ground_full_tex as the upsampled ground is
+// (upsampleGroundPass): drawn again only in the last frame's shadow rectangle and this frame's,
+// and copied into the main target.
+void Renderer::Impl::gridGroundPass(const FramePlan& f, RenderStats& st) {
+  const PixelRect all{0, 0, f.w, f.h};
+  std::vector<float> key = groundKey(f);
+  key.push_back(-1.0f);  // the grid ground's: never a key of the half-resolution one
+  PixelRect shadow{0, 0, 0, 0};
+  bool whole = false;
+  if (!(f.shadows_on && groundShadowRect(f.view_proj, f.w, f.h, shadow, whole))) shadow = {0, 0, 0, 0};
+  const bool kept = key == ground_key && !ground_lo_whole && !whole;
+  const PixelRect dirty = kept ? (ground_lo_shadow | shadow) & all : all;
+  ground_key = std::move(key);
+  ground_lo_shadow = shadow;
+  ground_lo_whole = whole;
+  ground_lo_kept = false;
+  if (!kept) {
+    ground_full_key.clear();
+    glBindFramebuffer(GL_FRAMEBUFFER, ground_up_fbo);
+    drawGridGround(f, all, st);
+    return;
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, ground_full_fbo);
+  if (ground_full_key != ground_key) {
+    drawGridGround(f, all, st);
+    ground_full_key = ground_key;
+  } else if (!dirty.empty()) {
+    drawGridGround(f, dirty, st);
+  }
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, ground_full_fbo);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, ground_up_fbo);
+  glBlitFramebuffer(0, 0, f.w, f.h, 0, 0, f.w, f.h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  ++st.draw_calls;
+}
+
 // Without the half-resolution ground: the ground after the objects (the early depth test skips
 // the pixels they cover, and its nearer fragments still hide whatever is below it). It writes its
 // depth, so that the background, last, fills only the pixels nothing was drawn on (none when

@@ -71,11 +71,11 @@ Renderer::~Renderer() {
   for (GLuint p : I.programs)
     if (p) glDeleteProgram(p);
   for (int i = 0; i < int(I.meshes.size()); ++i) release(MeshHandle{i});
-  GLuint vaos[] = {I.hull_vao, I.hull_shadow_vao, I.empty_vao, I.lines_vao, I.hair_vao};
-  glDeleteVertexArrays(5, vaos);
-  GLuint bufs[] = {I.hull_vbo,       I.hull_ebo,  I.hull_shadow_vbo, I.hull_shadow_ebo,
-                   I.hull_instances, I.lines_vbo, I.hair_vbo,        I.hair_ebo};
-  glDeleteBuffers(8, bufs);
+  GLuint vaos[] = {I.hull_vao, I.hull_shadow_vao, I.empty_vao, I.lines_vao, I.hair_vao, I.grid_vao};
+  glDeleteVertexArrays(6, vaos);
+  GLuint bufs[] = {I.hull_vbo,  I.hull_ebo, I.hull_shadow_vbo, I.hull_shadow_ebo, I.hull_instances,
+                   I.lines_vbo, I.hair_vbo, I.hair_ebo,        I.grid_ebo};
+  glDeleteBuffers(9, bufs);
   GLuint fbos[] = {I.msaa_fbo,      I.resolve_fbo,   I.shadow_fbo,   I.ground_shadow_fbo, I.surf_fbo,
                    I.ground_lo_fbo, I.ground_up_fbo, I.post_src_fbo, I.ground_full_fbo};
   glDeleteFramebuffers(9, fbos);
@@ -125,6 +125,8 @@ bool Renderer::Impl::buildPrograms(std::string* err) {
       {&prog_deferred, "deferred shading", kFullscreenVS, kDeferredFS},
       {&prog_deferred_class, "deferred shading (lit and unlit)", kFullscreenVS, kDeferredFS, kShadowClassifyDefine},
       {&prog_ground_up, "ground (upsampled)", kGroundUpVS, kGroundUpFS},
+      {&prog_grid, "ground (grid)", kGridVS, kGridFS},
+      {&prog_grid_shadow, "ground (grid, shadowed)", kGridVS, kGridFS, kGridShadowedDefine},
       {&prog_ground_near, "ground (near)", kGroundVS, kGroundFS, kGroundNearDefine},
       {&prog_ground_near_lit, "ground (near, lit)", kGroundVS, kGroundFS, kGroundNearLitDefine},
       {&prog_ground_lit, "ground (lit)", kGroundVS, kGroundFS, kGroundLitDefine},
@@ -369,10 +371,14 @@ void Renderer::endFrame() {
   I.beginPass(Impl::kMainPass);
   stats_.draw_calls = 0;
   // Single-sample: the ground and the background at half resolution, before the objects.
-  if (f.half_ground) I.halfGroundPass(f, stats_);
+  if (f.half_ground && !f.grid_ground) I.halfGroundPass(f, stats_);
   glViewport(0, 0, f.w, f.h);
-  // ... upsampled over the frame; the background's own pass above the horizon (sky_row).
-  if (f.half_ground) I.upsampleGroundPass(f, stats_);
+  // ... upsampled over the frame; the background's own pass above the horizon (sky_row). Or the
+  // ground at full resolution as a grid lit at its corners (FramePlan::grid_ground).
+  if (f.grid_ground)
+    I.gridGroundPass(f, stats_);
+  else if (f.half_ground)
+    I.upsampleGroundPass(f, stats_);
   // The objects; deferred, their shadows and finished colour once per visible pixel after them.
   I.objectsPass(f, stats_);
   if (f.deferred) I.deferredLightPass(f, stats_);

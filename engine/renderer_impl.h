@@ -123,6 +123,10 @@ struct FramePlan {
   // Which passes run, and how.
   bool half_ground = false;  // the ground at half resolution, upsampled before the objects
   int sky_row = 1;           // the first pixel row (from the bottom) left to the background's pass
+  // With half_ground: the ground drawn at full resolution as a grid lit at its corners instead
+  // (gridGroundPass), below grid_top (the first pixel row left to the background's pass).
+  bool grid_ground = false;
+  int grid_top = 0;
   bool deferred = false;     // the objects' shadows in a pass of their own (deferredLightPass)
   bool clear_color = false;  // the colour target needs a clear (nothing else writes every pixel)
   float clip_side = 0.0f;    // the objects' clip plane at the ground: +1 / -1 the eye's side, 0 none
@@ -143,6 +147,8 @@ struct Renderer::Impl {
   GLuint prog_mesh_split = 0, prog_mesh_mat_split = 0, prog_hull_split = 0, prog_hair_split = 0;
   GLuint prog_deferred = 0, prog_deferred_class = 0;
   GLuint prog_ground_up = 0;            // the half-resolution ground, upsampled (kGroundUpFS)
+  GLuint prog_grid = 0;                 // the grid ground (kGridVS, kGridFS)
+  GLuint prog_grid_shadow = 0;          // ... per pixel where its shadow may be (kGroundFS, GRID_GROUND)
   GLuint prog_ground_near = 0;          // kGroundFS where nothing fades (GROUND_NEAR)
   GLuint prog_ground_near_lit = 0;      // ... and nothing is shadowed (GROUND_LIT)
   GLuint prog_ground_lit = 0;           // kGroundFS where nothing is shadowed (the ring)
@@ -156,6 +162,10 @@ struct Renderer::Impl {
   GLsizei hull_shadow_index_count = 0;
   size_t hull_triangles = 0;
   GLuint empty_vao = 0;
+  // The grid ground's cells (drawGridGround): indices of the corners (cols + 1 a row, numbered
+  // from the bottom left; kGridVS computes each from its number), 6 a cell, row after row.
+  GLuint grid_vao = 0, grid_ebo = 0;
+  int grid_cols = 0, grid_rows = 0;
   GLuint lines_vao = 0, lines_vbo = 0;
   GLuint hair_vao = 0, hair_vbo = 0, hair_ebo = 0;
   std::vector<GpuMesh> meshes;  // index = MeshHandle::id; vao == 0: released
@@ -282,6 +292,8 @@ struct Renderer::Impl {
   void groundShadowPass(const FramePlan& f);
   void halfGroundPass(const FramePlan& f, RenderStats& st);
   void upsampleGroundPass(const FramePlan& f, RenderStats& st);
+  void gridGroundPass(const FramePlan& f, RenderStats& st);
+  void drawGridGround(const FramePlan& f, const PixelRect& clip, RenderStats& st);
   void objectsPass(const FramePlan& f, RenderStats& st);
   void deferredLightPass(const FramePlan& f, RenderStats& st);
   void groundAndBackgroundPass(const FramePlan& f, RenderStats& st);

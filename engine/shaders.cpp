@@ -56,6 +56,14 @@ vec3 linearToSrgb(vec3 c) {
   c = clamp(c, 0.0, 1.0);
   return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
 }
+// linearToSrgb() (the ground's) from three square roots: a fit of 1.055 c^(1/2.4) - 0.055 on [0.0031308, 1] in
+// c, c^(1/2), c^(1/4), c^(1/8), within 0.012 of one 8-bit step everywhere.
+vec3 linearToSrgbFast(vec3 c) {
+  c = clamp(c, 0.0, 1.0);
+  vec3 s1 = sqrt(c), s2 = sqrt(s1), s3 = sqrt(s2);
+  vec3 g = -0.01756295 * c + 0.64236556 * s1 + 0.71211042 * s2 - 0.3368699 * s3;
+  return mix(c * 12.92, g, step(0.0031308, c));
+}
 // Filmic curve (Narkowicz's fit of ACES): keeps the key light's highlights from clipping.
 vec3 toneMap(vec3 x) {
   x *= u_exposure;
@@ -528,14 +536,6 @@ float filteredChecker(vec2 p) {
   return 0.5 - 0.5 * i.x * i.y;  // 0 or 1 per square, blended at edges
 }
 
-// linearToSrgb() from three square roots: a fit of 1.055 c^(1/2.4) - 0.055 on [0.0031308, 1] in
-// c, c^(1/2), c^(1/4), c^(1/8), within 0.012 of one 8-bit step everywhere.
-vec3 linearToSrgbFast(vec3 c) {
-  c = clamp(c, 0.0, 1.0);
-  vec3 s1 = sqrt(c), s2 = sqrt(s1), s3 = sqrt(s2);
-  vec3 g = -0.01756295 * c + 0.64236556 * s1 + 0.71211042 * s2 - 0.3368699 * s3;
-  return mix(c * 12.92, g, step(0.0031308, c));
-}
 
 // Compiled with GROUND_NEAR: for the part of the ground nearer the fade's centre than its start
 // (f = 0: no fade, no background); with GROUND_LIT as well: where the shadow texture is 1 (sh = 1).
@@ -578,6 +578,155 @@ void main() {
   // Faded into the background: its colour exactly, so the square's edge is unseen.
   vec4 gone = u_transparent != 0 ? vec4(0.0) : vec4(bg, 1.0);
   o_color = f >= 1.0 ? gone : vec4(mix(col, bg, f), 1.0);
+#endif
+}
+)GLSL";
+
+// The ground at full resolution without a pass of its own (gridGroundPass): a grid of screen
+// cells (u_gridCell pixels a side) over the rows below u_gridTop, each corner the ground point
+// seen through it, lit there for both squares of the checker (kGroundFS's lighting, tone curve,
+// fade and background); each pixel mixes its cell's two interpolated colours by the checker
+// (kGridFS). Everything but the checker varies over metres of ground, so a cell's corners carry
+// it; the ground point is perspective-interpolated exactly (every corner is on the plane). With
+// GRID_SHADOWED (where the ground's shadow may fall): the two parts of the radiance instead, and
+// the pixel looks the shadow up and finishes the colour.
+const char* const kGridVS = R"GLSL(
+uniform mat4 u_viewProj;
+uniform mat4 u_invViewProj;
+uniform mat4 u_lightViewProj;
+uniform vec2 u_viewport;
+uniform float u_gridCell;   // pixels
+uniform float u_gridTop;    // the first pixel row (from the bottom) above the grid
+uniform int u_gridCols;
+uniform float u_groundZ;
+uniform vec3 u_eye;
+uniform vec3 u_lightDir;
+uniform vec3 u_lightColor;
+uniform vec3 u_fillDir;
+uniform vec3 u_fillColor;
+uniform vec3 u_skyAmbient;
+uniform float u_exposure;
+uniform vec3 u_bgTop;
+uniform vec3 u_bgBottom;
+uniform vec3 u_groundAlbedo;
+uniform float u_gridSpacing;
+uniform vec3 u_fadeCenter;
+uniform vec2 u_fade;
+out vec2 v_cell;    // the checker's coordinate (kGridFS)
+out vec4 v_filter;  // 1 / the ramp's width in v_cell's units, and the contrast, per axis
+#ifdef GRID_SHADOWED
+out vec2 v_shadowUv;
+out vec3 v_keyA, v_keyB;    // the key light's part before the shadow, checker value 0 and 1
+out vec3 v_restA, v_restB;  // the rest
+out vec4 v_bgFade;          // the background and the fade into it
+#else
+out vec3 v_colA;  // the colour of a square with checker value 0
+out vec3 v_colB;  // ... and 1
+#endif
+// kCommonFS's toneMap() and background(), and its linearToSrgbFast(), for the corners.
+vec3 toneMap(vec3 x) {
+  x *= u_exposure;
+  return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
+}
+vec3 background(float y) {
+  float t = smoothstep(0.0, 1.0, clamp(y, 0.0, 1.0));
+  return mix(u_bgBottom, u_bgTop, t);
+}
+vec3 linearToSrgbFast(vec3 c) {
+  c = clamp(c, 0.0, 1.0);
+  vec3 s1 = sqrt(c), s2 = sqrt(s1), s3 = sqrt(s2);
+  vec3 g = -0.01756295 * c + 0.64236556 * s1 + 0.71211042 * s2 - 0.3368699 * s3;
+  return mix(c * 12.92, g, step(0.0031308, c));
+}
+// kGroundFS's two parts of the radiance at P for checker value k, lit.
+void groundTerms(vec3 P, float k, out vec3 key, out vec3 rest) {
+  float grid = step(1e-9, u_gridSpacing);
+  vec3 albedo = u_groundAlbedo * mix(1.0, mix(0.93, 1.05, k), grid);
+  vec3 V = normalize(u_eye - P);
+  vec3 L = -u_lightDir;
+  float ndl = max(L.z, 0.0);
+  vec3 H = normalize(L + V);
+  float h2 = max(H.z, 0.0);
+  h2 *= h2;
+  h2 *= h2;
+  h2 *= h2;
+  float spec = 0.04 * 3.0 * (h2 * h2) * ndl;
+  key = u_lightColor * step(1e-30, ndl) * (albedo * ndl + vec3(spec));
+  rest = u_fillColor * albedo * max(-u_fillDir.z, 0.0) + albedo * u_skyAmbient;
+}
+// The ground point seen through pixel position px (from the bottom left).
+vec3 groundAt(vec2 px) {
+  vec2 ndc = px / u_viewport * 2.0 - 1.0;
+  vec4 a = u_invViewProj * vec4(ndc, -1.0, 1.0), b = u_invViewProj * vec4(ndc, 1.0, 1.0);
+  a.xyz /= a.w;
+  b.xyz /= b.w;
+  vec3 d = b.xyz - a.xyz;
+  return vec3(a.xy + d.xy * ((u_groundZ - a.z) / d.z), u_groundZ);
+}
+void main() {
+  // The corner's number (the index drawn): u_gridCols + 1 corners a row, from the bottom left.
+  int cx = gl_VertexID - (u_gridCols + 1) * (gl_VertexID / (u_gridCols + 1)), cy = gl_VertexID / (u_gridCols + 1);
+  // The last column and row end at the viewport's edge and half a pixel over the grid's top
+  // (the scissor cuts what is over).
+  vec2 px = min(vec2(float(cx), float(cy)) * u_gridCell, vec2(u_viewport.x, u_gridTop + 0.5));
+  vec3 P = groundAt(px);
+  // The checker's footprint: fwidth() of its coordinate, from the ground points a pixel to the
+  // right and a pixel up.
+  float inv = 1.0 / max(u_gridSpacing, 1e-9);
+  vec2 c = P.xy * inv;
+  vec2 fw = (abs(groundAt(px + vec2(1.0, 0.0)).xy * inv - c) + abs(groundAt(px + vec2(0.0, 1.0)).xy * inv - c));
+  vec2 w = max(fw * 3.5, vec2(1e-5));  // the ramp: 3.5 pixels' footprint (about the half-resolution ground's box and bilinear tap)
+  v_cell = c * 0.5 + 0.25;
+  // In v_cell's units (half a checker's coordinate) the ramp is (1 - 4 q) / w (kGridFS); its
+  // contrast goes to 0 as it nears two squares (the box filter's value at a square's centre).
+  v_filter = vec4(1.0 / w, clamp(2.0 - w, 0.0, 1.0));
+  vec3 bg = background(px.y / u_viewport.y);
+  float f = smoothstep(u_fade.x, u_fade.y, length(P.xy - u_fadeCenter.xy));
+  vec3 keyA, restA, keyB, restB;
+  groundTerms(P, 0.0, keyA, restA);
+  groundTerms(P, 1.0, keyB, restB);
+#ifdef GRID_SHADOWED
+  vec4 s = u_lightViewProj * vec4(P, 1.0);
+  v_shadowUv = s.xy / s.w * 0.5 + 0.5;
+  v_keyA = keyA;
+  v_keyB = keyB;
+  v_restA = restA;
+  v_restB = restB;
+  v_bgFade = vec4(bg, f);
+#else
+  v_colA = f >= 1.0 ? bg : mix(linearToSrgbFast(toneMap(keyA + restA)), bg, f);
+  v_colB = f >= 1.0 ? bg : mix(linearToSrgbFast(toneMap(keyB + restB)), bg, f);
+#endif
+  gl_Position = u_viewProj * vec4(P, 1.0);
+}
+)GLSL";
+const char* const kGridFS = R"GLSL(
+in vec2 v_cell;
+in vec4 v_filter;
+#ifdef GRID_SHADOWED
+in vec2 v_shadowUv;
+in vec3 v_keyA, v_keyB, v_restA, v_restB;
+in vec4 v_bgFade;
+uniform sampler2D u_groundShadow;
+#else
+in vec3 v_colA;
+in vec3 v_colB;
+#endif
+out vec4 o_color;
+void main() {
+  // The checker, 0 or 1 a square: q is 0 at a square's centre, 0.25 at its edges, 0.5 at the next
+  // centre; each edge a linear ramp (the box filter of a step).
+  vec2 q = abs(fract(v_cell) - 0.5);
+  vec2 i = clamp((1.0 - 4.0 * q) * v_filter.xy, -1.0, 1.0) * v_filter.zw;
+  float k = 0.5 - 0.5 * i.x * i.y;
+#ifdef GRID_SHADOWED
+  vec2 c = v_shadowUv;
+  float inside = step(0.0, c.x) * step(c.x, 1.0) * step(0.0, c.y) * step(c.y, 1.0) * float(u_shadowsOn != 0);
+  float sh = mix(1.0, texture(u_groundShadow, c).r, inside);
+  vec3 col = linearToSrgbFast(toneMap(mix(v_restA, v_restB, k) + mix(v_keyA, v_keyB, k) * sh));
+  o_color = vec4(v_bgFade.w >= 1.0 ? v_bgFade.rgb : mix(col, v_bgFade.rgb, v_bgFade.w), 1.0);
+#else
+  o_color = vec4(mix(v_colA, v_colB, k), 1.0);
 #endif
 }
 )GLSL";
@@ -771,9 +920,9 @@ static GLuint compile(GLenum stage, const char* const* parts, int count, const c
 
 unsigned buildProgram(const char* name, const char* vs, const char* fs, std::string* err, const char* defines) {
   static const char* const kHeader = "#version 330 core\n";
-  const char* vparts[] = {kHeader, vs};
+  const char* vparts[] = {kHeader, defines ? defines : "", vs};
   const char* fparts[] = {kHeader, defines ? defines : "", "precision highp float;\n", kCommonFS, fs};
-  GLuint v = compile(GL_VERTEX_SHADER, vparts, 2, name, err);
+  GLuint v = compile(GL_VERTEX_SHADER, vparts, 3, name, err);
   if (!v) return 0;
   GLuint f = compile(GL_FRAGMENT_SHADER, fparts, 5, name, err);
   if (!f) {

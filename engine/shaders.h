@@ -11,6 +11,7 @@ extern const char* const kMeshMatVS;     // meshes with their own colours/textur
 extern const char* const kCapsuleVS;     // spheres / capsules / tapered capsules: one instanced draw
 extern const char* const kFullscreenVS;  // full-screen triangle from gl_VertexID (ground shadow pass)
 extern const char* const kGroundUpVS;    // the whole viewport as a strip of 4, with its texture coordinates
+extern const char* const kGridVS;        // the ground as a screen grid lit at its corners (gridGroundPass)
 extern const char* const kGroundVS;      // the ground square (a strip of 4 from gl_VertexID)
 extern const char* const kLinesVS;       // debug lines
 extern const char* const kHairVS;        // hair strands (camera- or light-facing ribbons) and core tube
@@ -18,6 +19,7 @@ extern const char* const kHairVS;        // hair strands (camera- or light-facin
 extern const char* const kLitFS;           // Blinn-Phong + rim, shadowed key light, fill, hemi ambient
 extern const char* const kMeshMatFS;       // kLitFS with the albedo times vertex colour and base-colour texture
 extern const char* const kGroundFS;        // the checker ground fading into the background
+extern const char* const kGridFS;          // the grid ground: its corners' colours mixed by the checker
 extern const char* const kGroundUpFS;      // the ground shaded at half resolution, upsampled
 extern const char* const kBackgroundFS;    // the background gradient (where nothing was drawn)
 extern const char* const kGroundShadowFS;  // the ground's soft shadow into a small texture
@@ -42,6 +44,8 @@ inline constexpr const char* kHairOnlySplitDefine =
 inline constexpr const char* kGroundNearDefine = "#define GROUND_NEAR 1\n";
 inline constexpr const char* kGroundNearLitDefine = "#define GROUND_NEAR 1\n#define GROUND_LIT 1\n";
 inline constexpr const char* kGroundLitDefine = "#define GROUND_LIT 1\n";
+// The grid ground where its shadow may fall (kGridVS, kGridFS).
+inline constexpr const char* kGridShadowedDefine = "#define GRID_SHADOWED 1\n";
 // Compiled into kGroundShadowFS: the classifying first pass (shadowClass()).
 inline constexpr const char* kShadowClassifyDefine = "#define SHADOW_CLASSIFY 1\n";
 // Compiled into kPostAaFS: its first pass (flat pixels copied, edges marked).

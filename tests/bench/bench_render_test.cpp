@@ -6,11 +6,13 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "bench/commands.h"
 #include "common/run_util.h"
 
 namespace {
@@ -131,6 +133,25 @@ TEST(BenchRender, BadInputIsRefusedBeforeAnythingIsMeasured) {
       << "measured before the bad scene was seen\n"
       << r.out;
   EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+// The default scenes are the demo's (the Makefile's DEMO_SCENES, as `make demo` reads it), in its
+// order, then ponytail_hopper, and each is a scene file: a scene added to the demo is benched too.
+TEST(BenchRender, DefaultScenesAreTheDemosScenes) {
+  std::ifstream mk("Makefile");
+  ASSERT_TRUE(mk) << "run from the repository root";
+  std::vector<std::string> demo;
+  for (std::string line; std::getline(mk, line);) {
+    if (line.rfind("DEMO_SCENES", 0) != 0 || line.find("?=") == std::string::npos) continue;
+    std::istringstream names(line.substr(line.find("?=") + 2));
+    for (std::string n; names >> n;) demo.push_back("assets/scenes/" + n + ".json");
+  }
+  ASSERT_FALSE(demo.empty()) << "the Makefile's DEMO_SCENES ?= line";
+  std::vector<std::string> expected = demo;
+  expected.push_back("assets/scenes/ponytail_hopper.json");
+  const std::vector<std::string> scenes = ponyhop::benchRenderDefaultScenes();
+  EXPECT_EQ(scenes, expected);
+  for (const std::string& s : scenes) EXPECT_TRUE(std::filesystem::is_regular_file(s)) << s;
 }
 
 }  // namespace

@@ -817,6 +817,57 @@ TEST(Renderer, TheGroundKeptBetweenFramesIsTheGroundDrawnAnew) {
 // without the shadow lookup outside the shadow's pixel rectangle, as the square inside it is: a
 // shadow that falls in the ring must still be there, at one sample (the half-resolution ground)
 // and four (the ground after the objects).
+// A single-sample frame draws the ground as a grid lit at its corners, with only the checker per
+// pixel (and, where the ground's shadow may fall, the shadow and the tone curve): it must look
+// like the ground shaded per pixel, as the 4x MSAA frame draws it, in the light, in the
+// sphere's shadow and where the ground fades into the background. Pixel for pixel, away from the
+// sphere's silhouette (which MSAA smooths another way) and the checker's edges (its filter is
+// another box).
+TEST(Renderer, TheGridGroundIsTheGroundShadedPerPixel) {
+  REQUIRE_GL();
+  Camera cam;
+  cam.eye = Eigen::Vector3d(0.6, -1.6, 0.6);
+  cam.target = Eigen::Vector3d(0.0, 0.0, 0.15);
+  cam.fov = 40.0;
+  const auto sphere = [](Renderer& r) { r.drawSphere(kSphereC, kSphereR, red()); };
+  RenderParams grid = testParams(1, true), msaa = testParams(4, true);
+  msaa.antialias = AntiAlias::Msaa;
+  const auto a = render(cam, grid, sphere), b = render(cam, msaa, sphere);
+  const auto plain = render(cam, testParams(1, true), [](Renderer&) {});
+  save("grid_ground.png", a);
+  save("grid_ground_msaa.png", b);
+  // The sphere's pixels (red: the grey ground has none), grown by 3: left out.
+  const auto red_at = [](const std::vector<uint8_t>& px, int x, int y) {
+    const uint8_t* p = px.data() + (size_t(y) * kW + size_t(x)) * 4;
+    return int(p[0]) - int(p[1]) > 12;
+  };
+  const auto near_sphere = [&](int x, int y) {
+    for (int dy = -3; dy <= 3; ++dy)
+      for (int dx = -3; dx <= 3; ++dx) {
+        const int u = std::clamp(x + dx, 0, kW - 1), v = std::clamp(y + dy, 0, kH - 1);
+        if (red_at(a, u, v) || red_at(b, u, v)) return true;
+      }
+    return false;
+  };
+  int n = 0, shadowed = 0, far_off = 0;
+  double sum = 0.0;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      if (near_sphere(x, y)) continue;
+      const double d = std::abs(luminance(a, x, y) - luminance(b, x, y));
+      sum += d;
+      ++n;
+      if (d > 6.0) ++far_off;
+      if (luminance(plain, x, y) - luminance(a, x, y) > 20.0) ++shadowed;
+    }
+  std::printf("grid ground: %d pixels compared, mean difference %.3f, %d over 6 levels, %d shadowed\n", n, sum / n,
+              far_off, shadowed);
+  ASSERT_GT(n, kW * kH / 2);
+  EXPECT_GT(shadowed, 200) << "the sphere's shadow is on the grid ground";
+  EXPECT_LT(sum / n, 1.0) << "mean luminance difference to the per-pixel ground";
+  EXPECT_LT(far_off, n / 100) << "pixels more than 6 levels from the per-pixel ground";
+}
+
 TEST(Renderer, AShadowInTheGroundsRingIsDrawn) {
   REQUIRE_GL();
   const Camera cam = testCamera();
