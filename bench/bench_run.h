@@ -100,9 +100,10 @@ struct RunResult {
   long steps = 0;             // steps in the timed horizon run
   double us_per_step = 0.0;   // median over repeats
   double us_per_sim_second = 0.0;
-  std::array<double, StageTimes::kCount> stage_us{};  // per step, the median repeat
-  double other_us = 0.0;                              // per step: step() minus the stages
-  double substeps = 1.0;                              // mean World::lastSubsteps()
+  // Per step, from one more run with the per-stage clock on (the timed repeats run without it).
+  std::array<double, StageTimes::kCount> stage_us{};
+  double other_us = 0.0;                // per step: that run's step() minus its stages
+  double substeps = 1.0;                // mean World::lastSubsteps()
   int tolerance_misses = 0;             // +tol: substeps still above the tolerance at the deepest split (timed run)
   double err_rms = 0.0, err_max = 0.0;  // m, against the reference over the horizon
   // Long run (continues the first repeat to BenchCase::long_duration).

@@ -332,7 +332,10 @@ void writeMarkdown(const std::string& path, const BenchArgs& args, const Config&
        "accuracy cheaply, only the whip substepped) and `+tol` (`tolerance = "
     << fmt(kBenchTolerance, "%g")
     << "` m, step doubling), whose cost per step includes "
-       "their substeps (the substeps column: mean per dt). Error: RMS and max distance of the tracked point (chain: "
+       "their substeps (the substeps column: mean per dt). Cost: wall time of `Sim::step`, the step `ponyhop sim` "
+       "takes, with the per-stage clock off as `ponyhop sim` runs it and as the peers' steps carry none; the stage "
+       "columns come from one more run of the same steps with that clock on. Error: RMS and max distance of the "
+       "tracked point (chain: "
        "the free end; hopper: the body "
        "centre) from the reference at the run's own steps over the converged horizon. Long runs continue the "
        "first run untimed: energy drift max|E - E0| (fixed anchor, conservative), joint drift (max |C| sampled "
