@@ -1,5 +1,7 @@
 #include "physics/constraint_solver.h"
 
+#include <limits>
+
 namespace ponyhop {
 
 Status ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, const ConstraintSystem& system,
@@ -12,11 +14,19 @@ Status ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, const 
   std::vector<Vector6d>& vel = vel_;
   acc.resize(bodies.size());
   inverse_inertia_.resize(bodies.size());
+  if (principal_of_.size() != bodies.size()) {  // sized once: NaN matches no inertia
+    principal_of_.assign(bodies.size(), Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+    principal_inverse_.resize(bodies.size());
+  }
   for (size_t i = 0; i < bodies.size(); ++i) {
     const RigidBody& b = bodies[i];
     if (b.isDynamic()) {
+      if (!(b.inertia == principal_of_[i])) {
+        principal_of_[i] = b.inertia;
+        principal_inverse_[i] = b.inertia.cwiseInverse();
+      }
       const Eigen::Matrix3d r = b.rotation();
-      rotateDiagonalInto(r, b.inertia.cwiseInverse(), inverse_inertia_[i]);
+      rotateDiagonalInto(r, principal_inverse_[i], inverse_inertia_[i]);
       b.freeAcceleration(r, inverse_inertia_[i], acc[i]);
     } else {
       acc[i] << b.a, b.alpha;

@@ -80,6 +80,9 @@ class ConstraintSolver {
   // Work space of solveJointForces (kept between calls: a steady step allocates nothing).
   std::vector<Vector6d> acc_, vel_, fc_;
   std::vector<Eigen::Matrix3d> inverse_inertia_;  // R I^-1 R^T per dynamic body, this step
+  // I^-1 (principal, body frame) per body, and the inertia it was made from: three divisions a
+  // body and step only when the inertia changed (a body's mass properties may be edited).
+  std::vector<Eigen::Vector3d> principal_inverse_, principal_of_;
   Eigen::VectorXd rhs_, jx_;
 };
 
