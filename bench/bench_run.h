@@ -85,8 +85,8 @@ std::vector<Override> methodOverrides(const Method& method, double dt, double co
 // Runs the case with the method at dt for `duration` seconds and samples the tracked point.
 Trajectory simulateTrajectory(const BenchCase& c, const Method& method, double dt, double duration);
 
-// RMS and max distance of `run` from `reference` (its stride dividing run's) over run's samples
-// in [0, horizon]. Returns {rms, max}.
+// RMS and max distance of `run` from `reference` over run's samples in [0, horizon] that fall on
+// the reference's samples (every one when the reference's stride divides run's). Returns {rms, max}.
 std::array<double, 2> trajectoryError(const Trajectory& run, const Trajectory& reference, double horizon);
 
 // The long run stops when its CPU time passes kLongRunBudget x the timed horizon's cost per step
