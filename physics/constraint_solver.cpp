@@ -11,7 +11,6 @@ Status ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, const 
   // Each dynamic body's rotation and R I^-1 R^T once, shared by the free acceleration, the
   // factorization and M^-1 J^T lambda below.
   std::vector<Vector6d>& acc = acc_;
-  std::vector<Vector6d>& vel = vel_;
   acc.resize(bodies.size());
   inverse_inertia_.resize(bodies.size());
   if (principal_of_.size() != bodies.size()) {  // sized once: NaN matches no inertia
@@ -32,21 +31,18 @@ Status ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, const 
       acc[i] << b.a, b.alpha;
     }
   }
-  if (gains.alpha != 0.0) {  // velocities only for C' = J q'
-    vel.resize(bodies.size());
-    for (size_t i = 0; i < bodies.size(); ++i) vel[i] << bodies[i].v, bodies[i].w;
-  }
-
   lambda_.setZero(system.rows());
   if (system.rows() > 0) {
-    // b = -J'q' - J_d M^-1 F_ext - J_k acc_k - (2 alpha C' + beta^2 C)
-    system.timesInto(acc, jx_);
+    // b = -J'q' - J_d M^-1 F_ext - J_k acc_k - (2 alpha C' + beta^2 C); C' = J q' (with alpha
+    // only) in the same pass over the rows as J acc.
+    if (gains.alpha != 0.0) {
+      system.timesInto(acc, bodies, jx_, jv_);
+    } else {
+      system.timesInto(acc, jx_);
+    }
     rhs_ = -jx_;
     if (!gains.velocity_level) rhs_ -= system.bias();
-    if (gains.alpha != 0.0) {
-      system.timesInto(vel, jx_);
-      rhs_ -= 2.0 * gains.alpha * jx_;
-    }
+    if (gains.alpha != 0.0) rhs_ -= 2.0 * gains.alpha * jv_;
     if (gains.beta != 0.0) rhs_ -= gains.beta * gains.beta * system.C();
     if (!factorWith(bodies, system, inverse_inertia_)) {
       return Status::error("the constraint matrix J M^-1 J^T is singular");

@@ -78,12 +78,12 @@ class ConstraintSolver {
  private:
   Eigen::VectorXd lambda_;
   // Work space of solveJointForces (kept between calls: a steady step allocates nothing).
-  std::vector<Vector6d> acc_, vel_, fc_;
+  std::vector<Vector6d> acc_, fc_;
   std::vector<Eigen::Matrix3d> inverse_inertia_;  // R I^-1 R^T per dynamic body, this step
   // I^-1 (principal, body frame) per body, and the inertia it was made from: three divisions a
   // body and step only when the inertia changed (a body's mass properties may be edited).
   std::vector<Eigen::Vector3d> principal_inverse_, principal_of_;
-  Eigen::VectorXd rhs_, jx_;
+  Eigen::VectorXd rhs_, jx_, jv_;
 };
 
 // M^-1 x for one body's 6-vector (1/m on the linear part, I_world^-1 on the angular part), with
