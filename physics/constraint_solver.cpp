@@ -55,6 +55,9 @@ Status ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, const 
   std::vector<Vector6d>& fc = fc_;
   fc.assign(bodies.size(), Vector6d::Zero());
   if (system.rows() > 0) system.addTransposeTimes(lambda_, bodies, fc);
+  // z: 0 when every a, alpha and constraint force written is finite, else NaN (x - x is NaN for
+  // an inf or NaN x, +0 otherwise), checked while the values are at hand.
+  double z = 0.0;
   for (size_t i = 0; i < bodies.size(); ++i) {
     RigidBody& b = bodies[i];
     if (!b.isDynamic()) continue;
@@ -62,7 +65,10 @@ Status ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, const 
     b.constraint_torque = fc[i].tail<3>();
     b.a = acc[i].head<3>() + fc[i].head<3>() / b.mass;
     b.alpha = acc[i].tail<3>() + inverse_inertia_[i] * fc[i].tail<3>();
+    for (int k = 0; k < 3; ++k)
+      z += (b.a(k) - b.a(k)) + (b.alpha(k) - b.alpha(k)) + (b.constraint_force(k) - b.constraint_force(k));
   }
+  accelerations_finite_ = z == 0.0;
   return {};
 }
 

@@ -63,6 +63,9 @@ class ConstraintSolver {
   // The multipliers of the last solveJointForces (one per constraint row; a spherical joint's
   // three are its constraint force on body a, in newtons).
   const Eigen::VectorXd& lambda() const { return lambda_; }
+  // Whether the last solveJointForces that succeeded wrote only finite a, alpha and constraint
+  // forces (World then skips its per-body check, which would find nothing).
+  bool accelerationsFinite() const { return accelerations_finite_; }
 
   // dq = M^-1 J^T y for the dynamic bodies (zero for the others): the mass-metric correction
   // for a multiplier-like vector y.
@@ -77,6 +80,7 @@ class ConstraintSolver {
 
  private:
   Eigen::VectorXd lambda_;
+  bool accelerations_finite_ = false;
   // Work space of solveJointForces (kept between calls: a steady step allocates nothing).
   std::vector<Vector6d> acc_, fc_;
   std::vector<Eigen::Matrix3d> inverse_inertia_;  // R I^-1 R^T per dynamic body, this step

@@ -465,7 +465,8 @@ void World::solveJointForces() {
     return stop("joint forces", s.message(),
                 "redundant or duplicate joints, a joint between two prescribed bodies, or a zero mass or inertia");
   }
-  if (checkBodies("joint forces", true)) forces_stale_ = false;
+  // The per-body check (to name the body and stop) only when the solve saw a non-finite value.
+  if (solver_->accelerationsFinite() || checkBodies("joint forces", true)) forces_stale_ = false;
 }
 
 void World::integrate(double h) {
