@@ -85,8 +85,8 @@ std::vector<Override> methodOverrides(const Method& method, double dt, double co
 // Runs the case with the method at dt for `duration` seconds and samples the tracked point.
 Trajectory simulateTrajectory(const BenchCase& c, const Method& method, double dt, double duration);
 
-// RMS and max distance of `run` from `reference` (its stride dividing run's) over run's samples
-// in [0, horizon]. Returns {rms, max}.
+// RMS and max distance of `run` from `reference` over run's samples in [0, horizon] that fall on
+// the reference's samples (every one when the reference's stride divides run's). Returns {rms, max}.
 std::array<double, 2> trajectoryError(const Trajectory& run, const Trajectory& reference, double horizon);
 
 // The long run stops when its CPU time passes kLongRunBudget x the timed horizon's cost per step
@@ -100,9 +100,10 @@ struct RunResult {
   long steps = 0;             // steps in the timed horizon run
   double us_per_step = 0.0;   // median over repeats
   double us_per_sim_second = 0.0;
-  std::array<double, StageTimes::kCount> stage_us{};  // per step, the median repeat
-  double other_us = 0.0;                              // per step: step() minus the stages
-  double substeps = 1.0;                              // mean World::lastSubsteps()
+  // Per step, from one more run with the per-stage clock on (the timed repeats run without it).
+  std::array<double, StageTimes::kCount> stage_us{};
+  double other_us = 0.0;                // per step: that run's step() minus its stages
+  double substeps = 1.0;                // mean World::lastSubsteps()
   int tolerance_misses = 0;             // +tol: substeps still above the tolerance at the deepest split (timed run)
   double err_rms = 0.0, err_max = 0.0;  // m, against the reference over the horizon
   // Long run (continues the first repeat to BenchCase::long_duration).

@@ -92,6 +92,56 @@ void ConstraintSystem::timesInto(const std::vector<Vector6d>& per_body, Eigen::V
   }
 }
 
+void ConstraintSystem::timesInto(const std::vector<Vector6d>& per_body, const std::vector<RigidBody>& bodies,
+                                 Eigen::VectorXd& out, Eigen::VectorXd& out_velocity) const {
+  out.setZero(rows_);
+  out_velocity.setZero(rows_);
+  const auto velocity = [&](int i) {
+    Vector6d v;
+    v << bodies[i].v, bodies[i].w;
+    return v;
+  };
+  for (const Block& b : blocks_) {
+    if (b.point) {  // as timesInto above, for x and for (v; w)
+      Eigen::Vector3d s = Eigen::Vector3d::Zero(), sv = Eigen::Vector3d::Zero();
+      if (b.body_a != kWorldBody) {
+        const Vector6d& x = per_body[b.body_a];
+        const RigidBody& body = bodies[b.body_a];
+        s += x.head<3>() + x.tail<3>().cross(b.arm_a);
+        sv += body.v + body.w.cross(b.arm_a);
+      }
+      if (b.body_b != kWorldBody) {
+        const Vector6d& x = per_body[b.body_b];
+        const RigidBody& body = bodies[b.body_b];
+        s -= x.head<3>() + x.tail<3>().cross(b.arm_b);
+        sv -= body.v + body.w.cross(b.arm_b);
+      }
+      out.segment<3>(b.row) = s;
+      out_velocity.segment<3>(b.row) = sv;
+      continue;
+    }
+    if (b.rows == 3) {
+      if (b.body_a != kWorldBody) {
+        out.segment<3>(b.row) += fixed3(b.ja) * per_body[b.body_a];
+        out_velocity.segment<3>(b.row) += fixed3(b.ja) * velocity(b.body_a);
+      }
+      if (b.body_b != kWorldBody) {
+        out.segment<3>(b.row) += fixed3(b.jb) * per_body[b.body_b];
+        out_velocity.segment<3>(b.row) += fixed3(b.jb) * velocity(b.body_b);
+      }
+      continue;
+    }
+    if (b.body_a != kWorldBody) {
+      out.segment(b.row, b.rows) += b.ja * per_body[b.body_a];
+      out_velocity.segment(b.row, b.rows) += b.ja * velocity(b.body_a);
+    }
+    if (b.body_b != kWorldBody) {
+      out.segment(b.row, b.rows) += b.jb * per_body[b.body_b];
+      out_velocity.segment(b.row, b.rows) += b.jb * velocity(b.body_b);
+    }
+  }
+}
+
 void ConstraintSystem::addTransposeTimes(const Eigen::VectorXd& lambda, const std::vector<RigidBody>& bodies,
                                          std::vector<Vector6d>& out) const {
   for (const Block& b : blocks_) {

@@ -117,6 +117,10 @@ class ConstraintSystem {
   Eigen::VectorXd times(const std::vector<Vector6d>& per_body) const;
   // out = J x (out resized to rows() when needed).
   void timesInto(const std::vector<Vector6d>& per_body, Eigen::VectorXd& out) const;
+  // The same, and out_velocity = J q' for the bodies' velocities (v; w) in the same pass: the
+  // values of timesInto with a vector of (v; w) per body, without building it.
+  void timesInto(const std::vector<Vector6d>& per_body, const std::vector<RigidBody>& bodies, Eigen::VectorXd& out,
+                 Eigen::VectorXd& out_velocity) const;
   // out[body] += J^T lambda for dynamic bodies only (kinematic bodies take no constraint force).
   void addTransposeTimes(const Eigen::VectorXd& lambda, const std::vector<RigidBody>& bodies,
                          std::vector<Vector6d>& out) const;

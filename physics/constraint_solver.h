@@ -63,6 +63,9 @@ class ConstraintSolver {
   // The multipliers of the last solveJointForces (one per constraint row; a spherical joint's
   // three are its constraint force on body a, in newtons).
   const Eigen::VectorXd& lambda() const { return lambda_; }
+  // Whether the last solveJointForces that succeeded wrote only finite a, alpha and constraint
+  // forces (World then skips its per-body check, which would find nothing).
+  bool accelerationsFinite() const { return accelerations_finite_; }
 
   // dq = M^-1 J^T y for the dynamic bodies (zero for the others): the mass-metric correction
   // for a multiplier-like vector y.
@@ -77,10 +80,14 @@ class ConstraintSolver {
 
  private:
   Eigen::VectorXd lambda_;
+  bool accelerations_finite_ = false;
   // Work space of solveJointForces (kept between calls: a steady step allocates nothing).
-  std::vector<Vector6d> acc_, vel_, fc_;
+  std::vector<Vector6d> acc_, fc_;
   std::vector<Eigen::Matrix3d> inverse_inertia_;  // R I^-1 R^T per dynamic body, this step
-  Eigen::VectorXd rhs_, jx_;
+  // I^-1 (principal, body frame) per body, and the inertia it was made from: three divisions a
+  // body and step only when the inertia changed (a body's mass properties may be edited).
+  std::vector<Eigen::Vector3d> principal_inverse_, principal_of_;
+  Eigen::VectorXd rhs_, jx_, jv_;
 };
 
 // M^-1 x for one body's 6-vector (1/m on the linear part, I_world^-1 on the angular part), with

@@ -27,10 +27,20 @@ inline Eigen::Matrix3d skew(const Eigen::Vector3d& a) {
 // construction: the six upper entries, mirrored.
 // Into `out` directly: a returned 3 x 3 written entry by entry and then copied whole is read
 // back in 16-byte halves of 8-byte stores (failed store forwarding, a stall per copy).
+// In scalars: r is written entry by entry (toRotationMatrix) just before, and Eigen's r * d read
+// its columns back 16 bytes at a time (failed store forwarding, the joint-force stage's largest
+// stall). The same operations: rd_ik = r_ik d_k, out_ij = rd_i0 r_j0 + (rd_i1 r_j1 + rd_i2 r_j2),
+// the order of Eigen's 3-term dot (bit for bit on 2 million random rotations).
 inline void rotateDiagonalInto(const Eigen::Matrix3d& r, const Eigen::Vector3d& d, Eigen::Matrix3d& out) {
-  const Eigen::Matrix3d rd = r * d.asDiagonal();
+  double m[3][3], rd[3][3];
   for (int i = 0; i < 3; ++i) {
-    for (int j = i; j < 3; ++j) out(i, j) = out(j, i) = rd.row(i).dot(r.row(j));
+    for (int k = 0; k < 3; ++k) m[i][k] = r(i, k);
+  }
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) rd[i][k] = m[i][k] * d(k);
+  }
+  for (int i = 0; i < 3; ++i) {
+    for (int j = i; j < 3; ++j) out(i, j) = out(j, i) = rd[i][0] * m[j][0] + (rd[i][1] * m[j][1] + rd[i][2] * m[j][2]);
   }
 }
 inline Eigen::Matrix3d rotateDiagonal(const Eigen::Matrix3d& r, const Eigen::Vector3d& d) {

@@ -22,6 +22,10 @@ namespace ponyhop {
 
 struct RigidBody;
 
+// atan2(y, x) for y, x >= 0 (the monitor's turn angles: half a turn's angle from |vec| and |w|
+// of a quaternion), within a few ulp of std::atan2 and about a third of its cost.
+double atan2NonNegative(double y, double x);
+
 class StabilityMonitor {
  public:
   static constexpr double kGrowth = 3.0;

@@ -240,7 +240,11 @@ bool TreeSolver::factorTree(const std::vector<RigidBody>& bodies, const Constrai
   for (Clique& cl : cliques_) {
     const RigidBody& body = bodies[cl.body];
     const Eigen::Matrix3d& inertia_inv = inverse_inertia[cl.body];
-    const double mass_inv = 1.0 / body.mass;
+    if (!(body.mass == cl.mass)) {
+      cl.mass = body.mass;
+      cl.mass_inv = 1.0 / body.mass;
+    }
+    const double mass_inv = cl.mass_inv;
     const size_t k = cl.members.size();
     bool points = true;
     for (size_t x = 0; x < k && points; ++x) points = blocks[nodes_[cl.members[x]].block].point;

@@ -30,6 +30,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/LU>
+#include <limits>
 #include <vector>
 
 #include "physics/constraint_solver.h"
@@ -68,6 +69,9 @@ class TreeSolver final : public ConstraintSolver {
     int body = -1;
     std::vector<int> members;  // node indices
     int a = 0;                 // its first block in a_ or a3_ (k x k blocks, row-major by slot)
+    // 1 / m of its body, and the m it was made from (a division per step only when m changed).
+    double mass = std::numeric_limits<double>::quiet_NaN();
+    double mass_inv = 0.0;
   };
 
   bool structureChanged(const std::vector<RigidBody>& bodies, const ConstraintSystem& system) const;

@@ -142,7 +142,7 @@ void World::step() {
     return std::max(params_.substeps,
                     theta > 0.0 ? static_cast<int>(std::min(4096.0, std::ceil(params_.dt * speed / theta))) : 1);
   };
-  int n = count(maxAngularSpeed());
+  int n = theta > 0.0 ? count(maxAngularSpeed()) : count(0.0);  // no turn limit: no speeds (8 norms at N = 8)
   // RATTLE: the count must also hold at the end of dt, or the dt is taken again with the end's
   // count (once). A count from the start alone is not time-symmetric, and a reversible method
   // with such steps loses its bounded energy error: the whipping chain's energy fell 0.05 % of E0
@@ -465,7 +465,8 @@ void World::solveJointForces() {
     return stop("joint forces", s.message(),
                 "redundant or duplicate joints, a joint between two prescribed bodies, or a zero mass or inertia");
   }
-  if (checkBodies("joint forces", true)) forces_stale_ = false;
+  // The per-body check (to name the body and stop) only when the solve saw a non-finite value.
+  if (solver_->accelerationsFinite() || checkBodies("joint forces", true)) forces_stale_ = false;
 }
 
 void World::integrate(double h) {

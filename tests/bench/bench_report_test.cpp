@@ -56,6 +56,29 @@ ScalingConfig fake(const std::string& name, bool peer, std::vector<std::string>&
   return c;
 }
 
+// A run whose step does not divide the reference's stride is compared at the times both have:
+// the tip at k / 100 s against the reference's sample at that time (every 5th of the run's lands
+// on 1/1920 s), not at its rounded ratio (19: 19 k / 1920 s).
+TEST(BenchError, ARunIsComparedWithTheReferenceAtItsOwnTimes) {
+  const auto path = [](double t) { return Eigen::Vector3d(std::sin(3.0 * t), std::cos(2.0 * t), t * t); };
+  Trajectory ref;
+  ref.stride = kBenchGrid;
+  for (int j = 0; j <= 1920; ++j) ref.p.push_back(path(j * kBenchGrid));
+  for (int d : {100, 1000, 80, 1920, 7}) {
+    Trajectory run;
+    run.stride = 1.0 / d;
+    for (int k = 0; k <= d; ++k) run.p.push_back(path(k * run.stride));
+    const auto e = trajectoryError(run, ref, 1.0);
+    EXPECT_LT(e[0], 1e-12) << "1/" << d;
+    EXPECT_LT(e[1], 1e-12) << "1/" << d;
+  }
+  // Off the path: the error is seen (at the times both have).
+  Trajectory off;
+  off.stride = 0.01;
+  for (int k = 0; k <= 100; ++k) off.p.push_back(path(k * off.stride) + Eigen::Vector3d(0.0, 0.0, 0.5));
+  EXPECT_NEAR(trajectoryError(off, ref, 1.0)[0], 0.5, 1e-12);
+}
+
 TEST(BenchScaling, RoundsInterleaveAndAStoppedRunIsNotRepeated) {
   std::vector<std::string> made;
   const std::vector<ScalingConfig> configs = {fake("a", false, made, 0, 1e-6), fake("b", true, made),

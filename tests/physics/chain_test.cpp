@@ -7,6 +7,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <numbers>
 #include <random>
 #include <thread>
 #include <vector>
@@ -321,6 +323,32 @@ TEST(PhysicsChain, StabilityMonitorReadsBodiesAsAGatheredState) {
     cw.world.step();
   }
   EXPECT_GT(gathered.hRho(), 0.0);
+}
+
+// The monitor's own atan2 (its turn angles) agrees with libm's within 4 ulp over the whole first
+// quadrant: near the axes, at and between its table's grid points t = k / 64, and beyond 1.
+TEST(PhysicsChain, StabilityMonitorAtanAgreesWithLibm) {
+  double worst = 0.0, worst_t = 0.0;
+  const auto check = [&](double y, double x) {
+    const double want = std::atan2(y, x), got = atan2NonNegative(y, x);
+    const double ulps = std::abs(got - want) / (std::numeric_limits<double>::epsilon() * std::max(want, 1e-300));
+    if (ulps > worst) {
+      worst = ulps;
+      worst_t = y / x;
+    }
+  };
+  for (int i = 0; i <= 256000; ++i) {
+    const double t = i / 128000.0;  // 0 ... 2, through every grid point and half-way between
+    check(t, 1.0);
+    check(1.0, t);         // y / x from 1/2 to infinity (x = 0: pi / 2)
+    check(t * 1e-3, 1.0);  // small turns
+    check(3.7 * t, 3.7);   // scaled
+  }
+  for (double t = 1.0 / 128.0; t < 1.0; t += 1.0 / 64.0) check(std::nextafter(t, 2.0), 1.0);  // at the splits
+  EXPECT_LT(worst, 4.0) << "at y / x = " << worst_t;
+  EXPECT_EQ(atan2NonNegative(0.0, 1.0), 0.0);
+  EXPECT_DOUBLE_EQ(atan2NonNegative(1.0, 0.0), 0.5 * std::numbers::pi);
+  EXPECT_TRUE(std::isnan(atan2NonNegative(std::nan(""), 1.0)));
 }
 
 }  // namespace

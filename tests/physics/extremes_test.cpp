@@ -282,5 +282,27 @@ TEST(PhysicsExtremes, HopperWithGainsHundredTimesTooStiff) {
   }
 }
 
+// A non-finite acceleration out of the joint-force stage stops the world there, naming the body
+// (the solver flags it while writing the accelerations; World's per-body check then says which).
+// The gyroscopic term of a body with one principal inertia of 1e-300 kg m^2 turning at 1e9 rad/s
+// overflows: I^-1 (w x I w) ~ 1e300 * 6e18.
+TEST(PhysicsExtremes, NonFiniteAccelerationStopsTheJointForceStage) {
+  PhysicsParams p;
+  p.solver = SolverKind::Tree;
+  p.integrator = Integrator::SymplecticEuler;
+  p.stabilization = Stabilization::None;
+  World world(p);
+  RigidBody b;
+  b.name = "spinner";
+  b.mass = 1.0;
+  b.inertia = Eigen::Vector3d(1e-300, 1.0, 2.0);
+  b.w = Eigen::Vector3d(1e9, 2e9, 3e9);
+  world.addDynamicBody(b);
+  world.step();
+  ASSERT_FALSE(world.ok());
+  EXPECT_NE(world.status().find("stage 'joint forces': non-finite acceleration of 'spinner'"), std::string::npos)
+      << world.status();
+}
+
 }  // namespace
 }  // namespace ponyhop
