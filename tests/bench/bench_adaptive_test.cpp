@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "common/out_util.h"
+
 namespace ponyhop {
 namespace {
 
@@ -78,10 +80,7 @@ TEST(BenchAdaptive, EveryOracleWritesARowWithinTheBudget) {
   o.out = std::string(PONYHOP_TEST_OUT) + "/bench-adaptive";
   o.command_line = "bench_adaptive_test";
   ASSERT_EQ(runAdaptiveBench(o), 0);
-  std::ifstream md(o.out + "/adaptive.md");
-  std::stringstream text;
-  text << md.rdbuf();
-  const std::string s = text.str();
+  const std::string s = testing::readFile(o.out + "/adaptive.md");
   const std::vector<std::string> full = adaptiveRow(s, "| 24 | fixed | full |");
   ASSERT_FALSE(full.empty()) << s;
   for (const std::string& oracle : o.oracles) {

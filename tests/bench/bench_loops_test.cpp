@@ -11,6 +11,8 @@
 #include <sstream>
 #include <string>
 
+#include "common/out_util.h"
+
 namespace ponyhop {
 namespace {
 
@@ -25,10 +27,7 @@ TEST(BenchLoops, AShortRunClosesEveryLoopAndAStoppedRowIsAFindingNotAFailure) {
   o.out = std::string(PONYHOP_TEST_OUT) + "/bench-loops";
   o.command_line = "bench_loops_test";
   EXPECT_EQ(runLoopBench(o), 0);
-  std::ifstream md(o.out + "/loops.md");
-  std::stringstream text;
-  text << md.rdbuf();
-  const std::string s = text.str();
+  const std::string s = testing::readFile(o.out + "/loops.md");
   EXPECT_NE(s.find("stopped:"), std::string::npos) << "no row stopped at 1/60 s: the exit status is not exercised";
   // Each projection row at 1/240 s, in both tables (the four-bar's, the hair loop's): its closure,
   // the third cell, within the goal of 1e-10 m.

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "bench/bench_report.h"
+#include "common/out_util.h"
 
 namespace {
 
@@ -93,11 +94,9 @@ TEST_F(BenchSmoke, RunsAndWritesItsFiles) {
     EXPECT_TRUE(fs::exists(out_ / f)) << f;
     EXPECT_GT(fs::file_size(out_ / f), 50u) << f;
   }
-  std::ifstream md(out_ / "README.md");
-  std::stringstream text;
-  text << md.rdbuf();
-  EXPECT_NE(text.str().find("| method |"), std::string::npos) << "no table in README.md";
-  EXPECT_NE(text.str().find("ponyhop bench --quick"), std::string::npos) << "README.md does not name its command";
+  const std::string readme = ponyhop::testing::readFile((out_ / "README.md").string());
+  EXPECT_NE(readme.find("| method |"), std::string::npos) << "no table in README.md";
+  EXPECT_NE(readme.find("ponyhop bench --quick"), std::string::npos) << "README.md does not name its command";
 }
 
 TEST_F(BenchSmoke, EveryNumberIsFiniteOrTheRowSaysWhyItFailed) {
