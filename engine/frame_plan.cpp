@@ -8,6 +8,7 @@
 // [SECTION] Where the passes run: screen and texel rectangles
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -384,23 +385,44 @@ bool Renderer::Impl::groundShadowRect(const Eigen::Matrix4f& view_proj, int w, i
   const double gs = double(ground_shadow_size), g = params.ground_height;
   const double xs[2] = {double(ground_shadow_box[0] - 1), double(ground_shadow_box[2] + 1)};
   const double ys[2] = {double(ground_shadow_box[1] - 1), double(ground_shadow_box[3] + 1)};
+  // The four points, in order around the parallelogram they make on the ground (the light is
+  // orthographic), in the camera's clip space.
+  const double txs[4] = {xs[0], xs[1], xs[1], xs[0]}, tys[4] = {ys[0], ys[0], ys[1], ys[1]};
+  std::array<Eigen::Vector4d, 4> quad;
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector2d ndc(txs[k] / gs * 2.0 - 1.0, tys[k] / gs * 2.0 - 1.0);
+    const Eigen::Vector4d a4 = inv * Eigen::Vector4d(ndc.x(), ndc.y(), -1.0, 1.0);
+    const Eigen::Vector4d b4 = inv * Eigen::Vector4d(ndc.x(), ndc.y(), 1.0, 1.0);
+    const Eigen::Vector3d a = a4.head<3>() / a4.w(), b = b4.head<3>() / b4.w();
+    if (std::abs(b.z() - a.z()) < 1e-12) return whole = true;
+    const Eigen::Vector3d P = a + (b - a) * ((g - a.z()) / (b.z() - a.z()));
+    quad[size_t(k)] = view_proj.cast<double>() * P.homogeneous();
+  }
+  // Cut at the near plane (z >= -w in clip space; clip coordinates are affine along the
+  // parallelogram's edges): a part behind the eye is not on screen, and what is left projects
+  // to a bounded rectangle. Nothing left: the shadow is nowhere on screen.
+  std::vector<Eigen::Vector4d> kept;
+  kept.reserve(8);
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector4d& p = quad[size_t(k)];
+    const Eigen::Vector4d& q = quad[size_t((k + 1) % 4)];
+    const double dp = p.z() + p.w(), dq = q.z() + q.w();
+    if (dp >= 0.0) kept.push_back(p);
+    if ((dp >= 0.0) != (dq >= 0.0)) kept.push_back(p + (q - p) * (dp / (dp - dq)));
+  }
   double x0 = 1e30, y0 = 1e30, x1 = -1e30, y1 = -1e30;
-  for (double tx : xs)
-    for (double ty : ys) {
-      const Eigen::Vector2d ndc(tx / gs * 2.0 - 1.0, ty / gs * 2.0 - 1.0);
-      const Eigen::Vector4d a4 = inv * Eigen::Vector4d(ndc.x(), ndc.y(), -1.0, 1.0);
-      const Eigen::Vector4d b4 = inv * Eigen::Vector4d(ndc.x(), ndc.y(), 1.0, 1.0);
-      const Eigen::Vector3d a = a4.head<3>() / a4.w(), b = b4.head<3>() / b4.w();
-      if (std::abs(b.z() - a.z()) < 1e-12) return whole = true;
-      const Eigen::Vector3d P = a + (b - a) * ((g - a.z()) / (b.z() - a.z()));
-      const Eigen::Vector4d c = view_proj.cast<double>() * P.homogeneous();
-      if (c.w() < 1e-6) return whole = true;  // behind the eye: not bounded on screen
-      const double px = (c.x() / c.w() * 0.5 + 0.5) * w, py = (c.y() / c.w() * 0.5 + 0.5) * h;
-      x0 = std::min(x0, px);
-      x1 = std::max(x1, px);
-      y0 = std::min(y0, py);
-      y1 = std::max(y1, py);
-    }
+  for (const Eigen::Vector4d& c : kept) {
+    if (c.w() < 1e-9) return whole = true;  // only with a degenerate near plane
+    const double px = (c.x() / c.w() * 0.5 + 0.5) * w, py = (c.y() / c.w() * 0.5 + 0.5) * h;
+    x0 = std::min(x0, px);
+    x1 = std::max(x1, px);
+    y0 = std::min(y0, py);
+    y1 = std::max(y1, py);
+  }
+  if (kept.empty()) return false;
+  // Clamped before the cast: a point just past the near plane projects far off screen.
+  x0 = std::clamp(x0, -2.0, w + 2.0), x1 = std::clamp(x1, -2.0, w + 2.0);
+  y0 = std::clamp(y0, -2.0, h + 2.0), y1 = std::clamp(y1, -2.0, h + 2.0);
   rect.x0 = std::clamp(int(std::floor(x0)) - 1, 0, w);
   rect.y0 = std::clamp(int(std::floor(y0)) - 1, 0, h);
   rect.x1 = std::clamp(int(std::ceil(x1)) + 1, 0, w);

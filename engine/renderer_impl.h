@@ -261,7 +261,8 @@ struct Renderer::Impl {
   std::vector<PixelRect> rects;  // scratch of the passes (kept: no allocation per frame)
   bool casterTexelBox(const Eigen::Matrix4d& light_vp, double margin_m, int size, int box[4]) const;
   // The pixel rectangle (of a w x h viewport) outside which the ground is lit: its shadow texture
-  // reads 1 there. False: none (nothing shadowed); `whole` set when it cannot be bounded.
+  // reads 1 there (the part of its ground parallelogram behind the near plane cut off). False: none
+  // (nothing shadowed, or all of it behind the eye); `whole` set when it cannot be bounded.
   bool groundShadowRect(const Eigen::Matrix4f& view_proj, int w, int h, PixelRect& rect, bool& whole) const;
 
   // The ground kept between frames (halfGroundPass, upsampleGroundPass). Outside the pixel

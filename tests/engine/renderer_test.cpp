@@ -868,6 +868,42 @@ TEST(Renderer, TheGridGroundIsTheGroundShadedPerPixel) {
   EXPECT_LT(far_off, n / 100) << "pixels more than 6 levels from the per-pixel ground";
 }
 
+// The ground shadow's pixel rectangle (groundShadowRect) is the casters' box in the light's view,
+// carried along the light onto the ground and projected. With one caster behind the eye, part of
+// that parallelogram is behind the eye too: it is cut at the near plane, and what is left must
+// still hold the shadow of the caster in front, near the bottom of the frame (where the cut is),
+// at one sample (the grid ground) and four.
+TEST(Renderer, AGroundShadowNearTheEyeIsDrawnWhenACasterIsBehindIt) {
+  REQUIRE_GL();
+  Camera cam;
+  cam.eye = Eigen::Vector3d(0.0, -1.2, 0.5);
+  cam.target = Eigen::Vector3d(0.0, 0.5, 0.1);
+  cam.fov = 40.0;
+  const Eigen::Vector3d d = LightParams().direction.normalized();
+  const Eigen::Vector3d front(0.25, -0.3, 0.2), behind(0.0, -3.0, 0.3);
+  const auto onGround = [&](const Eigen::Vector3d& c) { return Eigen::Vector3d(c + d * (c.z() / -d.z())); };
+  const Eigen::Vector3d fwd = (cam.target - cam.eye).normalized();
+  ASSERT_LT((onGround(behind) - cam.eye).dot(fwd), -0.5) << "the far caster's shadow is behind the eye";
+  ASSERT_LT((behind - cam.eye).dot(fwd), -0.5) << "the far caster is behind the eye";
+  constexpr double kR = 0.08;
+  const auto both = [&](Renderer& r) {
+    r.drawSphere(front, kR, red());
+    r.drawSphere(behind, kR, red());
+  };
+  const auto nothing = [](Renderer&) {};
+  for (int samples : {1, 4}) {
+    const auto shadowed = render(cam, testParams(samples), both);
+    const auto lit = render(cam, testParams(samples), nothing);
+    save("near_shadow_" + std::to_string(samples) + ".png", shadowed);
+    const Eigen::Vector2d c = project(cam, front), p = project(cam, onGround(front));
+    const double r_px = (project(cam, front + cam.view().block<1, 3>(1, 0).transpose() * kR) - c).norm();
+    ASSERT_GT((p - c).norm(), r_px + 3.0) << "the sphere hides its shadow's centre";
+    ASSERT_TRUE(p.x() > 2 && p.y() > kH / 2 && p.x() < kW - 3 && p.y() < kH - 3) << p.transpose();
+    const double dl = luminance(lit, int(p.x()), int(p.y())) - luminance(shadowed, int(p.x()), int(p.y()));
+    EXPECT_GT(dl, 20.0) << "no shadow near the eye at " << samples << " sample(s), pixel " << p.transpose();
+  }
+}
+
 TEST(Renderer, AShadowInTheGroundsRingIsDrawn) {
   REQUIRE_GL();
   const Camera cam = testCamera();
