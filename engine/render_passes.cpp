@@ -525,23 +525,36 @@ void Renderer::Impl::upsampleGround(const FramePlan& f, const PixelRect& clip, R
 // (glBlitFramebuffer of the same size and format: a memory copy on llvmpipe, about a quarter of
 // the bilinear tap's cost).
 void Renderer::Impl::upsampleGroundPass(const FramePlan& f, RenderStats& st) {
-  const PixelRect all{0, 0, f.w, f.h};
-  if (!ground_lo_kept) {
-    ground_full_key.clear();
-    glBindFramebuffer(GL_FRAMEBUFFER, ground_up_fbo);
-    upsampleGround(f, all, st);
-    return;
-  }
-  glBindFramebuffer(GL_FRAMEBUFFER, ground_full_fbo);
-  if (ground_full_key != ground_key) {
-    upsampleGround(f, all, st);
-    ground_full_key = ground_key;
-  } else if (!ground_lo_dirty.empty()) {
+  PixelRect dirty{0, 0, 0, 0};
+  if (!ground_lo_dirty.empty()) {
     // Pixel x taps the texels at (x + 0.5) w_lo / w - 0.5 and the next: a redrawn texel column c
     // reaches the pixels within 2 of 2c (3 for an odd width); 4 for the interpolation's rounding.
     constexpr int kReach = 4;
     const PixelRect& d = ground_lo_dirty;
-    upsampleGround(f, all & PixelRect{2 * d.x0 - kReach, 2 * d.y0 - kReach, 2 * d.x1 + kReach, 2 * d.y1 + kReach}, st);
+    dirty = PixelRect{0, 0, f.w, f.h} &
+            PixelRect{2 * d.x0 - kReach, 2 * d.y0 - kReach, 2 * d.x1 + kReach, 2 * d.y1 + kReach};
+  }
+  keptGroundPass(f, ground_lo_kept, dirty, &Impl::upsampleGround, st);
+}
+
+// The full-size ground into the main target by `draw`: straight into it when the ground is not
+// kept; else into ground_full_tex (all of it when its key is stale, else `dirty` alone) and copied
+// into the main target from there.
+void Renderer::Impl::keptGroundPass(const FramePlan& f, bool kept, const PixelRect& dirty, GroundDraw draw,
+                                    RenderStats& st) {
+  const PixelRect all{0, 0, f.w, f.h};
+  if (!kept) {
+    ground_full_key.clear();
+    glBindFramebuffer(GL_FRAMEBUFFER, ground_up_fbo);
+    (this->*draw)(f, all, st);
+    return;
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, ground_full_fbo);
+  if (ground_full_key != ground_key) {
+    (this->*draw)(f, all, st);
+    ground_full_key = ground_key;
+  } else if (!dirty.empty()) {
+    (this->*draw)(f, dirty, st);
   }
   glBindFramebuffer(GL_READ_FRAMEBUFFER, ground_full_fbo);
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, ground_up_fbo);
@@ -659,23 +672,7 @@ void Renderer::Impl::gridGroundPass(const FramePlan& f, RenderStats& st) {
   ground_lo_shadow = shadow;
   ground_lo_whole = whole;
   ground_lo_kept = false;
-  if (!kept) {
-    ground_full_key.clear();
-    glBindFramebuffer(GL_FRAMEBUFFER, ground_up_fbo);
-    drawGridGround(f, all, st);
-    return;
-  }
-  glBindFramebuffer(GL_FRAMEBUFFER, ground_full_fbo);
-  if (ground_full_key != ground_key) {
-    drawGridGround(f, all, st);
-    ground_full_key = ground_key;
-  } else if (!dirty.empty()) {
-    drawGridGround(f, dirty, st);
-  }
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, ground_full_fbo);
-  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, ground_up_fbo);
-  glBlitFramebuffer(0, 0, f.w, f.h, 0, 0, f.w, f.h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
-  ++st.draw_calls;
+  keptGroundPass(f, kept, dirty, &Impl::drawGridGround, st);
 }
 
 // Without the half-resolution ground: the ground after the objects (the early depth test skips

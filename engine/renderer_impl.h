@@ -293,6 +293,8 @@ struct Renderer::Impl {
   void groundShadowPass(const FramePlan& f);
   void halfGroundPass(const FramePlan& f, RenderStats& st);
   void upsampleGroundPass(const FramePlan& f, RenderStats& st);
+  using GroundDraw = void (Impl::*)(const FramePlan&, const PixelRect&, RenderStats&);
+  void keptGroundPass(const FramePlan& f, bool kept, const PixelRect& dirty, GroundDraw draw, RenderStats& st);
   void gridGroundPass(const FramePlan& f, RenderStats& st);
   void drawGridGround(const FramePlan& f, const PixelRect& clip, RenderStats& st);
   void objectsPass(const FramePlan& f, RenderStats& st);
