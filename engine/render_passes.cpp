@@ -490,7 +490,7 @@ void Renderer::Impl::halfGroundPass(const FramePlan& f, RenderStats& st) {
 // Into the bound target, inside `clip`: the half-resolution ground, a bilinear tap of it per
 // pixel, below sky_row; above it the background's own pass.
 void Renderer::Impl::upsampleGround(const FramePlan& f, const PixelRect& clip, RenderStats& st) {
-  const int w = f.w, h = f.h;
+  const int w = f.w;
   glDisable(GL_DEPTH_TEST);
   glEnable(GL_SCISSOR_TEST);
   glBindVertexArray(empty_vao);
@@ -508,13 +508,7 @@ void Renderer::Impl::upsampleGround(const FramePlan& f, const PixelRect& clip, R
     glActiveTexture(GL_TEXTURE0);
     ++st.draw_calls;
   }
-  if (const PixelRect r = clip & PixelRect{0, f.sky_row, w, h}; !r.empty()) {
-    setFrameUniforms(prog_bg, f);
-    glUniform2f(loc(prog_bg, "u_viewport"), float(w), float(h));
-    glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    ++st.draw_calls;
-  }
+  backgroundRows(f, clip, f.sky_row, st);
   glDisable(GL_SCISSOR_TEST);
   glBindVertexArray(0);
 }
@@ -562,6 +556,18 @@ void Renderer::Impl::keptGroundPass(const FramePlan& f, bool kept, const PixelRe
   ++st.draw_calls;
 }
 
+// The background's own pass over the rows from `row` up, inside `clip` (the scissor test on, the
+// empty vertex array bound).
+void Renderer::Impl::backgroundRows(const FramePlan& f, const PixelRect& clip, int row, RenderStats& st) {
+  const PixelRect r = clip & PixelRect{0, row, f.w, f.h};
+  if (r.empty()) return;
+  setFrameUniforms(prog_bg, f);
+  glUniform2f(loc(prog_bg, "u_viewport"), float(f.w), float(f.h));
+  glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  ++st.draw_calls;
+}
+
 // Into the bound target (main_color_tex's size), inside `clip`: the grid ground below grid_top,
 // the background's own pass above it. The grid's cells are drawn by prog_grid but in the ground
 // shadow's pixel rectangle (groundShadowRect), where prog_grid_shadow (GRID_SHADOWED) looks the
@@ -571,13 +577,7 @@ void Renderer::Impl::drawGridGround(const FramePlan& f, const PixelRect& clip, R
   glDisable(GL_DEPTH_TEST);
   glEnable(GL_SCISSOR_TEST);
   glBindVertexArray(empty_vao);
-  if (const PixelRect r = clip & PixelRect{0, f.grid_top, w, h}; !r.empty()) {
-    setFrameUniforms(prog_bg, f);
-    glUniform2f(loc(prog_bg, "u_viewport"), float(w), float(h));
-    glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    ++st.draw_calls;
-  }
+  backgroundRows(f, clip, f.grid_top, st);
   const PixelRect below = clip & PixelRect{0, 0, w, f.grid_top};
   if (!below.empty()) {
     // 64-pixel cells: the lighting, the fade and the background are smooth at that scale (on the

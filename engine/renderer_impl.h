@@ -297,6 +297,7 @@ struct Renderer::Impl {
   void keptGroundPass(const FramePlan& f, bool kept, const PixelRect& dirty, GroundDraw draw, RenderStats& st);
   void gridGroundPass(const FramePlan& f, RenderStats& st);
   void drawGridGround(const FramePlan& f, const PixelRect& clip, RenderStats& st);
+  void backgroundRows(const FramePlan& f, const PixelRect& clip, int row, RenderStats& st);
   void objectsPass(const FramePlan& f, RenderStats& st);
   void deferredLightPass(const FramePlan& f, RenderStats& st);
   void groundAndBackgroundPass(const FramePlan& f, RenderStats& st);
