@@ -162,6 +162,10 @@ bool UiGl::composeCached(const Renderer& renderer, unsigned fbo, int width, int 
     ImGui_ImplOpenGL3_RenderDrawData(&panel.data);
     panel_sig_.swap(sig_);
     panel_valid_ = true;
+    if (times) {
+      glFinish();
+      times->panel_redraw_ms = msSince(t1);
+    }
   }
   last_panel_drawn_ = redraw;
   glDisable(GL_SCISSOR_TEST);

@@ -29,7 +29,8 @@ class UiGl {
   // overlay drawn.
   struct Times {
     double copy_ms = 0.0, panel_ms = 0.0;
-    bool panel_drawn = true;  // ImGui drew the panel this frame (false: its texture was copied as it was)
+    bool panel_drawn = true;       // ImGui drew the panel this frame (false: its texture was copied as it was)
+    double panel_redraw_ms = 0.0;  // with the panel cache: of panel_ms, ImGui drawing the panel's texture
   };
   // Into framebuffer `fbo` (width x height): the renderer's last frame in the left scene_width
   // pixels, then ImGui's draw data of the frame just ended (ImGui::Render()) over everything.

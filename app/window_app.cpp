@@ -95,14 +95,18 @@ bool screenshot(const std::string& path, int w, int h) {
 struct StageSums {
   std::vector<double> frame_ms;
   double physics = 0, panel = 0, render = 0, compose = 0;
-  double copy = 0, panel_draw = 0, swap = 0;  // compose = copy + panel_draw + swap
-  int rendered = 0, panel_drawn = 0;          // frames whose scene was rendered, whose panel ImGui drew
-  double rendered_ms = 0, reused_ms = 0;      // their frame times, and those of the re-presented ones
+  double copy = 0, panel_draw = 0, swap = 0;       // compose = copy + panel_draw + swap
+  int rendered = 0, panel_drawn = 0;               // frames whose scene was rendered, whose panel ImGui drew
+  double panel_drawn_ms = 0, panel_copied_ms = 0;  // the panel's time on those frames and on the others
+  double panel_redraw = 0;                         // of panel_drawn_ms: ImGui into the panel's texture
+  double rendered_ms = 0, reused_ms = 0;           // their frame times, and those of the re-presented ones
   void add(double frame, double physics_ms, double panel_ms, double render_ms, double compose_ms, const UiGl::Times& ct,
            double swap_ms, bool scene_rendered) {
     frame_ms.push_back(frame);
     rendered += scene_rendered;
     panel_drawn += ct.panel_drawn;
+    (ct.panel_drawn ? panel_drawn_ms : panel_copied_ms) += ct.panel_ms;
+    panel_redraw += ct.panel_redraw_ms;
     (scene_rendered ? rendered_ms : reused_ms) += frame;
     physics += physics_ms;
     panel += panel_ms;
@@ -126,6 +130,7 @@ struct FrameStats {
   // frame a final picture rendered anew, and how long it took (ms; it is shown at its swap).
   int stops = 0, stops_final_at_once = 0;
   double first_still_ms = 0;
+  std::vector<double> each_first_still_ms;
 };
 
 }  // namespace
@@ -246,6 +251,7 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
           ++stats.stops;
           stats.stops_final_at_once += rendered;
           stats.first_still_ms += frame_ms;
+          stats.each_first_still_ms.push_back(frame_ms);
         }
         last_draft = draft;
         if (frame >= 5) {  // warm-up frames (font texture, shaders, first shadow map) are not typical
@@ -282,15 +288,23 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
         const int reused = int(s.frame_ms.size()) - s.rendered;
         std::fprintf(stderr,
                      "run:   of which %d rendered (mean %.1f ms) and %d re-presented unchanged (mean %.1f ms); "
-                     "the panel drawn on %d, copied on %zu\n",
+                     "the panel drawn on %d (panel %.2f ms, of which ImGui into its texture %.2f), "
+                     "copied on %d (panel %.2f ms: its columns' copy and the view's overlay)\n",
                      s.rendered, s.rendered ? s.rendered_ms / s.rendered : 0.0, reused,
-                     reused ? s.reused_ms / reused : 0.0, s.panel_drawn, s.frame_ms.size() - size_t(s.panel_drawn));
+                     reused ? s.reused_ms / reused : 0.0, s.panel_drawn,
+                     s.panel_drawn ? s.panel_drawn_ms / s.panel_drawn : 0.0,
+                     s.panel_drawn ? s.panel_redraw / s.panel_drawn : 0.0, int(s.frame_ms.size()) - s.panel_drawn,
+                     s.frame_ms.size() > size_t(s.panel_drawn)
+                         ? s.panel_copied_ms / double(s.frame_ms.size() - size_t(s.panel_drawn))
+                         : 0.0);
       }
       if (stats.stops > 0) {
         std::fprintf(stderr,
                      "run: the motion stopped %d times; the first still frame was a final picture rendered anew "
-                     "%d of %d times, shown %.1f ms (mean) after the last moving frame\n",
+                     "%d of %d times, shown %.1f ms (mean) after the last moving frame (each:",
                      stats.stops, stats.stops_final_at_once, stats.stops, stats.first_still_ms / stats.stops);
+        for (double ms : stats.each_first_still_ms) std::fprintf(stderr, " %.1f", ms);
+        std::fprintf(stderr, " ms)\n");
       }
       if (!sim.ok()) std::fprintf(stderr, "run: the simulation stopped: %s\n", sim.stopMessage().c_str());
     }  // GL objects go while the context is current

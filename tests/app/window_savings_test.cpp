@@ -3,6 +3,7 @@
 // changed, and a still final view re-presented instead of rendered again. Each must give the
 // frame the plain path gives, at once: an edit shows in the frame that made it.
 #include <gtest/gtest.h>
+#include <imgui.h>
 
 #include <functional>
 #include <vector>
@@ -137,6 +138,57 @@ TEST(WindowSavings, AStillViewIsShownAgainUntilSomethingChanges) {
   ui.setWindowSavings(false);
   EXPECT_TRUE(frame(b));
   EXPECT_TRUE(sceneColumns(a) == sceneColumns(b)) << "the re-presented view is the view rendered anew";
+}
+
+// The panel's running figures (simulated time, readouts) are refreshed a few times a second while
+// the scene plays, so a playing scene does not redraw the panel every frame; what the user does
+// shows at once. No GL: the panel's draw data itself is compared frame to frame.
+TEST(WindowSavings, PlayingFiguresRefreshAFewTimesASecondAndAStepShowsAtOnce) {
+  PanelContext ctx;
+  LiveSim sim(smallChain());
+  sim.setStepBudgetMs(0.0);
+  Panel panel(sim);
+  panel.setReadoutRefresh(0.25);
+  panel.setSectionOpen("Readouts", true);
+  const PanelLayout layout;
+  UiInput in;
+  in.dt = 1.0 / 60.0;
+  const auto frame = [&] {  // the panel's vertices (not the view's overlay, which shows the time live)
+    feedInput(in);
+    ImGui::NewFrame();
+    panel.build(layout);
+    ImGui::Render();
+    std::vector<uint8_t> out;
+    const ImDrawData* d = ImGui::GetDrawData();
+    for (int i = 0; i < d->CmdListsCount; ++i) {
+      const ImDrawList* l = d->CmdLists[i];
+      if (l == ImGui::GetBackgroundDrawList()) continue;
+      const auto* b = reinterpret_cast<const uint8_t*>(l->VtxBuffer.Data);
+      out.insert(out.end(), b, b + size_t(l->VtxBuffer.Size) * sizeof(ImDrawVert));
+    }
+    return out;
+  };
+  for (int i = 0; i < 3; ++i) frame();
+  std::vector<uint8_t> last = frame();
+  int changed = 0;
+  for (int i = 0; i < 60; ++i) {  // one second of playing
+    std::vector<uint8_t> now = frame();
+    changed += now != last;
+    last = std::move(now);
+  }
+  EXPECT_GE(changed, 3) << "the figures move while the scene plays";
+  EXPECT_LE(changed, 5) << "about 4 times a second, not every frame";
+
+  in.keys_down = {ImGuiKey_Space};  // pause
+  frame();
+  in.keys_down.clear();
+  frame();
+  const std::vector<uint8_t> paused = frame();
+  EXPECT_TRUE(frame() == paused) << "paused and still: the panel does not change";
+  in.keys_down = {ImGuiKey_RightArrow};  // one step: seen by the panel after it is drawn
+  frame();
+  in.keys_down.clear();
+  EXPECT_TRUE(frame() != paused) << "a step while paused shows on the next frame, not a refresh later";
 }
 
 }  // namespace
