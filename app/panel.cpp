@@ -597,6 +597,8 @@ void Panel::build(const PanelLayout& layout, bool advance) {
   rects_.clear();
   ImGuiIO& io = ImGui::GetIO();
   const float panel_w = float(std::min(layout.panel_width, layout.width));
+  shown_playback_.since += io.DeltaTime;
+  shown_readout_group_.since += io.DeltaTime;
 
   ImGui::SetNextWindowPos(ImVec2(float(layout.width) - panel_w, 0.0f));
   ImGui::SetNextWindowSize(ImVec2(panel_w, float(layout.height)));
@@ -643,6 +645,22 @@ void Panel::build(const PanelLayout& layout, bool advance) {
   drawViewOverlay(layout);
 }
 
+// A group is taken anew when its period has passed, on the first frame, on a run/pause, and when
+// something the user did moved the simulation while paused (a step, an edit, a reset): so
+// playback's figures change a few times a second and the user's own actions show at once. With
+// no period, every time it is drawn (as it always was).
+bool Panel::ShownFigures::due(const LiveSim& sim, double period) const {
+  return period <= 0.0 || !valid || since >= period || sim.running() != running ||
+         (!sim.running() && sim.changes() != changes);
+}
+
+void Panel::ShownFigures::taken(const LiveSim& sim) {
+  valid = true;
+  running = sim.running();
+  changes = sim.changes();
+  since = 0.0;
+}
+
 // ---------------------------------------------------------------------------------------------
 // [SECTION] Panel: the parts of the panel
 
@@ -674,13 +692,19 @@ void Panel::drawPlayback() {
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Playback speed: slow motion to fast forward");
 
   const Scene& s = sim_.applied();
-  ImGui::Text("t = %.3f s", sim_.simTime());
+  if (shown_playback_.due(sim_, readout_refresh_)) {
+    shown_playback_.taken(sim_);
+    shown_time_ = sim_.simTime();
+    shown_behind_ = sim_.fallingBehind();
+    shown_rtf_ = sim_.achievedRealTimeFactor();
+  }
+  ImGui::Text("t = %.3f s", shown_time_);
   ImGui::SameLine();
   ImGui::TextDisabled("dt %.3g ms x %d substeps, %s", 1000.0 * s.physics.dt, s.physics.substeps,
                       std::string(enumName(s.physics.integrator)).c_str());
-  if (sim_.fallingBehind()) {
+  if (shown_behind_) {
     ImGui::TextColored(ImVec4(1.0f, 0.75f, 0.3f, 1.0f), "Behind: %.2fx real time (asked %.3gx)",
-                       sim_.achievedRealTimeFactor() * sim_.speed(), sim_.speed());
+                       shown_rtf_ * sim_.speed(), sim_.speed());
   }
   if (!sim_.ok()) {
     ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.45f, 0.4f, 1.0f));
@@ -789,7 +813,22 @@ void Panel::drawLook() {
 
 void Panel::drawReadouts() {
   if (!sectionHeader("Readouts", false)) return;
-  const Readouts& r = sim_.readouts();
+  if (shown_readout_group_.due(sim_, readout_refresh_)) {
+    shown_readout_group_.taken(sim_);
+    shown_readouts_ = sim_.readouts();
+    shown_phase_ = sim_.hopperBody() >= 0 ? sim_.hopperPhase() : std::string();
+    shown_contacts_.clear();
+    if (const Collisions* c = sim_.runtime().collisions()) {
+      // The contact solve's own account: sweeps of the last stage, and any solve that stopped at
+      // its cap before its tolerance (physics/collisions.h).
+      const CollisionStats& cs = c->stats();
+      char buf[128];
+      std::snprintf(buf, sizeof buf, "Contacts %d, PGS sweeps %d, stopped at the cap %ld", cs.active, cs.iterations,
+                    cs.capped);
+      shown_contacts_ = buf;
+    }
+  }
+  const Readouts& r = shown_readouts_;
   const float plot_w = ImGui::GetContentRegionAvail().x;
   const auto plot = [&](const char* id, const History& h, const char* fmt, double scale) {
     char overlay[96];
@@ -805,14 +844,9 @@ void Panel::drawReadouts() {
   if (sim_.hopperBody() >= 0) {
     plot("##height", r.hopper_height, "hopper height %.3f m", 1.0);
     plot("##speed", r.hopper_speed, "hopper speed %.2f m/s", 1.0);
-    ImGui::Text("Hopper phase: %s", sim_.hopperPhase().c_str());
+    ImGui::Text("Hopper phase: %s", shown_phase_.c_str());
   }
-  if (const Collisions* c = sim_.runtime().collisions()) {
-    // The contact solve's own account: sweeps of the last stage, and any solve that stopped at its
-    // cap before its tolerance (physics/collisions.h).
-    const CollisionStats& cs = c->stats();
-    ImGui::Text("Contacts %d, PGS sweeps %d, stopped at the cap %ld", cs.active, cs.iterations, cs.capped);
-  }
+  if (!shown_contacts_.empty()) ImGui::TextUnformatted(shown_contacts_.c_str());
   if (r.show_wall_clock) {
     if (r.frame_ms > 0.0)  // the window's (a headless frame has no swap)
       ImGui::TextDisabled("Frame: %.1f fps, %.1f ms: physics %.2f  panel %.2f  render %.2f  compose %.2f",

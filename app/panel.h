@@ -98,6 +98,12 @@ class Panel {
   // The window's last compose and swap, and its whole frame (ms): the readouts show the frame rate
   // and where the frame's time goes.
   void setFrameMs(double compose_ms, double frame_ms);
+  // How often the panel's running figures (simulated time, behind, the Readouts section) are
+  // refreshed while the scene plays, in seconds of io.DeltaTime; 0 (the default): every frame.
+  // The window refreshes them 4 times a second, as MuJoCo's viewer and Blender's status bar do,
+  // so that a playing scene does not redraw the panel (UiGl::setPanelCache) on every frame. A
+  // step, an edit, a reset or a run/pause shows at once.
+  void setReadoutRefresh(double seconds) { readout_refresh_ = seconds; }
   // The last message shown under Presets (saved / loaded / why not).
   const std::string& presetMessage() const { return preset_message_; }
 
@@ -113,6 +119,13 @@ class Panel {
   void drawPlayback();
   void drawLook();
   void drawReadouts();
+  struct ShownFigures {  // when a group of running figures was last taken from the simulation
+    bool valid = false, running = false;
+    uint64_t changes = 0;
+    double since = 0.0;  // s of io.DeltaTime
+    bool due(const LiveSim& sim, double period) const;
+    void taken(const LiveSim& sim);
+  };
   void drawPresets();
   void drawSections();
   void drawGoals();
@@ -134,6 +147,14 @@ class Panel {
   std::map<std::string, WidgetRect> rects_;
   std::map<std::string, bool> pending_open_;
   double panel_ms_ = 0.0;
+
+  // The running figures as the panel shows them (refreshShown).
+  double readout_refresh_ = 0.0;
+  ShownFigures shown_playback_, shown_readout_group_;
+  bool shown_behind_ = false;
+  double shown_time_ = 0.0, shown_rtf_ = 0.0;
+  Readouts shown_readouts_;
+  std::string shown_phase_, shown_contacts_;
 
   // The scene view's camera.
   Camera camera_;

@@ -4,7 +4,10 @@
 #include <imgui.h>
 #include <imgui_impl_opengl3.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <stdexcept>
+#include <vector>
 
 #include "engine/gl_context.h"
 #include "physics/stage_times.h"
@@ -15,11 +18,181 @@ UiGl::UiGl() {
   if (!ImGui_ImplOpenGL3_Init("#version 330 core")) throw std::runtime_error("ImGui OpenGL 3 backend: init failed");
 }
 
-UiGl::~UiGl() { ImGui_ImplOpenGL3_Shutdown(); }
+UiGl::~UiGl() {
+  if (panel_fbo_) glDeleteFramebuffers(1, &panel_fbo_);
+  if (panel_tex_) glDeleteTextures(1, &panel_tex_);
+  ImGui_ImplOpenGL3_Shutdown();
+}
+
+void UiGl::setPanelCache(bool on) {
+  cache_on_ = on;
+  panel_valid_ = false;
+}
 
 void UiGl::newFrame() { ImGui_ImplOpenGL3_NewFrame(); }
 
+namespace {
+
+template <typename T>
+void append(std::vector<uint8_t>& out, const T* p, size_t n) {
+  const auto* b = reinterpret_cast<const uint8_t*>(p);
+  out.insert(out.end(), b, b + n * sizeof(T));
+}
+template <typename T>
+void appendValue(std::vector<uint8_t>& out, const T& v) {
+  append(out, &v, 1);
+}
+
+// A draw data holding some of the frame's lists, over the rectangle [x0, x0 + w) x the frame's
+// height (ImGui's coordinates): the backend projects that rectangle onto the bound framebuffer.
+struct PartialDrawData {
+  std::vector<ImDrawList*> lists;
+  ImDrawData data;
+  void make(const ImDrawData& whole, float x0, float w) {
+    data.Clear();
+    data.Valid = true;
+    data.CmdListsCount = int(lists.size());
+    data.CmdLists = lists.data();
+    for (const ImDrawList* l : lists) {
+      data.TotalVtxCount += l->VtxBuffer.Size;
+      data.TotalIdxCount += l->IdxBuffer.Size;
+    }
+    data.DisplayPos = ImVec2(x0, whole.DisplayPos.y);
+    data.DisplaySize = ImVec2(w, whole.DisplaySize.y);
+    data.FramebufferScale = whole.FramebufferScale;
+  }
+};
+
+}  // namespace
+
+bool UiGl::composeCached(const Renderer& renderer, unsigned fbo, int width, int height, int scene_width, Times* times) {
+  ImDrawData* d = ImGui::GetDrawData();
+  if (!d || !d->Valid || scene_width <= 0 || scene_width >= width || renderer.width() <= 0) return false;
+  const float sx = d->FramebufferScale.x > 0.0f ? d->FramebufferScale.x : 1.0f;
+  const float panel_x0 = d->DisplayPos.x + float(scene_width) / sx;  // the panel's left edge, ImGui's coordinates
+  const ImDrawList* background = ImGui::GetBackgroundDrawList();
+  PartialDrawData overlay, panel;
+  for (int i = 0; i < d->CmdListsCount; ++i) {
+    ImDrawList* l = d->CmdLists[i];
+    for (const ImDrawCmd& c : l->CmdBuffer)
+      if (c.UserCallback) return false;
+    if (l == background) {
+      // The overlay is drawn over the scene after the panel's copy: it must stay off the panel.
+      for (const ImDrawVert& v : l->VtxBuffer)
+        if (v.pos.x > panel_x0) return false;
+      overlay.lists.push_back(l);
+    } else {
+      // Drawn into the panel's texture, clipped to the panel's columns: nothing may reach left of them.
+      for (const ImDrawCmd& c : l->CmdBuffer) {
+        // What a command can touch: its vertices' extent within its clip rectangle (a window's
+        // frame is drawn under the whole display's clip rectangle, inside the window).
+        float x_min = 1e30f;
+        for (unsigned k = 0; k < c.ElemCount; ++k)
+          x_min = std::min(x_min, l->VtxBuffer[int(c.VtxOffset + l->IdxBuffer[int(c.IdxOffset + k)])].pos.x);
+        if (c.ElemCount > 0 && std::max(x_min, c.ClipRect.x) < panel_x0) return false;
+      }
+      panel.lists.push_back(l);
+    }
+  }
+  const ImVec4 bg = ImGui::GetStyle().Colors[ImGuiCol_WindowBg];
+
+  // What the panel's columns are drawn from, whole.
+  sig_.clear();
+  appendValue(sig_, width);
+  appendValue(sig_, scene_width);
+  appendValue(sig_, height);
+  appendValue(sig_, panel_x0);
+  appendValue(sig_, d->DisplaySize);
+  appendValue(sig_, d->FramebufferScale);
+  appendValue(sig_, bg);
+  for (const ImDrawList* l : panel.lists) {
+    appendValue(sig_, l->VtxBuffer.Size);
+    appendValue(sig_, l->IdxBuffer.Size);
+    appendValue(sig_, l->CmdBuffer.Size);
+    append(sig_, l->VtxBuffer.Data, size_t(l->VtxBuffer.Size));
+    append(sig_, l->IdxBuffer.Data, size_t(l->IdxBuffer.Size));
+    for (const ImDrawCmd& c : l->CmdBuffer) {  // field by field: the struct's padding is not data
+      appendValue(sig_, c.ClipRect);
+      appendValue(sig_, c.TextureId);
+      appendValue(sig_, c.VtxOffset);
+      appendValue(sig_, c.IdxOffset);
+      appendValue(sig_, c.ElemCount);
+    }
+  }
+
+  const auto t0 = Clock::now();
+  glDisable(GL_SCISSOR_TEST);
+  // The scene's one copy: it covers the view's columns, so no clear under it.
+  renderer.blitTo(fbo, scene_width, height);
+  if (times) {
+    glFinish();
+    times->copy_ms = msSince(t0);
+  }
+  const auto t1 = Clock::now();
+  const bool redraw = !panel_valid_ || sig_ != panel_sig_;
+  if (redraw) {
+    // The texture is the whole frame's size and ImGui draws into it with the frame's own
+    // projection, so the panel's pixels are rasterized exactly as in the frame (a texture of the
+    // panel's columns alone, drawn with its origin moved, came out up to 1 in 255 off on a few
+    // hundred edge pixels). It is cleared whole (llvmpipe's fastest fill, and only when the panel
+    // changed) and only the panel's columns are copied.
+    if (panel_w_ != width || panel_h_ != height || !panel_tex_) {
+      if (!panel_tex_) glGenTextures(1, &panel_tex_);
+      if (!panel_fbo_) glGenFramebuffers(1, &panel_fbo_);
+      glBindTexture(GL_TEXTURE_2D, panel_tex_);
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, width, height, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+      glBindTexture(GL_TEXTURE_2D, 0);
+      glBindFramebuffer(GL_FRAMEBUFFER, panel_fbo_);
+      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, panel_tex_, 0);
+      if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+        glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+        panel_valid_ = false;
+        return false;  // (nothing drawn into fbo but the scene, which the direct path draws again)
+      }
+      panel_w_ = width;
+      panel_h_ = height;
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, panel_fbo_);
+    glViewport(0, 0, width, height);
+    glClearColor(bg.x, bg.y, bg.z, 1.0f);  // the panel's background, as the direct path's clear
+    glClear(GL_COLOR_BUFFER_BIT);
+    panel.make(*d, d->DisplayPos.x, d->DisplaySize.x);
+    ImGui_ImplOpenGL3_RenderDrawData(&panel.data);
+    panel_sig_.swap(sig_);
+    panel_valid_ = true;
+    if (times) {
+      glFinish();
+      times->panel_redraw_ms = msSince(t1);
+    }
+  }
+  last_panel_drawn_ = redraw;
+  glDisable(GL_SCISSOR_TEST);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, panel_fbo_);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo);
+  glBlitFramebuffer(scene_width, 0, width, height, scene_width, 0, width, height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glViewport(0, 0, width, height);
+  if (!overlay.lists.empty()) {
+    overlay.make(*d, d->DisplayPos.x, d->DisplaySize.x);
+    ImGui_ImplOpenGL3_RenderDrawData(&overlay.data);
+  }
+  if (times) {
+    glFinish();
+    times->panel_ms = msSince(t1);
+    times->panel_drawn = redraw;
+  }
+  return true;
+}
+
 void UiGl::compose(const Renderer& renderer, unsigned fbo, int width, int height, int scene_width, Times* times) {
+  if (cache_on_) {
+    if (composeCached(renderer, fbo, width, height, scene_width, times)) return;
+    panel_valid_ = false;
+  }
+  if (times) times->panel_drawn = true;
+  last_panel_drawn_ = true;
   const auto t0 = Clock::now();
   glBindFramebuffer(GL_FRAMEBUFFER, fbo);
   glViewport(0, 0, width, height);

@@ -37,6 +37,23 @@ void renderSceneView(Renderer& renderer, LiveSim& sim, const Camera& camera, int
   r.aa_ms = st.resolve_ms;
 }
 
+bool ViewReuse::Key::operator==(const Key& o) const {
+  return changes == o.changes && sim_time == o.sim_time && camera.eye == o.camera.eye &&
+         camera.target == o.camera.target && camera.up == o.camera.up && camera.fov == o.camera.fov &&
+         camera.znear == o.camera.znear && camera.zfar == o.camera.zfar && width == o.width && height == o.height;
+}
+
+bool ViewReuse::render(Renderer& renderer, LiveSim& sim, const Camera& camera, int width, int height,
+                       RenderQuality quality, double draft_scale) {
+  const Key key{sim.changes(), sim.simTime(), camera, width, height};
+  const bool final_view = quality == RenderQuality::Final;
+  if (final_view && valid_ && key == last_) return false;
+  renderSceneView(renderer, sim, camera, width, height, quality, draft_scale);
+  last_ = key;
+  valid_ = final_view;
+  return true;
+}
+
 HeadlessUi::HeadlessUi(const Scene& scene, int scene_width, int height, int panel_width) {
   layout_.width = scene_width + panel_width;
   layout_.height = height;
@@ -65,6 +82,12 @@ HeadlessUi::~HeadlessUi() {
   imgui_.reset();
 }
 
+void HeadlessUi::setWindowSavings(bool on) {
+  savings_ = on;
+  reuse_.forget();
+  gl_->setPanelCache(on);
+}
+
 void HeadlessUi::frame(const UiInput& in_raw, std::vector<uint8_t>* rgba, std::optional<double> sim_time) {
   UiInput in = in_raw;
   in.width = float(layout_.width);
@@ -81,7 +104,12 @@ void HeadlessUi::frame(const UiInput& in_raw, std::vector<uint8_t>* rgba, std::o
   const RenderQuality quality = sim_time ? sim_->applied().render.quality : viewQuality(*sim_);
   ImGui::Render();
   const auto t0 = Clock::now();
-  renderSceneView(*renderer_, *sim_, panel_->camera(), layout_.sceneWidth(), layout_.height, quality);
+  if (savings_) {
+    last_rendered_ = reuse_.render(*renderer_, *sim_, panel_->camera(), layout_.sceneWidth(), layout_.height, quality);
+  } else {
+    renderSceneView(*renderer_, *sim_, panel_->camera(), layout_.sceneWidth(), layout_.height, quality);
+    last_rendered_ = true;
+  }
   gl_->compose(*renderer_, target_->fbo(), layout_.width, layout_.height, layout_.sceneWidth());
   if (rgba) target_->readPixels(*rgba);
   panel_->setRenderMs(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());

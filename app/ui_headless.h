@@ -16,6 +16,31 @@
 
 namespace ponyhop {
 
+// A still final view whose inputs did not change is not rendered again: the renderer's output
+// still holds it, and the compositor copies it to the screen as it would a new one. The inputs
+// are the simulation's change counter (edits, live ones too, steps, playback, reset, load), the
+// camera, the view's size and the quality. Draft views are always rendered (something moves; a
+// pull's spring is drawn from the mouse), and so is the first final view after them.
+class ViewReuse {
+ public:
+  // Renders the view unless it is the same final view as the last one rendered; true when it
+  // rendered.
+  bool render(Renderer& renderer, LiveSim& sim, const Camera& camera, int width, int height, RenderQuality quality,
+              double draft_scale = 1.0);
+  void forget() { valid_ = false; }  // the next view renders (the renderer drew something else)
+
+ private:
+  struct Key {
+    uint64_t changes = 0;
+    double sim_time = 0.0;
+    Camera camera;
+    int width = 0, height = 0;
+    bool operator==(const Key& o) const;
+  };
+  Key last_;
+  bool valid_ = false;  // last_ is a final view the renderer's output still holds
+};
+
 class HeadlessUi {
  public:
   // The scene view is scene_width x height, the panel panel_width x height beside it.
@@ -28,6 +53,16 @@ class HeadlessUi {
   // `sim_time`, the simulation is stepped to exactly that time instead (video frames), and
   // playback does not advance. Pixels (RGBA8, top row first) when rgba is given.
   void frame(const UiInput& in, std::vector<uint8_t>* rgba = nullptr, std::optional<double> sim_time = {});
+
+  // The window's two savings, off by default (`render --ui` and the snapshots draw every frame in
+  // full): a still final view is re-presented instead of rendered again (ViewReuse), and the panel
+  // is drawn into its own texture only when it changed (UiGl::setPanelCache). Tests turn them on
+  // to check that a frame made with them is the frame made without.
+  void setWindowSavings(bool on);
+  // Whether the last frame rendered the scene (false: the last final view, re-presented).
+  bool lastViewRendered() const { return last_rendered_; }
+  // Whether the last frame's panel was drawn by ImGui (false: the panel cache's texture, copied).
+  bool lastPanelDrawn() const { return gl_->lastPanelDrawn(); }
 
   int width() const { return layout_.width; }
   int height() const { return layout_.height; }
@@ -45,6 +80,9 @@ class HeadlessUi {
   std::unique_ptr<OffscreenTarget> target_;
   std::unique_ptr<LiveSim> sim_;
   std::unique_ptr<Panel> panel_;
+  bool savings_ = false;
+  ViewReuse reuse_;
+  bool last_rendered_ = true;
 };
 
 // The quality the scene view needs now (call between ImGui::NewFrame and ImGui::Render): draft

@@ -165,6 +165,7 @@ void LiveSim::replaceRuntime(std::unique_ptr<Sim> next, double time_offset) {
   perturbation_->body = -1;  // body indices belong to the old world
   runtime_->world().addForceElement(std::make_unique<Perturbation>(perturbation_));
   target_time_ = simTime();
+  ++changes_;
 }
 
 ApplyKind LiveSim::applyEdits() {
@@ -208,6 +209,7 @@ ApplyKind LiveSim::applyEdits() {
   applied_ = edited_;
   error_.clear();
   last_apply_ = done;
+  ++changes_;
   return done;
 }
 
@@ -226,6 +228,7 @@ void LiveSim::reset() {
 bool LiveSim::stepOnce() {
   const auto t0 = Clock::now();
   const bool ok_now = runtime_->step();
+  ++changes_;
   target_time_ = simTime();
   record(0.0, 0.0, 1000.0 * msSince(t0));
   if (!ok_now) {
@@ -243,6 +246,7 @@ bool LiveSim::advanceTo(double t) {
     runtime_->step();
     ++steps;
   }
+  if (steps) ++changes_;
   target_time_ = simTime();
   readouts_.physics_frame_ms = msSince(t0);
   readouts_.physics_ms = smooth(readouts_.physics_ms, readouts_.physics_frame_ms);
@@ -276,6 +280,7 @@ void LiveSim::advance(double wall_dt) {
       break;
     }
   }
+  if (steps) ++changes_;
   if (out_of_time) target_time_ = simTime();  // behind: drop the backlog instead of spiralling
   const double physics_ms = msSince(t_start);
   readouts_.physics_frame_ms = physics_ms;

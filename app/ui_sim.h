@@ -20,6 +20,7 @@
 
 #include <array>
 #include <chrono>
+#include <cstdint>
 #include <memory>
 #include <set>
 #include <string>
@@ -152,6 +153,12 @@ class LiveSim {
   // How long the last rebuild took (ms): the panel shows it, so slow rebuilds are visible.
   double lastRebuildMs() const { return rebuild_ms_; }
 
+  // Bumped by everything that can change what the scene view draws, other than the camera and
+  // the view's size: an applied edit (live ones too: the light, the look), a rebuild, a reset, a
+  // load, a step, playback that moved simulated time. The window re-presents its last final
+  // picture while this, the camera and the size hold still (app/ui_headless.h, ViewReuse).
+  uint64_t changes() const { return changes_; }
+
  private:
   void replaceRuntime(std::unique_ptr<Sim> next, double time_offset);
   ApplyKind classify(const Scene& from, const Scene& to) const;
@@ -173,6 +180,7 @@ class LiveSim {
   double rtf_ = 1.0;
   Readouts readouts_;
   double rebuild_ms_ = 0.0;
+  uint64_t changes_ = 0;
 
   // The running sim's meshes on the renderer (released when the sim is replaced).
   SceneDraw draw_;

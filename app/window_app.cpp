@@ -3,6 +3,10 @@
 // events -> panel (edits, playback: the physics steps at its own dt up to the new simulated
 // time, within a wall-time budget) -> scene render -> compose (scene blit + ImGui) -> swap. The run
 // prints each stage's mean per quality, the compose split into the scene's copy, the panel, the swap.
+// Two savings (docs/bench/render.md, session 27): a still final view whose inputs did not change
+// is re-presented, not rendered again (ViewReuse), and the panel is drawn into its own texture
+// only when its draw data changed, its running figures refreshed 4 times a second (UiGl's panel
+// cache, Panel::setReadoutRefresh); the panel's texture is copied to the screen every frame.
 #include <glad/gl.h>
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -91,10 +95,19 @@ bool screenshot(const std::string& path, int w, int h) {
 struct StageSums {
   std::vector<double> frame_ms;
   double physics = 0, panel = 0, render = 0, compose = 0;
-  double copy = 0, panel_draw = 0, swap = 0;  // compose = copy + panel_draw + swap
+  double copy = 0, panel_draw = 0, swap = 0;       // compose = copy + panel_draw + swap
+  int rendered = 0, panel_drawn = 0;               // frames whose scene was rendered, whose panel ImGui drew
+  double panel_drawn_ms = 0, panel_copied_ms = 0;  // the panel's time on those frames and on the others
+  double panel_redraw = 0;                         // of panel_drawn_ms: ImGui into the panel's texture
+  double rendered_ms = 0, reused_ms = 0;           // their frame times, and those of the re-presented ones
   void add(double frame, double physics_ms, double panel_ms, double render_ms, double compose_ms, const UiGl::Times& ct,
-           double swap_ms) {
+           double swap_ms, bool scene_rendered) {
     frame_ms.push_back(frame);
+    rendered += scene_rendered;
+    panel_drawn += ct.panel_drawn;
+    (ct.panel_drawn ? panel_drawn_ms : panel_copied_ms) += ct.panel_ms;
+    panel_redraw += ct.panel_redraw_ms;
+    (scene_rendered ? rendered_ms : reused_ms) += frame;
     physics += physics_ms;
     panel += panel_ms;
     render += render_ms;
@@ -113,6 +126,11 @@ struct StageSums {
 struct FrameStats {
   StageSums all;
   StageSums draft, final;  // the same frames split by the view's quality
+  // Each time the motion stopped (a draft frame followed by a final one): was that first still
+  // frame a final picture rendered anew, and how long it took (ms; it is shown at its swap).
+  int stops = 0, stops_final_at_once = 0;
+  double first_still_ms = 0;
+  std::vector<double> each_first_still_ms;
 };
 
 }  // namespace
@@ -161,14 +179,18 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
     glfwSetKeyCallback(window, trickleKey);  // in place of the backend's, which trickleKey calls
     {
       UiGl gl;
+      gl.setPanelCache(true);
+      ViewReuse reuse;
       Renderer renderer;
       if (!renderer.init(&err)) {
         std::fprintf(stderr, "ponyhop run: renderer: %s\n", err.c_str());
         code = 1;
       }
       Panel panel(sim);
+      panel.setReadoutRefresh(0.25);
       FrameStats stats;
       int frame = 0;
+      bool last_draft = false;
       while (code == 0 && !glfwWindowShouldClose(window)) {
         const auto t_frame = Clock::now();
         g_keys.nextFrame();
@@ -201,13 +223,11 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
         const double build_ms = msSince(t0);
 
         t0 = Clock::now();
-        renderSceneView(renderer, sim, panel.camera(), scene_fb_w, fb_h, quality, o.draft_scale);
+        const bool rendered = reuse.render(renderer, sim, panel.camera(), scene_fb_w, fb_h, quality, o.draft_scale);
         const double render_ms = msSince(t0);
         panel.setRenderMs(render_ms);
-        if (quality_log) {  // the size the view was rendered at (a draft one is upscaled)
-          std::fprintf(quality_log, " view=%dx%d of %dx%d\n", renderer.width(), renderer.height(), scene_fb_w, fb_h);
-          std::fflush(quality_log);
-        }
+        if (quality_log)  // the size the view was rendered at (a draft one is upscaled)
+          std::fprintf(quality_log, " view=%dx%d of %dx%d", renderer.width(), renderer.height(), scene_fb_w, fb_h);
 
         t0 = Clock::now();
         UiGl::Times compose_times;
@@ -221,11 +241,25 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
 
         const double frame_ms = msSince(t_frame);
         panel.setFrameMs(compose_ms, frame_ms);
+        if (quality_log) {  // the scene rendered anew or re-presented; the panel drawn by ImGui or copied
+          std::fprintf(quality_log, " rendered=%d panel_drawn=%d\n", rendered ? 1 : 0,
+                       compose_times.panel_drawn ? 1 : 0);
+          std::fflush(quality_log);
+        }
+        const bool draft = quality == RenderQuality::Draft;
+        if (last_draft && !draft) {  // the motion stopped: this is the first still frame
+          ++stats.stops;
+          stats.stops_final_at_once += rendered;
+          stats.first_still_ms += frame_ms;
+          stats.each_first_still_ms.push_back(frame_ms);
+        }
+        last_draft = draft;
         if (frame >= 5) {  // warm-up frames (font texture, shaders, first shadow map) are not typical
           // This frame's own physics time (the smoothed readout lags: the panel's share came out negative).
           const double physics_ms = sim.readouts().physics_frame_ms;
-          for (StageSums* s : {&stats.all, quality == RenderQuality::Draft ? &stats.draft : &stats.final})
-            s->add(frame_ms, physics_ms, build_ms - physics_ms, render_ms, compose_ms, compose_times, swap_ms);
+          for (StageSums* s : {&stats.all, draft ? &stats.draft : &stats.final})
+            s->add(frame_ms, physics_ms, build_ms - physics_ms, render_ms, compose_ms, compose_times, swap_ms,
+                   rendered);
         }
         ++frame;
         if (last) break;
@@ -251,6 +285,26 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
                      "clear + scene copy %.2f, panel %.2f, swap %.2f)\n",
                      s.frame_ms.size(), name, s.mean(), 1000.0 / s.mean(), s.render / n, s.compose / n, s.copy / n,
                      s.panel_draw / n, s.swap / n);
+        const int reused = int(s.frame_ms.size()) - s.rendered;
+        std::fprintf(stderr,
+                     "run:   of which %d rendered (mean %.1f ms) and %d re-presented unchanged (mean %.1f ms); "
+                     "the panel drawn on %d (panel %.2f ms, of which ImGui into its texture %.2f), "
+                     "copied on %d (panel %.2f ms: its columns' copy and the view's overlay)\n",
+                     s.rendered, s.rendered ? s.rendered_ms / s.rendered : 0.0, reused,
+                     reused ? s.reused_ms / reused : 0.0, s.panel_drawn,
+                     s.panel_drawn ? s.panel_drawn_ms / s.panel_drawn : 0.0,
+                     s.panel_drawn ? s.panel_redraw / s.panel_drawn : 0.0, int(s.frame_ms.size()) - s.panel_drawn,
+                     s.frame_ms.size() > size_t(s.panel_drawn)
+                         ? s.panel_copied_ms / double(s.frame_ms.size() - size_t(s.panel_drawn))
+                         : 0.0);
+      }
+      if (stats.stops > 0) {
+        std::fprintf(stderr,
+                     "run: the motion stopped %d times; the first still frame was a final picture rendered anew "
+                     "%d of %d times, shown %.1f ms (mean) after the last moving frame (each:",
+                     stats.stops, stats.stops_final_at_once, stats.stops, stats.first_still_ms / stats.stops);
+        for (double ms : stats.each_first_still_ms) std::fprintf(stderr, " %.1f", ms);
+        std::fprintf(stderr, " ms)\n");
       }
       if (!sim.ok()) std::fprintf(stderr, "run: the simulation stopped: %s\n", sim.stopMessage().c_str());
     }  // GL objects go while the context is current

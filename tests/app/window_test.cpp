@@ -103,7 +103,8 @@ TEST(WindowTest, ViewIsDraftWhileMovingAndFinalWhenStill) {
   std::ifstream in(qlog);
   ASSERT_TRUE(in.good()) << "no quality log\n" << log;
   int playing_draft = 0, dragging_draft = 0, still_final = 0, lines = 0;
-  bool last_final = false;
+  int stops = 0, still_reshown = 0, panel_copied = 0;
+  bool last_final = false, last_moving = false;
   std::string line;
   while (std::getline(in, line)) {
     int frame = 0, running = 0, active = 0, mouse = 0;
@@ -122,6 +123,22 @@ TEST(WindowTest, ViewIsDraftWhileMovingAndFinalWhenStill) {
     const int div = moving ? 2 : 1;
     EXPECT_EQ(rw, (vw + div - 1) / div) << line;  // the half size rounded (lround of an odd size's half)
     EXPECT_EQ(rh, (vh + div - 1) / div) << line;
+    // The window's savings (issue 37 item 2): a still view re-presented, the panel copied. The
+    // first still frame after a motion is a final picture rendered anew, never the last one shown.
+    int rendered = -1, panel_drawn = -1;
+    const size_t saving = line.find(" rendered=");
+    ASSERT_NE(saving, std::string::npos) << line;
+    ASSERT_EQ(std::sscanf(line.c_str() + saving, " rendered=%d panel_drawn=%d", &rendered, &panel_drawn), 2) << line;
+    if (moving) {
+      EXPECT_EQ(rendered, 1) << "a moving view is rendered: " << line;
+    }
+    if (last_moving && !moving) {
+      ++stops;
+      EXPECT_EQ(rendered, 1) << "the first still frame is rendered anew: " << line;
+    }
+    still_reshown += !moving && rendered == 0;
+    panel_copied += panel_drawn == 0;
+    last_moving = moving;
     playing_draft += running && std::string(mode) == "draft";
     dragging_draft += !running && mouse && std::string(mode) == "draft";
     still_final += !moving && std::string(mode) == "final";
@@ -132,6 +149,13 @@ TEST(WindowTest, ViewIsDraftWhileMovingAndFinalWhenStill) {
   EXPECT_GT(dragging_draft, 0) << "draft while the mouse drags in the view (paused)\n" << log;
   EXPECT_GT(still_final, 0) << "final when nothing moves\n" << log;
   EXPECT_TRUE(last_final) << "back to final once the drag ended\n" << log;
+  EXPECT_GE(stops, 2) << "the pause and the drag's end\n" << log;
+  EXPECT_GT(still_reshown, 0) << "a still view whose inputs did not change is shown again, not rendered\n" << log;
+  EXPECT_GT(panel_copied, 0) << "a still panel is copied, not drawn\n" << log;
+  // ... and says so, with each motion's first still frame.
+  const std::string stopped = "the first still frame was a final picture rendered anew " + std::to_string(stops) +
+                              " of " + std::to_string(stops) + " times";
+  EXPECT_NE(log.find(stopped), std::string::npos) << stopped << "\n" << log;
   EXPECT_NE(log.find("final (still) frames"), std::string::npos) << "the run reports fps per quality\n" << log;
   // ... and splits each quality's compose + swap into its parts, which lie within it.
   for (const char* quality : {"draft (moving) frames", "final (still) frames"}) {
