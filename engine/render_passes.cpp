@@ -241,15 +241,18 @@ void Renderer::Impl::drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only
 // costly one, then runs under the far-plane triangle with depth test GREATER, on those pixels
 // only. llvmpipe runs both sides of a shader's branches, but its early depth test does skip
 // blocks before shading. `first` = 0: `second` alone, everywhere. Leaves the depth test on with
-// LESS and depth writes on.
-static void drawFullscreenTwoPass(GLuint vao, GLuint first, GLuint second) {
+// LESS and depth writes on. `first_color` false: `first` writes only the depth (the pixels it
+// decides already hold their colour).
+static void drawFullscreenTwoPass(GLuint vao, GLuint first, GLuint second, bool first_color = true) {
   glBindVertexArray(vao);
   glEnable(GL_DEPTH_TEST);
   glDepthMask(GL_TRUE);
   glDepthFunc(GL_ALWAYS);
   if (first) {
     glUseProgram(first);
+    if (!first_color) glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
     glDrawArrays(GL_TRIANGLES, 0, 3);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     glDepthFunc(GL_GREATER);
   }
   glDepthMask(GL_FALSE);
@@ -750,8 +753,8 @@ void Renderer::Impl::deferredLightPass(const FramePlan& f, RenderStats& st) {
   }
   // Two passes, each a full-screen triangle just short of the far plane (glDepthRange) with
   // depth test GREATER: it passes where an object is. The first finishes the pixels whose
-  // shadow needs no filter (no key light, or nothing above the surface: nothingAbove()) and
-  // moves their depth to the triangle's, discarding the others; the second, the whole
+  // shadow needs no filter (no key light, nothing above the surface, or the umbra:
+  // shadowKnown()) and moves their depth to the triangle's, discarding the others; the second, the whole
   // shadowFactor(), then runs only where an object's depth is left: llvmpipe tests depth
   // before the shader (a discarding shader keeps the early test when it writes no stencil), so
   // the filter costs nothing where it is not needed. Just short of the far plane, so that the
@@ -847,11 +850,14 @@ void Renderer::Impl::antiAliasPass(const FramePlan& f) {
     glUniform2f(loc(p, "u_texel"), 1.0f / float(w), 1.0f / float(h));
   }
   // The first pass copies the pixels without an edge, the filter runs on the others (where
-  // rectangles overlap, the second one's passes redo the same pixels with the same result).
+  // rectangles overlap, the second one's passes redo the same pixels with the same result). In
+  // place (boxed), the pixels without an edge are already there: the first pass only marks the
+  // edges (it writes no colour), and a pixel the filter changed is an edge again for the next
+  // rectangle, filtered again from the same copy.
   if (boxed) {
     for (const PixelRect& r : rects) {
       glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
-      drawFullscreenTwoPass(empty_vao, prog_post_class, prog_post);
+      drawFullscreenTwoPass(empty_vao, prog_post_class, prog_post, false);
     }
   } else {
     drawFullscreenTwoPass(empty_vao, prog_post_class, prog_post);

@@ -82,11 +82,13 @@ void Renderer::Impl::ensureSingleSampleTargets(int w, int h) {
     glGenTextures(1, &key_tex);
     glGenTextures(1, &rest_tex);
   }
-  // Full float: the shadow search sees exactly the position the forward shader has, and the
-  // radiance is combined as the forward shader combines it.
+  // The surface in full float: the shadow search sees exactly the position the forward shader
+  // has. The two parts of the radiance in half float (11 bits of mantissa: a relative step of
+  // 1/2048, under a tenth of an 8-bit level after the tone curve and sRGB): half the bytes the
+  // objects write and the deferred shading reads for them.
   for (GLuint t : {surf_tex, key_tex, rest_tex}) {
     glBindTexture(GL_TEXTURE_2D, t);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
+    glTexImage2D(GL_TEXTURE_2D, 0, t == surf_tex ? GL_RGBA32F : GL_RGBA16F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   }

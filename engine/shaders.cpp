@@ -154,26 +154,44 @@ float shadowClass(vec3 P, vec3 N) {
   return nB == 0.0 ? 1.0 : (nB == 7.0 ? 0.0 : 0.5);
 }
 
-// True when nothing can shadow the receiver at P (normal N): no shadow-map texel within the blocker
-// search's reach rises above its tangent plane (through the lookup point), so shadowFactor() is
+// What the deferred shading's first pass (kDeferredFS) knows of shadowFactor(P, N) before its
+// filter: 1 when nothing can shadow the receiver at P (normal N), 0 deep in the umbra, 0.5 when
+// the whole filter must decide. Nothing above: no shadow-map texel within the blocker search's
+// reach rises above the receiver's tangent plane (through the lookup point), so shadowFactor() is
 // 1 up to its own filter's self-shadowing on slopes. The plain search counts the receiver's own
 // surface uphill of the lookup as blockers on every slope and curve (and so runs the filter
 // there); measured against the tangent plane, a flat or convex lit surface has none. Errors
 // (sampling the nearest texel, a plane seen edge-on from the light) only ever add blockers: such
-// a point takes the whole shadowFactor(). Used by the deferred shading's first pass.
-bool nothingAbove(vec3 P, vec3 N) {
+// a point takes the whole shadowFactor(). The umbra: the same taps compared with the flat plane
+// at the lookup's depth, as shadowFactor()'s own blocker search does, all blocked, where
+// shadowFactor() returns 0 before its filter (not in draft, which filters everywhere).
+float shadowKnown(vec3 P, vec3 N) {
   vec3 c = shadowCoord(P, N);
-  if (outsideShadowMap(c)) return true;
+  if (outsideShadowMap(c)) return 1.0;
   // The tangent plane's depth as an affine function of the shadow-map xy: depth = c.z + g . dxy.
   vec3 t1 = normalize(cross(N, abs(N.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
   vec3 t2 = cross(N, t1);
   vec3 a = 0.5 * (u_lightViewProj * vec4(t1, 0.0)).xyz, b = 0.5 * (u_lightViewProj * vec4(t2, 0.0)).xyz;
   float det = a.x * b.y - a.y * b.x;
-  // Edge-on (or nearly): the plane's depth is undefined in xy; the whole filter decides.
-  if (abs(det) < 1e-6 * (dot(a, a) + dot(b, b))) return false;
-  vec2 g = vec2(a.z * b.y - a.y * b.z, a.x * b.z - a.z * b.x) / det;
-  // The blocker search's own taps, against the plane, with a quarter texel of depth to spare.
-  return shadowBlockers(c, g, 0.25 * u_texelWorld / u_lightDepthRange).x == 0.0;
+  // Edge-on (or nearly): the plane's depth is undefined in xy; only the umbra can be known.
+  bool edgeOn = abs(det) < 1e-6 * (dot(a, a) + dot(b, b));
+  vec2 g = edgeOn ? vec2(0.0) : vec2(a.z * b.y - a.y * b.z, a.x * b.z - a.z * b.x) / det;
+  // The blocker search's own taps (shadowBlockers()), against the plane with a quarter texel of
+  // depth to spare, and against the flat plane as shadowFactor() compares them.
+  float eps = 0.25 * u_texelWorld / u_lightDepthRange;
+  float searchR = u_maxPenumbraTexels * u_shadowTexel;
+  float nPlane = 0.0, nFlat = 0.0;
+  for (int i = 0; i < 12; i += 2) {
+    vec2 o = kPoisson[i] * searchR;
+    float d = texture(u_shadowDepth, c.xy + o).r;
+    if (d < c.z + dot(g, o) - eps) nPlane += 1.0;
+    if (d < c.z) nFlat += 1.0;
+  }
+  float dCentre = texture(u_shadowDepth, c.xy).r;
+  if (dCentre < c.z - eps) nPlane += 1.0;
+  if (dCentre < c.z) nFlat += 1.0;
+  if (!edgeOn && nPlane == 0.0) return 1.0;
+  return (u_shadowDraft == 0 && nFlat == 7.0) ? 0.0 : 0.5;
 }
 
 // Linear radiance of a surface point (before tone mapping), in two parts: `key`, the key light's
@@ -753,10 +771,12 @@ void main() {
   vec3 key = texelFetch(u_key, p, 0).rgb, rest = texelFetch(u_rest, p, 0).rgb;
 #ifdef SHADOW_CLASSIFY
   // The first of two passes: finish the pixels whose shadow is known without the filter (no key
-  // light at all, or nothing above the surface: fully lit) and leave the others, by discarding
-  // them, to the second pass, the whole shadowFactor() (deferredLightPass).
-  if (max(key.r, max(key.g, key.b)) > 0.0 && !nothingAbove(s.xyz, unpackNormal(s.w))) discard;
-  o_color = vec4(linearToSrgb(toneMap(key + rest)), 1.0);
+  // light at all; nothing above the surface: fully lit; the umbra: shadowFactor() 0, the colour
+  // `rest` as the second pass computes it) and leave the others, by discarding them, to the
+  // second pass, the whole shadowFactor() (deferredLightPass).
+  float known = max(key.r, max(key.g, key.b)) > 0.0 ? shadowKnown(s.xyz, unpackNormal(s.w)) : 1.0;
+  if (known == 0.5) discard;
+  o_color = vec4(linearToSrgb(toneMap(known == 0.0 ? rest : key + rest)), 1.0);
 #else
   o_color = vec4(linearToSrgb(toneMap(key * shadowFactor(s.xyz, unpackNormal(s.w)) + rest)), 1.0);
 #endif
