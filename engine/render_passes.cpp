@@ -319,17 +319,21 @@ void Renderer::Impl::groundShadowPass(const FramePlan& f) {
   glViewport(0, 0, gs, gs);
   bindShadowTextures(false);  // the ground texture is the target here
   // Only the texels near a caster are shaded: a texel whose taps find no blocker is fully lit
-  // (1), as the cleared texture is. The box holds the casters seen along the light, grown by
-  // the widest reach of the taps (the blocker search's kMaxPenumbraMetres, at least 2 texels;
-  // draft's 8 texels at most), a texel of bilinear footprint, the normal offset (2.25
-  // texels) and two ground texels: the texture is the same as with every texel shaded.
+  // (1), as the cleared texture is. Each caster's box (casterTexelBoxes) is grown by the widest
+  // reach of the taps (the blocker search's kMaxPenumbraMetres, at least 2 texels; draft's 8
+  // texels at most), a texel of bilinear footprint, the normal offset (2.25 texels) and two
+  // ground texels: the texture is the same as with every texel shaded. One box per caster, not
+  // the box around them all: on hopper_terrain the terrain's blocks and the hopper leave most of
+  // the box around them empty.
   glClearColor(1.0f, 0.0f, 0.0f, 1.0f);
   glDepthMask(GL_TRUE);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   const double ground_texel = lf.texel_world * double(shadow_size) / double(gs);
-  int* box = ground_shadow_box;
-  ground_shadow_boxed =
-      casterTexelBox(lf.view_proj, kMaxPenumbraMetres + 12.0 * lf.texel_world + 2.0 * ground_texel, gs, box);
+  const double reach = kMaxPenumbraMetres + 12.0 * lf.texel_world + 2.0 * ground_texel;
+  casterTexelBoxes(lf.view_proj, reach, gs, ground_shadow_boxes);
+  ground_shadow_light = f.light_dir;
+  ground_shadow_reach = reach + ground_texel;  // and a texel of the bilinear lookup's footprint
+  ground_shadow_boxed = !ground_shadow_boxes.empty();
   if (ground_shadow_boxed) {
     const Eigen::Matrix4f lvp = lf.view_proj.cast<float>();
     for (GLuint p : {prog_ground_shadow_class, prog_ground_shadow}) {
@@ -339,10 +343,14 @@ void Renderer::Impl::groundShadowPass(const FramePlan& f) {
       glUniform2f(loc(p, "u_groundShadowSize"), float(gs), float(gs));
     }
     glEnable(GL_SCISSOR_TEST);
-    glScissor(box[0], box[1], box[2] - box[0], box[3] - box[1]);
     // The blocker search writes the fully lit and umbra texels, the filter runs on the
-    // others (draft has no search: one pass).
-    drawFullscreenTwoPass(empty_vao, f.draft ? 0 : prog_ground_shadow_class, prog_ground_shadow);
+    // others (draft has no search: one pass); over the boxes' union cut into disjoint pieces.
+    std::vector<PixelRect> outside;
+    partitionRects(ground_shadow_boxes, PixelRect{0, 0, gs, gs}, rects, outside);
+    for (const PixelRect& b : rects) {
+      glScissor(b.x0, b.y0, b.x1 - b.x0, b.y1 - b.y0);
+      drawFullscreenTwoPass(empty_vao, f.draft ? 0 : prog_ground_shadow_class, prog_ground_shadow);
+    }
     glDisable(GL_SCISSOR_TEST);
   }
   glDepthMask(GL_TRUE);
@@ -573,8 +581,8 @@ void Renderer::Impl::backgroundRows(const FramePlan& f, const PixelRect& clip, i
 
 // Into the bound target (main_color_tex's size), inside `clip`: the grid ground below grid_top,
 // the background's own pass above it. The grid's cells are drawn by prog_grid but in the ground
-// shadow's pixel rectangle (groundShadowRect), where prog_grid_shadow (GRID_SHADOWED) looks the
-// shadow up per pixel (everywhere when that rectangle cannot be bounded).
+// shadows' pixel rectangles (groundShadowRects, one per caster's box), where prog_grid_shadow
+// (GRID_SHADOWED) looks the shadow up per pixel (everywhere when they cannot be bounded).
 void Renderer::Impl::drawGridGround(const FramePlan& f, const PixelRect& clip, RenderStats& st) {
   const int w = f.w, h = f.h;
   glDisable(GL_DEPTH_TEST);
@@ -625,9 +633,8 @@ void Renderer::Impl::drawGridGround(const FramePlan& f, const PixelRect& clip, R
       glUniform2f(loc(p, "u_fade"), float(f.fade_start), float(f.fade_end));
       glUniform1i(loc(p, "u_groundShadow"), 2);
     }
-    PixelRect sr{};
     bool whole = false;
-    const bool boxed = f.shadows_on && groundShadowRect(f.view_proj, w, h, sr, whole);
+    const bool boxed = f.shadows_on && groundShadowRects(f.view_proj, w, h, rects, whole);
     // Each part scissored, drawing only the rows of cells it reaches (each corner is shaded
     // once a draw).
     const auto draw = [&](GLuint p, const PixelRect& part) {
@@ -645,10 +652,12 @@ void Renderer::Impl::drawGridGround(const FramePlan& f, const PixelRect& clip, R
     if (boxed && whole) {
       draw(prog_grid_shadow, below);
     } else if (boxed) {
-      draw(prog_grid_shadow, sr);
-      const PixelRect around[4] = {
-          {0, 0, w, sr.y0}, {0, sr.y1, w, h}, {0, sr.y0, sr.x0, sr.y1}, {sr.x1, sr.y0, w, sr.y1}};
-      for (const PixelRect& a : around) draw(prog_grid, a);
+      // The shadows' rectangles (one per caster's box, groundShadowRects) and the rest, cut
+      // into disjoint pieces.
+      std::vector<PixelRect> inside, outside;
+      partitionRects(rects, below, inside, outside);
+      for (const PixelRect& r : inside) draw(prog_grid_shadow, r);
+      for (const PixelRect& r : outside) draw(prog_grid, r);
     } else {
       draw(prog_grid, below);
     }

@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -195,10 +196,9 @@ struct Renderer::Impl {
   GLuint ground_shadow_fbo = 0, ground_shadow_tex = 0;  // R8, shadowFactor on the ground plane
   GLuint ground_shadow_depth = 0;                       // marks the texels that need the filter
   int ground_shadow_size = 0;
-  // This frame's texels of the ground's shadow texture that are not 1 (lit) lie in this box
-  // [x0, x1) x [y0, y1) (casterTexelBox); none when !ground_shadow_boxed.
+  // This frame's texels of the ground's shadow texture that are not 1 (lit) lie in the boxes
+  // ground_shadow_boxes (below); none when !ground_shadow_boxed.
   bool ground_shadow_boxed = false;
-  int ground_shadow_box[4] = {0, 0, 0, 0};
   // The last frame with shadows' light frustum and filter radius (setCommonUniforms reads them).
   LightFrustum frustum;
   int target_w = 0, target_h = 0, target_samples = -1, shadow_size = 0;
@@ -259,11 +259,31 @@ struct Renderer::Impl {
   };
   bool screenRects(const Eigen::Matrix4f& view_proj, int w, int h, std::vector<PixelRect>& rects) const;
   std::vector<PixelRect> rects;  // scratch of the passes (kept: no allocation per frame)
-  bool casterTexelBox(const Eigen::Matrix4d& light_vp, double margin_m, int size, int box[4]) const;
-  // The pixel rectangle (of a w x h viewport) outside which the ground is lit: its shadow texture
-  // reads 1 there (the part of its ground parallelogram behind the near plane cut off). False: none
-  // (nothing shadowed, or all of it behind the eye); `whole` set when it cannot be bounded.
+  // The texel boxes of a size x size texture over the light's square that hold everything drawn
+  // into the shadow map, seen along the light, each grown by `margin_m` metres: one per caster
+  // (a mesh draw, the hulls, the hair). Empty when nothing casts.
+  void casterTexelBoxes(const Eigen::Matrix4d& light_vp, double margin_m, int size, std::vector<PixelRect>& out) const;
+  // Merges rectangles while the box around a pair adds no more pixels than the two overlap or
+  // than `slack`.
+  static void mergeRects(std::vector<PixelRect>& rects, int64_t slack);
+  // The pixel rectangles (of a w x h viewport) outside which the ground is lit: its shadow texture
+  // reads 1 there. One per caster (casterCorners: the ground it shadows, grown by the taps'
+  // reach, the part behind the near plane cut off, projected), merged. False: none (nothing shadowed, or all of it
+  // behind the eye); `whole` set when they cannot be bounded. groundShadowRect: the box around them.
+  bool groundShadowRects(const Eigen::Matrix4f& view_proj, int w, int h, std::vector<PixelRect>& out,
+                         bool& whole) const;
   bool groundShadowRect(const Eigen::Matrix4f& view_proj, int w, int h, PixelRect& rect, bool& whole) const;
+  // Splits `clip` into disjoint rectangles inside the union of `rects` and outside it (bands of
+  // rows, each cut where a rectangle starts or ends; a band's pieces merged with the one below
+  // when they line up).
+  static void partitionRects(const std::vector<PixelRect>& rects, const PixelRect& clip, std::vector<PixelRect>& inside,
+                             std::vector<PixelRect>& outside);
+  std::vector<PixelRect> ground_shadow_boxes;  // this frame's casters' texel boxes (casterTexelBoxes)
+  // The light's direction (unit) and the taps' reach in light-space metres that those boxes were
+  // grown by, for groundShadowRects.
+  Eigen::Vector3d ground_shadow_light = Eigen::Vector3d(0, 0, -1);
+  double ground_shadow_reach = 0.0;
+  void casterCorners(std::vector<std::array<Eigen::Vector3d, 8>>& out) const;
 
   // The ground kept between frames (halfGroundPass, upsampleGroundPass). Outside the pixel
   // rectangle its shadow texture shades (groundShadowRect), the ground and the background depend

@@ -935,3 +935,67 @@ TEST(Renderer, AShadowInTheGroundsRingIsDrawn) {
     EXPECT_GT(dl, 20.0) << "no shadow in the ring at " << samples << " sample(s), pixel " << p.transpose();
   }
 }
+
+// The grid ground looks the shadow up per pixel only inside each caster's own rectangle
+// (groundShadowRects: its corners carried along the light onto the ground, grown by the taps'
+// reach). A floating plate's shadow has a soft edge outside its corners' shadow; a pole beside it
+// makes the box around both rectangles (where the MSAA frame's per-pixel ground looks the shadow
+// up) reach past the plate's rectangle. The two frames' ground must agree around the plate's
+// shadow (92 pixels over 6 levels when the rectangles are not grown by the reach), and both
+// shadows must be on the grid ground.
+TEST(Renderer, EachCastersShadowOnTheGridGroundKeepsItsSoftEdge) {
+  REQUIRE_GL();
+  Camera cam;
+  const Eigen::Vector3d d = LightParams().direction.normalized();
+  const Eigen::Vector3d box_c(-0.25, 0.1, 0.9), pole0(-0.25, 0.3, 0.0), pole1(-0.25, 0.3, 0.7);
+  cam.target = Eigen::Vector3d(-0.65, 0.6, 0.0);
+  cam.eye = cam.target + Eigen::Vector3d(0.3, -0.8, 0.5);
+  cam.fov = 40.0;
+  // A thin square plate turned so that its shadow's near and far edges run along the rows: the
+  // bound of its rectangle lies on them, and the soft edge is outside it along their length.
+  const Eigen::Vector3d half(0.08, 0.08, 0.01);
+  const Eigen::Vector3d right = (cam.target - cam.eye).cross(Eigen::Vector3d::UnitZ());
+  const Eigen::Affine3d plate =
+      Eigen::Translation3d(box_c) * Eigen::AngleAxisd(std::atan2(right.y(), right.x()), Eigen::Vector3d::UnitZ());
+  const auto onGround = [&](const Eigen::Vector3d& c) { return Eigen::Vector3d(c + d * (c.z() / -d.z())); };
+  const auto scene = [&](Renderer& r) {
+    r.drawBox(plate, half, red());
+    r.drawCapsule(pole0, pole1, 0.015, red());
+  };
+  RenderParams grid = testParams(1, true), msaa = testParams(4, true);
+  msaa.antialias = AntiAlias::Msaa;
+  const auto a = render(cam, grid, scene), b = render(cam, msaa, scene);
+  const auto plain = render(cam, grid, [](Renderer&) {});
+  save("caster_rects_grid.png", a);
+  save("caster_rects_msaa.png", b);
+  const Eigen::Vector2d box_px = project(cam, box_c), shadow_px = project(cam, onGround(box_c));
+  const Eigen::Vector2d pole_px = project(cam, onGround(0.5 * (pole0 + pole1)));
+  for (const Eigen::Vector2d& p : {shadow_px, pole_px})
+    ASSERT_TRUE(p.x() > 20 && p.y() > 20 && p.x() < kW - 20 && p.y() < kH - 20) << p.transpose();
+  EXPECT_GT(
+      luminance(plain, int(shadow_px.x()), int(shadow_px.y())) - luminance(a, int(shadow_px.x()), int(shadow_px.y())),
+      20.0)
+      << "the plate's shadow on the grid ground";
+  EXPECT_GT(luminance(plain, int(pole_px.x()), int(pole_px.y())) - luminance(a, int(pole_px.x()), int(pole_px.y())),
+            20.0)
+      << "the pole's shadow on the grid ground";
+  // Around the plate's shadow (its ground pixels: none red, 40 pixels of it from its centre, away
+  // from the plate itself), the grid ground against the per-pixel ground.
+  const auto red_at = [](const std::vector<uint8_t>& px, int x, int y) {
+    const uint8_t* p = px.data() + (size_t(y) * kW + size_t(x)) * 4;
+    return int(p[0]) - int(p[1]) > 12;
+  };
+  int n = 0, far_off = 0;
+  double worst = 0.0;
+  for (int y = std::max(0, int(shadow_px.y()) - 40); y < std::min(kH, int(shadow_px.y()) + 40); ++y)
+    for (int x = std::max(0, int(shadow_px.x()) - 40); x < std::min(kW, int(shadow_px.x()) + 40); ++x) {
+      if ((Eigen::Vector2d(x, y) - box_px).norm() < 30.0 || red_at(a, x, y) || red_at(b, x, y)) continue;
+      const double diff = std::abs(luminance(a, x, y) - luminance(b, x, y));
+      worst = std::max(worst, diff);
+      ++n;
+      if (diff > 6.0) ++far_off;
+    }
+  std::printf("around the plate's shadow: %d pixels, %d over 6 levels, worst %.1f\n", n, far_off, worst);
+  ASSERT_GT(n, 2000);
+  EXPECT_LE(far_off, 3) << "the grid ground's shadow of the box is cut short of its soft edge";
+}
