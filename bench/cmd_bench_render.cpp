@@ -8,8 +8,11 @@
 // first target allocation). The configurations take turns frame by frame (one session each), so a
 // change in the machine's load falls on all of them alike, and each figure is the median over its
 // frames. The render column is the wall time of RenderSession::renderFrame (all passes + the
-// read-back); the pass columns are RenderStats (glFinish-bracketed on llvmpipe). `--set` applies
-// the same overrides to every configuration (another shadow map size, another scene's look).
+// read-back), its context made current before the clock starts: switching OSMesa contexts costs
+// 0.6-1.4 ms, which bench-render pays at every turn and a single `ponyhop render` never does
+// (added to the final frame and the floor alike, it pulled every ratio towards 1); the pass columns are RenderStats
+// (glFinish-bracketed on llvmpipe). `--set` applies the same overrides to every configuration (another shadow map size,
+// another scene's look).
 #include <sys/utsname.h>
 
 #include <algorithm>
@@ -107,6 +110,7 @@ std::vector<Row> measureAll(const std::string& scene_path, const std::vector<std
     for (Run& r : runs) {
       const double t = i / r.scene.render.fps;
       if (!r.session->simulateTo(t)) throw InputError(scene_path + ": the simulation stopped: " + r.session->status());
+      r.session->makeCurrent();  // the switch between the configurations' contexts is not the frame's
       const auto t0 = Clock::now();
       r.session->renderFrame(t, rgba);
       const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();

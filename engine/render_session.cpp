@@ -27,6 +27,8 @@ RenderSession::~RenderSession() {
   renderer_.reset();  // GL objects go while the context lives
 }
 
+void RenderSession::makeCurrent() { context_->makeCurrent(); }
+
 bool RenderSession::simulateTo(double t) { return sim_.advanceTo(t); }
 
 void RenderSession::skipFrame(double t) {

@@ -31,6 +31,10 @@ class RenderSession {
   // Advances what a rendered frame at time t would (the follow camera) without drawing: a chunk
   // of a sequence (`render --range`) passes the frames before it so that its own match a full run.
   void skipFrame(double t);
+  // Makes this session's GL context current. renderFrame does it too; bench-render, whose sessions
+  // take turns on one thread, calls it before its clock starts, since a user's single session never
+  // switches contexts.
+  void makeCurrent();
 
   const std::string& status() const { return sim_.status(); }
   int width() const { return scene_.render.width; }
