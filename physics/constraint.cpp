@@ -12,7 +12,7 @@ const RigidBody& worldBody() {
   return world;
 }
 
-void ConstraintSystem::evaluate(const std::vector<RigidBody>& bodies, const Constraints& constraints) {
+void ConstraintSystem::evaluate(const std::vector<RigidBody>& bodies, const Constraints& constraints, bool with_bias) {
   const auto bodyOf = [&](int i) -> const RigidBody& { return i == kWorldBody ? worldBody() : bodies[i]; };
   rows_ = 0;
   for (const auto& c : constraints) rows_ += c->dimension();
@@ -31,6 +31,7 @@ void ConstraintSystem::evaluate(const std::vector<RigidBody>& bodies, const Cons
     b.jb.resize(m, 6);
     b.bias.resize(m);
     b.point = false;
+    b.bias_wanted = with_bias;
     c.evaluate(bodyOf(c.bodyA()), bodyOf(c.bodyB()), b);
     b.point = b.point && m == 3;
     b.body_a = c.bodyA();
@@ -38,9 +39,21 @@ void ConstraintSystem::evaluate(const std::vector<RigidBody>& bodies, const Cons
     b.row = row;
     b.rows = m;
     b.constraint = &c;
-    c_.segment(row, m) = b.C;
-    bias_.segment(row, m) = b.bias;
     row += m;
+  }
+  // The stacked C and J'q' in a second pass: a joint writes its rows entry by entry, and copying
+  // them right after its evaluate() read those stores back 16 bytes at a time (failed store
+  // forwarding, half of this function's samples at N = 8). By now they have left the store buffer.
+  // Three rows (a point joint) by fixed-size copies: a runtime-size copy of three entries ran
+  // Eigen's alignment peeling, a loop and its tail each time.
+  for (const Block& b : blocks_) {
+    if (b.rows == 3) {
+      c_.segment<3>(b.row) = b.C.head<3>();
+      bias_.segment<3>(b.row) = b.bias.head<3>();
+    } else {
+      c_.segment(b.row, b.rows) = b.C;
+      bias_.segment(b.row, b.rows) = b.bias;
+    }
   }
 }
 

@@ -40,6 +40,8 @@ struct ConstraintRows {
   // structure (J x = v_a + w_a x arm_a - ..., J M^-1 J^T by cross products) instead of the
   // general 3 x 6 blocks. ConstraintSystem::evaluate clears it before each evaluate().
   bool point = false;
+  // Set by the caller: false when nothing will read J'q' (a joint may then leave it NaN).
+  bool bias_wanted = true;
   Eigen::Vector3d arm_a = Eigen::Vector3d::Zero();
   Eigen::Vector3d arm_b = Eigen::Vector3d::Zero();
 };
@@ -102,7 +104,9 @@ class ConstraintSystem {
     const Constraint* constraint = nullptr;  // the joint that wrote it (for maxError())
   };
 
-  void evaluate(const std::vector<RigidBody>& bodies, const Constraints& constraints);
+  // with_bias = false: J'q' only where a joint needs no work for it, NaN where it skipped it (a
+  // point joint): for a solve that never reads bias() (stabilization = velocity).
+  void evaluate(const std::vector<RigidBody>& bodies, const Constraints& constraints, bool with_bias = true);
 
   int rows() const { return rows_; }
   const std::vector<Block>& blocks() const { return blocks_; }

@@ -40,10 +40,15 @@ Status ConstraintSolver::solveJointForces(std::vector<RigidBody>& bodies, const 
     } else {
       system.timesInto(acc, jx_);
     }
-    rhs_ = -jx_;
-    if (!gains.velocity_level) rhs_ -= system.bias();
-    if (gains.alpha != 0.0) rhs_ -= 2.0 * gains.alpha * jv_;
-    if (gains.beta != 0.0) rhs_ -= gains.beta * gains.beta * system.C();
+    if (gains.velocity_level && gains.alpha != 0.0 && gains.beta != 0.0) {
+      // One pass, the same operations as the passes below: ((-J acc) - 2 alpha J q') - beta^2 C.
+      rhs_ = (-jx_ - (2.0 * gains.alpha) * jv_) - (gains.beta * gains.beta) * system.C();
+    } else {
+      rhs_ = -jx_;
+      if (!gains.velocity_level) rhs_ -= system.bias();
+      if (gains.alpha != 0.0) rhs_ -= 2.0 * gains.alpha * jv_;
+      if (gains.beta != 0.0) rhs_ -= gains.beta * gains.beta * system.C();
+    }
     if (!factorWith(bodies, system, inverse_inertia_)) {
       return Status::error("the constraint matrix J M^-1 J^T is singular");
     }

@@ -1,5 +1,7 @@
 #include "physics/spherical_joint.h"
 
+#include <limits>
+
 #include "physics/small_matrix.h"
 
 namespace ponyhop {
@@ -41,15 +43,7 @@ void SphericalJoint::evaluate(const RigidBody& a, const RigidBody& b, Constraint
   jb << -1.0, 0.0, 0.0, 0.0, -b2, b1,  //
       0.0, -1.0, 0.0, b2, 0.0, -b0,    //
       0.0, 0.0, -1.0, -b1, b0, 0.0;
-  // bias = w_a x (w_a x r_a) - w_b x (w_b x r_b), every entry a named scalar (an array here was
-  // stored entry by entry and reread 16 bytes at a time by GCC's vectorizer).
-  const double wa0 = a.w(0), wa1 = a.w(1), wa2 = a.w(2), wb0 = b.w(0), wb1 = b.w(1), wb2 = b.w(2);
-  const double ca0 = wa1 * a2 - wa2 * a1, ca1 = wa2 * a0 - wa0 * a2, ca2 = wa0 * a1 - wa1 * a0;
-  const double cb0 = wb1 * b2 - wb2 * b1, cb1 = wb2 * b0 - wb0 * b2, cb2 = wb0 * b1 - wb1 * b0;
   out.bias.resize(3);
-  out.bias(0) = (wa1 * ca2 - wa2 * ca1) - (wb1 * cb2 - wb2 * cb1);
-  out.bias(1) = (wa2 * ca0 - wa0 * ca2) - (wb2 * cb0 - wb0 * cb2);
-  out.bias(2) = (wa0 * ca1 - wa1 * ca0) - (wb0 * cb1 - wb1 * cb0);
   out.point = true;
   out.arm_a(0) = a0;
   out.arm_a(1) = a1;
@@ -57,6 +51,18 @@ void SphericalJoint::evaluate(const RigidBody& a, const RigidBody& b, Constraint
   out.arm_b(0) = b0;
   out.arm_b(1) = b1;
   out.arm_b(2) = b2;
+  if (!out.bias_wanted) {  // the velocity-level solve never reads J'q'
+    out.bias.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return;
+  }
+  // bias = w_a x (w_a x r_a) - w_b x (w_b x r_b), every entry a named scalar (an array here was
+  // stored entry by entry and reread 16 bytes at a time by GCC's vectorizer).
+  const double wa0 = a.w(0), wa1 = a.w(1), wa2 = a.w(2), wb0 = b.w(0), wb1 = b.w(1), wb2 = b.w(2);
+  const double ca0 = wa1 * a2 - wa2 * a1, ca1 = wa2 * a0 - wa0 * a2, ca2 = wa0 * a1 - wa1 * a0;
+  const double cb0 = wb1 * b2 - wb2 * b1, cb1 = wb2 * b0 - wb0 * b2, cb2 = wb0 * b1 - wb1 * b0;
+  out.bias(0) = (wa1 * ca2 - wa2 * ca1) - (wb1 * cb2 - wb2 * cb1);
+  out.bias(1) = (wa2 * ca0 - wa0 * ca2) - (wb2 * cb0 - wb0 * cb2);
+  out.bias(2) = (wa0 * ca1 - wa1 * ca0) - (wb0 * cb1 - wb1 * cb0);
 }
 
 }  // namespace ponyhop

@@ -41,7 +41,8 @@ namespace {
 // |phi|^2 for the turn from q0 to q1 (unit quaternions): phi = 2 atan2(|v|, |w|) of q1 q0^-1 (the
 // shortest rotation; atan2 does not need the product normalized). A step's turn is small: then
 // atan(t) = t (1 - t^2 / 3 + t^4 / 5), whose error t^7 / 7 is below 1.5e-13 t for t < 0.01.
-double turnSquared(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q0) {
+// Always inlined into the monitor's pass over the bodies (GCC left it a call per body).
+[[gnu::always_inline]] inline double turnSquared(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q0) {
   const Eigen::Quaterniond dq = q1 * q0.conjugate();
   const double s2 = dq.vec().squaredNorm(), c = std::abs(dq.w());
   if (s2 < 1e-4 * c * c) {  // s < 0.01 c: angle = 2 t (1 - t^2 / 3 + t^4 / 5), t = s / c, squared without a sqrt

@@ -279,19 +279,28 @@ bool TreeSolver::factorTree(const std::vector<RigidBody>& bodies, const Constrai
         for (size_t y = x; y < k; ++y) {
           const double r0 = arm_[y](0), r1 = arm_[y](1), r2 = arm_[y](2);
           const double s = sign_[x] * sign_[y];
-          double e[3][3];
-          for (int i = 0; i < 3; ++i) {
-            e[i][0] = s * (r1 * w(i, 2) - r2 * w(i, 1));
-            e[i][1] = s * (r2 * w(i, 0) - r0 * w(i, 2));
-            e[i][2] = s * (r0 * w(i, 1) - r1 * w(i, 0));
-            e[i][i] += s * mass_inv;
-          }
           auto&& a = blockA(cl, x, y);
-          if (y == x) {  // symmetric: the upper triangle, mirrored
-            for (int i = 0; i < 3; ++i) {
-              for (int j = i; j < 3; ++j) a(i, j) = a(j, i) = e[i][j];
-            }
+          if (y == x) {  // symmetric: the upper triangle only (the same expressions), mirrored
+            const double e00 = s * (r1 * w(0, 2) - r2 * w(0, 1)) + s * mass_inv;
+            const double e01 = s * (r2 * w(0, 0) - r0 * w(0, 2));
+            const double e02 = s * (r0 * w(0, 1) - r1 * w(0, 0));
+            const double e11 = s * (r2 * w(1, 0) - r0 * w(1, 2)) + s * mass_inv;
+            const double e12 = s * (r0 * w(1, 1) - r1 * w(1, 0));
+            const double e22 = s * (r0 * w(2, 1) - r1 * w(2, 0)) + s * mass_inv;
+            a(0, 0) = e00;
+            a(0, 1) = a(1, 0) = e01;
+            a(0, 2) = a(2, 0) = e02;
+            a(1, 1) = e11;
+            a(1, 2) = a(2, 1) = e12;
+            a(2, 2) = e22;
           } else {
+            double e[3][3];
+            for (int i = 0; i < 3; ++i) {
+              e[i][0] = s * (r1 * w(i, 2) - r2 * w(i, 1));
+              e[i][1] = s * (r2 * w(i, 0) - r0 * w(i, 2));
+              e[i][2] = s * (r0 * w(i, 1) - r1 * w(i, 0));
+              e[i][i] += s * mass_inv;
+            }
             auto&& at = blockA(cl, y, x);
             for (int i = 0; i < 3; ++i) {
               for (int j = 0; j < 3; ++j) a(i, j) = at(j, i) = e[i][j];
@@ -487,6 +496,30 @@ void TreeSolver::treeSolveInPlace(Eigen::VectorXd& y) const {
     for (int l = n.l; l < end; ++l) segment<R>(y, near_row_[l], rowsOf(l)).noalias() -= lBlock<R>(l) * yj;
     const V z = dInvBlock<R>(j) * yj;
     yj = z;
+  }
+  if constexpr (R == 3) {
+    // In scalars, the same operations as below (L^T y_x summed ((x0 + x1) + x2) per entry): y_x
+    // was written entry by entry by the node just before, and the product read it back 16 bytes
+    // at a time (failed store forwarding, a third of this function's samples at N = 8).
+    double* yv = y.data();
+    for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
+      const Node& n = nodes_[*it];
+      double* yj = yv + n.row;
+      double y0 = yj[0], y1 = yj[1], y2 = yj[2];
+      const int end = n.l + static_cast<int>(n.near.size());
+      for (int l = n.l; l < end; ++l) {
+        const double* yx = yv + near_row_[l];
+        const double x0 = yx[0], x1 = yx[1], x2 = yx[2];
+        const Eigen::Matrix3d& lx = l3_[l];
+        y0 -= (lx(0, 0) * x0 + lx(1, 0) * x1) + lx(2, 0) * x2;
+        y1 -= (lx(0, 1) * x0 + lx(1, 1) * x1) + lx(2, 1) * x2;
+        y2 -= (lx(0, 2) * x0 + lx(1, 2) * x1) + lx(2, 2) * x2;
+      }
+      yj[0] = y0;
+      yj[1] = y1;
+      yj[2] = y2;
+    }
+    return;
   }
   for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
     const Node& n = nodes_[*it];

@@ -239,5 +239,33 @@ TEST(PhysicsSolver, TreeSolverScalesToLongChains) {
   }
 }
 
+// stabilization = velocity reads no J'q': its joint-force stage evaluates the joints without it.
+// Everything else a joint writes is the same bits as with it (C, J, the point joints' arms), and
+// a point joint's J'q' is NaN, so that a reader of it cannot take a stale value for a fresh one.
+TEST(PhysicsSolver, EvaluatingWithoutBiasChangesNothingElse) {
+  ChainWorld cw = chainWorld(SolverKind::Tree, 6, shake());
+  stir(cw.world, 3);
+  const std::vector<RigidBody>& bodies = cw.world.bodies();
+  ConstraintSystem with, without;
+  with.evaluate(bodies, cw.world.joints());
+  without.evaluate(bodies, cw.world.joints(), false);
+  ASSERT_EQ(with.rows(), without.rows());
+  EXPECT_EQ(with.C(), without.C());
+  EXPECT_TRUE(with.bias().allFinite());
+  EXPECT_GT(with.bias().norm(), 0.0);
+  ASSERT_EQ(with.blocks().size(), without.blocks().size());
+  for (size_t j = 0; j < with.blocks().size(); ++j) {
+    const ConstraintSystem::Block& a = with.blocks()[j];
+    const ConstraintSystem::Block& b = without.blocks()[j];
+    EXPECT_TRUE(a.point && b.point);
+    EXPECT_EQ(a.C, b.C);
+    EXPECT_EQ(a.ja, b.ja);
+    EXPECT_EQ(a.jb, b.jb);
+    EXPECT_EQ(a.arm_a, b.arm_a);
+    EXPECT_EQ(a.arm_b, b.arm_b);
+    EXPECT_TRUE(b.bias.array().isNaN().all()) << "joint " << j;
+  }
+}
+
 }  // namespace
 }  // namespace ponyhop
