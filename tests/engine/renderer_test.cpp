@@ -47,13 +47,16 @@ Gl& gl() {
 
 using ponyhop::testing::outFolder;
 
-Camera testCamera() {
+// A camera at `eye` looking at `target`, with a vertical field of view of `fov` degrees.
+Camera cameraAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, double fov = Camera().fov) {
   Camera c;
-  c.eye = Eigen::Vector3d(0.9, -1.4, 0.55);
-  c.target = Eigen::Vector3d(0.0, 0.0, 0.15);
-  c.fov = 35.0;
+  c.eye = eye;
+  c.target = target;
+  c.fov = fov;
   return c;
 }
+
+Camera testCamera() { return cameraAt(Eigen::Vector3d(0.9, -1.4, 0.55), Eigen::Vector3d(0.0, 0.0, 0.15), 35.0); }
 
 RenderParams testParams(int samples = 4, bool ground = true) {
   RenderParams p;
@@ -396,10 +399,7 @@ TEST(Renderer, ShadowMapMatchesTheFrame) {
 // down every column the colour changes smoothly from the sky into the ground.
 TEST(Renderer, TheSkyAboveTheHorizonIsTheBackgroundWithoutASeam) {
   REQUIRE_GL();
-  Camera cam;
-  cam.eye = Eigen::Vector3d(0.0, -2.0, 0.45);
-  cam.target = Eigen::Vector3d(0.0, 0.0, 0.25);
-  cam.fov = 40.0;
+  const Camera cam = cameraAt(Eigen::Vector3d(0.0, -2.0, 0.45), Eigen::Vector3d(0.0, 0.0, 0.25), 40.0);
   const auto nothing = [](Renderer&) {};
   const auto ground = render(cam, testParams(1, true), nothing);
   const auto sky = render(cam, testParams(1, false), nothing);
@@ -551,9 +551,7 @@ TEST(Renderer, MsaaOneAndFourSamplesBothWork) {
 
 TEST(Renderer, TaperedCapsuleChainHasNoGaps) {
   REQUIRE_GL();
-  Camera cam;
-  cam.eye = Eigen::Vector3d(0.0, -1.2, 0.3);
-  cam.target = Eigen::Vector3d(0.0, 0.0, 0.3);
+  const Camera cam = cameraAt(Eigen::Vector3d(0.0, -1.2, 0.3), Eigen::Vector3d(0.0, 0.0, 0.3));
   const RenderParams rp = testParams(4, false);
   std::vector<Eigen::Vector3d> pts;
   std::vector<double> radii;
@@ -710,9 +708,7 @@ TEST(Renderer, DemoFrame720p) {
   const MeshHandle h = r.upload(head);
   RenderParams rp;  // 1280 x 720, 4 samples
   LightParams light;
-  Camera cam;
-  cam.eye = Eigen::Vector3d(0.9, -1.4, 0.55);
-  cam.target = Eigen::Vector3d(0.0, 0.0, 0.25);
+  const Camera cam = cameraAt(Eigen::Vector3d(0.9, -1.4, 0.55), Eigen::Vector3d(0.0, 0.0, 0.25));
   Material skin, hair, metal, dark;
   skin.color = Eigen::Vector3f(0.93f, 0.78f, 0.67f);
   skin.specular = 0.08f;
@@ -813,10 +809,6 @@ TEST(Renderer, TheGroundKeptBetweenFramesIsTheGroundDrawnAnew) {
   EXPECT_GT(shadow, 200) << "no shadow on the ground";
 }
 
-// The ground's ring (from the square inside the fade's start out to the fade's end) is drawn
-// without the shadow lookup outside the shadow's pixel rectangle, as the square inside it is: a
-// shadow that falls in the ring must still be there, at one sample (the half-resolution ground)
-// and four (the ground after the objects).
 // A single-sample frame draws the ground as a grid lit at its corners, with only the checker per
 // pixel (and, where the ground's shadow may fall, the shadow and the tone curve): it must look
 // like the ground shaded per pixel, as the 4x MSAA frame draws it, in the light, in the
@@ -825,10 +817,7 @@ TEST(Renderer, TheGroundKeptBetweenFramesIsTheGroundDrawnAnew) {
 // another box).
 TEST(Renderer, TheGridGroundIsTheGroundShadedPerPixel) {
   REQUIRE_GL();
-  Camera cam;
-  cam.eye = Eigen::Vector3d(0.6, -1.6, 0.6);
-  cam.target = Eigen::Vector3d(0.0, 0.0, 0.15);
-  cam.fov = 40.0;
+  const Camera cam = cameraAt(Eigen::Vector3d(0.6, -1.6, 0.6), Eigen::Vector3d(0.0, 0.0, 0.15), 40.0);
   const auto sphere = [](Renderer& r) { r.drawSphere(kSphereC, kSphereR, red()); };
   RenderParams grid = testParams(1, true), msaa = testParams(4, true);
   msaa.antialias = AntiAlias::Msaa;
@@ -875,10 +864,7 @@ TEST(Renderer, TheGridGroundIsTheGroundShadedPerPixel) {
 // at one sample (the grid ground) and four.
 TEST(Renderer, AGroundShadowNearTheEyeIsDrawnWhenACasterIsBehindIt) {
   REQUIRE_GL();
-  Camera cam;
-  cam.eye = Eigen::Vector3d(0.0, -1.2, 0.5);
-  cam.target = Eigen::Vector3d(0.0, 0.5, 0.1);
-  cam.fov = 40.0;
+  const Camera cam = cameraAt(Eigen::Vector3d(0.0, -1.2, 0.5), Eigen::Vector3d(0.0, 0.5, 0.1), 40.0);
   const Eigen::Vector3d d = LightParams().direction.normalized();
   const Eigen::Vector3d front(0.25, -0.3, 0.2), behind(0.0, -3.0, 0.3);
   const auto onGround = [&](const Eigen::Vector3d& c) { return Eigen::Vector3d(c + d * (c.z() / -d.z())); };
@@ -945,12 +931,10 @@ TEST(Renderer, AShadowInTheGroundsRingIsDrawn) {
 // shadows must be on the grid ground.
 TEST(Renderer, EachCastersShadowOnTheGridGroundKeepsItsSoftEdge) {
   REQUIRE_GL();
-  Camera cam;
   const Eigen::Vector3d d = LightParams().direction.normalized();
   const Eigen::Vector3d box_c(-0.25, 0.1, 0.9), pole0(-0.25, 0.3, 0.0), pole1(-0.25, 0.3, 0.7);
-  cam.target = Eigen::Vector3d(-0.65, 0.6, 0.0);
-  cam.eye = cam.target + Eigen::Vector3d(0.3, -0.8, 0.5);
-  cam.fov = 40.0;
+  const Eigen::Vector3d target(-0.65, 0.6, 0.0);
+  const Camera cam = cameraAt(target + Eigen::Vector3d(0.3, -0.8, 0.5), target, 40.0);
   // A thin square plate turned so that its shadow's near and far edges run along the rows: the
   // bound of its rectangle lies on them, and the soft edge is outside it along their length.
   const Eigen::Vector3d half(0.08, 0.08, 0.01);
