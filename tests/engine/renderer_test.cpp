@@ -997,9 +997,9 @@ TEST(Renderer, ThePostFilterFiltersEveryEdgeOfABox) {
   const Camera cam = cameraAt(Eigen::Vector3d(0.6, -1.1, 0.7), Eigen::Vector3d(0.0, 0.05, 0.0), 40.0);
   const Eigen::Vector3d back = cam.eye + (cam.eye - cam.target).normalized();
   const auto whole = [&](Renderer& r) { r.drawLine(back, back + Eigen::Vector3d(0.0, 0.0, 0.1), {1.0f, 0.0f, 0.0f}); };
-  Material dark = red(), blue;
+  Material dark = red(), yellow;
   dark.color = Eigen::Vector3f(0.35f, 0.12f, 0.1f);
-  blue.color = Eigen::Vector3f(0.15f, 0.25f, 0.7f);
+  yellow.color = Eigen::Vector3f(0.95f, 0.85f, 0.3f);
   const Eigen::Affine3d slab = Eigen::Translation3d(0.0, 0.0, 0.01) * Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()) *
                                Eigen::AngleAxisd(0.15, Eigen::Vector3d::UnitX());
   const Eigen::Affine3d cutter = Eigen::Translation3d(0.05, 0.05, 0.06) *
@@ -1008,7 +1008,7 @@ TEST(Renderer, ThePostFilterFiltersEveryEdgeOfABox) {
   const Eigen::Vector3d slab_half(0.25, 0.18, 0.05), cutter_half(0.05, 0.05, 0.09);
   const auto boxes = [&](Renderer& r) {
     r.drawBox(slab, slab_half, dark);
-    r.drawBox(cutter, cutter_half, blue);
+    r.drawBox(cutter, cutter_half, yellow);
   };
   // The pixels (x right, y down) around the boxes: their corners' box, grown by 8 px.
   const auto around = [&](const std::vector<Eigen::Affine3d>& poses, const std::vector<Eigen::Vector3d>& halves) {
