@@ -177,8 +177,8 @@ struct Renderer::Impl {
   // texture (read by the post-process filter, or directly without anti-aliasing).
   GLuint msaa_fbo = 0, msaa_color = 0, msaa_depth = 0, main_color_tex = 0;
   GLuint resolve_fbo = 0, resolve_color = 0;
-  GLuint resolve_depth = 0;  // marks the pixels the post filter has an edge at
-  GLuint output_fbo = 0;     // where the finished frame is: resolve_fbo; msaa_fbo without AA or filtered in place
+  GLuint resolve_depth = 0;  // unused since the post filter works in place (session 28); kept with resolve_fbo
+  GLuint output_fbo = 0;     // where the finished frame is: resolve_fbo (MSAA); msaa_fbo without AA or post-filtered
   // The post filter over rectangles: a copy of them (and around them, as far as its taps reach)
   // that it reads while it writes the main target in place (antiAliasPass).
   GLuint post_src_fbo = 0, post_src_tex = 0;
