@@ -278,7 +278,8 @@ void Renderer::Impl::planPasses(FramePlan& f) const {
 // the early depth test then rejects it, and a hopper's body, leg and hair fill a third of their
 // common box. False when they cover nearly the whole frame anyway, or a point is behind the eye
 // (its projection is not bounded).
-bool Renderer::Impl::screenRects(const Eigen::Matrix4f& view_proj, int w, int h, std::vector<PixelRect>& out) const {
+bool Renderer::Impl::screenRects(const Eigen::Matrix4f& view_proj, int w, int h, std::vector<PixelRect>& out,
+                                 const std::vector<char>* skip) const {
   out.clear();
   if (draw_bounds.isEmpty() && lines.empty()) return false;
   constexpr int kReach = 6;
@@ -302,7 +303,7 @@ bool Renderer::Impl::screenRects(const Eigen::Matrix4f& view_proj, int w, int h,
   const Eigen::AlignedBox3d* parts = one ? &draw_bounds : part_bounds.data();
   for (size_t k = 0, n = one ? 1 : part_bounds.size(); k < n; ++k) {
     const Eigen::AlignedBox3d& b = parts[k];
-    if (b.isEmpty()) continue;
+    if (b.isEmpty() || (!one && skip && (*skip)[k])) continue;
     for (int i = 0; i < 8; ++i)
       if (!add(b.corner(Eigen::AlignedBox3d::CornerType(i)))) return false;
     emit();
@@ -333,6 +334,214 @@ bool Renderer::Impl::screenRects(const Eigen::Matrix4f& view_proj, int w, int h,
   int64_t covered = 0;
   for (const PixelRect& r : out) covered += r.area();
   return !out.empty() && covered < int64_t(w) * h * 9 / 10;  // else: no gain
+}
+
+namespace {
+
+// The corners of a box drawn by drawBox (the box mesh's [-1, 1]^3 under `model`): corner i has
+// x, y, z at +1 where bits 0, 1, 2 of i are set. Face (axis k, side s) in order around it.
+std::array<int, 4> boxFace(int k, int s) {
+  const int a1 = 1 << ((k + 1) % 3), a2 = 1 << ((k + 2) % 3), b = s > 0 ? 1 << k : 0;
+  return {b, b | a1, b | a1 | a2, b | a2};
+}
+
+// Where the quad q (corners in order around it) crosses the plane coordinate[axis] = value: the
+// segment between the two points where its edges change side. False when it does not.
+bool quadCut(const std::array<Eigen::Vector3d, 4>& q, int axis, double value, Eigen::Vector3d& p0,
+             Eigen::Vector3d& p1) {
+  int n = 0;
+  for (int i = 0; i < 4 && n < 2; ++i) {
+    const Eigen::Vector3d &a = q[size_t(i)], &b = q[size_t((i + 1) % 4)];
+    const double da = a[axis] - value, db = b[axis] - value;
+    if ((da < 0.0) == (db < 0.0)) continue;
+    (n++ == 0 ? p0 : p1) = a + (b - a) * (da / (da - db));
+  }
+  return n == 2;
+}
+
+// Cuts the segment p0 p1 (a box's local coordinates) to |coordinate| <= 1 on every axis but
+// `axis`. False when nothing is left.
+bool clipToFace(Eigen::Vector3d& p0, Eigen::Vector3d& p1, int axis) {
+  double t0 = 0.0, t1 = 1.0;
+  const Eigen::Vector3d d = p1 - p0;
+  for (int j = 0; j < 3; ++j) {
+    if (j == axis) continue;
+    for (int s = -1; s <= 1; s += 2) {  // s * (p0 + t d)[j] <= 1 + eps
+      const double num = 1.0 + 1e-9 - s * p0[j], den = s * d[j];
+      if (std::abs(den) < 1e-15) {
+        if (num < 0.0) return false;
+      } else if (den > 0.0) {
+        t1 = std::min(t1, num / den);
+      } else {
+        t0 = std::max(t0, num / den);
+      }
+    }
+  }
+  if (t0 > t1) return false;
+  const Eigen::Vector3d a = p0 + t0 * d, b = p0 + t1 * d;
+  p0 = a, p1 = b;
+  return true;
+}
+
+}  // namespace
+
+// The post filter marks a pixel when its luma and its four diagonal neighbours' differ enough,
+// so every pixel it marks lies within sqrt(2) px of a line across which the picture jumps. On a
+// box (drawBox: flat faces, one material) such a line can only be one of its edges, where one
+// of its faces meets the ground (the objects are clipped at the ground's plane, or hidden by it),
+// or where it cuts into another box: the filter's region for a box is a band kBand px wide on
+// each side of those lines (and past their ends), instead of its whole screen rectangle, most of
+// which is a face or the ground (hopper_terrain's first block: 71,000 pixels of rectangle, about
+// 8,000 of bands). What crosses a box is another draw, in its own rectangle: a hull's or the
+// hair's edges, and a shadow's hard edge at its caster's contact. A box not wholly in front of
+// the near plane, and every box among more than 64 draws (screenRects' union), keeps its
+// rectangle.
+void Renderer::Impl::postFilterRegions(const FramePlan& f, bool boxed, double shadow_reach,
+                                       std::vector<LineVertex>& tris) const {
+  tris.clear();
+  const auto corner = [&](double x0, double y0, double x1, double y1) {  // a pixel rectangle
+    const float X0 = float(x0 / f.w * 2.0 - 1.0), Y0 = float(y0 / f.h * 2.0 - 1.0);
+    const float X1 = float(x1 / f.w * 2.0 - 1.0), Y1 = float(y1 / f.h * 2.0 - 1.0);
+    for (const auto& [x, y] : {std::pair{X0, Y0}, {X1, Y0}, {X1, Y1}, {X0, Y0}, {X1, Y1}, {X0, Y1}})
+      tris.push_back(LineVertex{{x, y, 0.0f}, {0.0f, 0.0f, 0.0f}});
+  };
+  if (!boxed) {
+    corner(0, 0, f.w, f.h);
+    return;
+  }
+  constexpr double kBand = 2.5;
+  const Eigen::Matrix4d vp = f.view_proj.cast<double>();
+  // Pixel coordinates (from the bottom left) of a world point in front of the near plane.
+  const auto pixel = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector4d c = vp * p.homogeneous();
+    return Eigen::Vector2d((c.x() / c.w() * 0.5 + 0.5) * f.w, (c.y() / c.w() * 0.5 + 0.5) * f.h);
+  };
+  const auto band = [&](const Eigen::Vector3d& a3, const Eigen::Vector3d& b3) {
+    const Eigen::Vector2d a = pixel(a3), b = pixel(b3);
+    const double len = (b - a).norm();
+    const Eigen::Vector2d u = len > 1e-9 ? Eigen::Vector2d((b - a) / len) : Eigen::Vector2d(1.0, 0.0);
+    const Eigen::Vector2d n(-u.y(), u.x());
+    const Eigen::Vector2d q[4] = {a - kBand * (u + n), b + kBand * (u - n), b + kBand * (u + n), a - kBand * (u - n)};
+    for (int i : {0, 1, 2, 0, 2, 3})
+      tris.push_back(
+          LineVertex{{float(q[i].x() / f.w * 2.0 - 1.0), float(q[i].y() / f.h * 2.0 - 1.0), 0.0f}, {0.0f, 0.0f, 0.0f}});
+  };
+  // The boxes that get bands: their model matrices and world corners.
+  struct Box {
+    Eigen::Matrix4d model, inverse;
+    std::array<Eigen::Vector3d, 8> p;
+    int part;
+  };
+  std::vector<Box> boxes;
+  std::vector<char> skip(part_bounds.size(), 0);
+  if (part_bounds.size() <= 64) {
+    for (const MeshDraw& d : mesh_draws) {
+      if (d.mesh != box_mesh || d.part < 0) continue;
+      Box b;
+      b.model = d.model.cast<double>();
+      if (!(std::abs(b.model.topLeftCorner<3, 3>().determinant()) > 1e-18)) continue;
+      b.inverse = b.model.inverse();
+      b.part = d.part;
+      bool front = true;
+      for (int i = 0; i < 8; ++i) {
+        b.p[size_t(i)] = (b.model * Eigen::Vector4d(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1, 1)).head<3>();
+        const Eigen::Vector4d c = vp * b.p[size_t(i)].homogeneous();
+        front = front && c.w() > 1e-6 && c.z() >= -c.w();
+      }
+      if (!front) continue;
+      boxes.push_back(b);
+      skip[size_t(d.part)] = 1;
+    }
+  }
+  // Every other draw and the lines: their screen rectangles (the whole frame when those are not
+  // bounded).
+  bool others = !lines.empty();
+  for (size_t k = 0; k < part_bounds.size(); ++k) others = others || (!skip[k] && !part_bounds[k].isEmpty());
+  if (others) {
+    std::vector<PixelRect> own;
+    if (screenRects(f.view_proj, f.w, f.h, own, &skip))
+      for (const PixelRect& r : own) corner(r.x0, r.y0, r.x1, r.y1);
+    else
+      corner(0, 0, f.w, f.h);
+  }
+  // The other draws' shadows on a box: a hull's, the hair's or a mesh's penumbra can be marked
+  // (the hopper's on a block it stands over). Each such caster's box swept along the light down
+  // to the lowest box and grown by the shadow taps' reach over the light's slant holds its
+  // shadow; where that meets a box's bounds, the screen rectangle of the meeting gets the filter.
+  if (!boxes.empty() && f.shadows_on) {
+    const Eigen::Vector3d l = f.light_dir;
+    double zlow = std::numeric_limits<double>::infinity();
+    for (const Box& b : boxes) zlow = std::min(zlow, part_bounds[size_t(b.part)].min().z());
+    if (params.ground) zlow = std::min(zlow, params.ground_height);
+    const auto screenRect = [&](const Eigen::AlignedBox3d& box, PixelRect& r) {
+      double x0 = 1e30, y0 = 1e30, x1 = -1e30, y1 = -1e30;
+      for (int i = 0; i < 8; ++i) {
+        const Eigen::Vector4d c = vp * box.corner(Eigen::AlignedBox3d::CornerType(i)).homogeneous();
+        if (!(c.w() > 1e-6)) return false;
+        const Eigen::Vector2d p = pixel(box.corner(Eigen::AlignedBox3d::CornerType(i)));
+        x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x()), y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
+      }
+      r = {std::clamp(int(std::floor(x0)) - 6, 0, f.w), std::clamp(int(std::floor(y0)) - 6, 0, f.h),
+           std::clamp(int(std::ceil(x1)) + 6, 0, f.w), std::clamp(int(std::ceil(y1)) + 6, 0, f.h)};
+      return true;
+    };
+    for (size_t k = 0; k < part_bounds.size(); ++k) {
+      if (skip[k] || part_bounds[k].isEmpty()) continue;
+      Eigen::AlignedBox3d swept = part_bounds[k];
+      const bool bounded = l.z() < -0.05;
+      if (bounded) {
+        for (int i = 0; i < 8; ++i) {
+          const Eigen::Vector3d p = part_bounds[k].corner(Eigen::AlignedBox3d::CornerType(i));
+          if (p.z() > zlow) swept.extend(p + l * ((p.z() - zlow) / -l.z()));
+        }
+        const double grow = shadow_reach / -l.z();
+        swept.min().array() -= grow;
+        swept.max().array() += grow;
+      }
+      // Its shadow on the ground: the swept box's slab at the ground (within the reach).
+      PixelRect on_ground{0, 0, 0, 0};
+      if (params.ground && bounded) {
+        Eigen::AlignedBox3d slab = swept;
+        const double grow = shadow_reach / -l.z();
+        slab.min().z() = std::max(slab.min().z(), params.ground_height - grow);
+        slab.max().z() = std::min(slab.max().z(), params.ground_height + grow);
+        if (!slab.isEmpty() && !screenRect(slab, on_ground)) on_ground = {0, 0, f.w, f.h};
+      }
+      for (const Box& b : boxes) {
+        const Eigen::AlignedBox3d& bb = part_bounds[size_t(b.part)];
+        PixelRect own;
+        if (!screenRect(bb, own)) own = {0, 0, f.w, f.h};
+        const PixelRect g = on_ground & own;
+        if (!g.empty()) corner(g.x0, g.y0, g.x1, g.y1);
+        if (bounded && !swept.intersects(bb)) continue;
+        PixelRect r;
+        if (!bounded || !screenRect(swept.intersection(bb), r)) r = own;
+        if (!r.empty()) corner(r.x0, r.y0, r.x1, r.y1);
+      }
+    }
+  }
+  for (const Box& b : boxes) {
+    for (int i = 0; i < 8; ++i)  // the edges
+      for (int k = 0; k < 3; ++k)
+        if (!(i & (1 << k))) band(b.p[size_t(i)], b.p[size_t(i | (1 << k))]);
+    for (int k = 0; k < 3; ++k)
+      for (int s = -1; s <= 1; s += 2) {
+        const std::array<int, 4> face = boxFace(k, s);
+        const std::array<Eigen::Vector3d, 4> q{b.p[size_t(face[0])], b.p[size_t(face[1])], b.p[size_t(face[2])],
+                                               b.p[size_t(face[3])]};
+        Eigen::Vector3d p0, p1;
+        if (params.ground && quadCut(q, 2, params.ground_height, p0, p1)) band(p0, p1);  // the ground
+        for (const Box& o : boxes) {  // another box: this face against each of its faces
+          if (&o == &b || !part_bounds[size_t(b.part)].intersects(part_bounds[size_t(o.part)])) continue;
+          std::array<Eigen::Vector3d, 4> local;
+          for (int i = 0; i < 4; ++i) local[size_t(i)] = (o.inverse * q[size_t(i)].homogeneous()).head<3>();
+          for (int ko = 0; ko < 3; ++ko)
+            for (int so = -1; so <= 1; so += 2)
+              if (quadCut(local, ko, double(so), p0, p1) && clipToFace(p0, p1, ko))
+                band((o.model * p0.homogeneous()).head<3>(), (o.model * p1.homogeneous()).head<3>());
+        }
+      }
+  }
 }
 
 void Renderer::Impl::mergeRects(std::vector<PixelRect>& rects, int64_t slack) {

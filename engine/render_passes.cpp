@@ -827,55 +827,68 @@ void Renderer::Impl::antiAliasPass(const FramePlan& f) {
     glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
     return;
   }
-  // The filter runs only over the screen rectangles of what was drawn (objects, hair, lines),
-  // grown by its reach; the background and the ground around them have no edges to smooth (the
-  // checker is box-filtered, the shadows soft) and are copied as they are. Then the frame stays
-  // where it is and is filtered in place there, from a copy of the rectangles and of what the
-  // filter's taps reach around them (5 px: 4 along an edge, and a texel of bilinear footprint),
-  // instead of a copy of the whole frame.
+  // The filter classifies and filters only where an edge can be (postFilterRegions): inside the
+  // screen rectangles of what was drawn (objects, hair, lines), grown by its reach, and of a box
+  // only in bands along its edges and where it meets the ground or another box; the background
+  // and the ground around them have no edges to smooth (the checker is box-filtered, the shadows
+  // soft), nor has a box's flat face. The frame stays where it is and is filtered in place, from
+  // a copy of the rectangles and of what the filter's taps reach around them (5 px: 4 along an
+  // edge, and a texel of bilinear footprint), or of the whole frame when they are not bounded.
   const bool boxed = screenRects(f.view_proj, w, h, rects);
-  GLuint source = main_color_tex;
-  output_fbo = resolve_fbo;
-  if (boxed) {
-    glBindFramebuffer(GL_READ_FRAMEBUFFER, msaa_fbo);
-    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, post_src_fbo);
-    constexpr int kReach = 6;
-    for (const PixelRect& r : rects) {
-      const int x0 = std::max(r.x0 - kReach, 0), y0 = std::max(r.y0 - kReach, 0);
-      const int x1 = std::min(r.x1 + kReach, w), y1 = std::min(r.y1 + kReach, h);
-      glBlitFramebuffer(x0, y0, x1, y1, x0, y0, x1, y1, GL_COLOR_BUFFER_BIT, GL_NEAREST);
-    }
-    source = post_src_tex;
-    output_fbo = msaa_fbo;  // its depth buffer is done with: the filter marks edges in it
-    glEnable(GL_SCISSOR_TEST);
+  if (!boxed) rects.assign(1, PixelRect{0, 0, w, h});
+  // The shadow taps' reach, as groundShadowPass takes it (ground_shadow_reach).
+  const int gs = std::max(64, shadow_size / kGroundShadowDivisor);
+  const double ground_texel = frustum.texel_world * double(shadow_size) / double(gs);
+  postFilterRegions(f, boxed, kMaxPenumbraMetres + 12.0 * frustum.texel_world + 3.0 * ground_texel, post_tris);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, msaa_fbo);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, post_src_fbo);
+  constexpr int kReach = 6;
+  for (const PixelRect& r : rects) {
+    const int x0 = std::max(r.x0 - kReach, 0), y0 = std::max(r.y0 - kReach, 0);
+    const int x1 = std::min(r.x1 + kReach, w), y1 = std::min(r.y1 + kReach, h);
+    glBlitFramebuffer(x0, y0, x1, y1, x0, y0, x1, y1, GL_COLOR_BUFFER_BIT, GL_NEAREST);
   }
+  output_fbo = msaa_fbo;  // its depth buffer is done with: the filter marks edges in it
   glBindFramebuffer(GL_FRAMEBUFFER, output_fbo);
   glActiveTexture(GL_TEXTURE3);
-  glBindTexture(GL_TEXTURE_2D, source);
+  glBindTexture(GL_TEXTURE_2D, post_src_tex);
   glActiveTexture(GL_TEXTURE0);
   for (GLuint p : {prog_post_class, prog_post}) {
     glUseProgram(p);
     glUniform1i(loc(p, "u_frame"), 3);
     glUniform2f(loc(p, "u_texel"), 1.0f / float(w), 1.0f / float(h));
   }
-  // The first pass copies the pixels without an edge, the filter runs on the others (where
-  // rectangles overlap, the second one's passes redo the same pixels with the same result). In
-  // place (boxed), the pixels without an edge are already there: the first pass only marks the
-  // edges (it writes no colour), and a pixel the filter changed is an edge again for the next
-  // rectangle, filtered again from the same copy.
-  if (boxed) {
-    for (const PixelRect& r : rects) {
-      glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
-      drawFullscreenTwoPass(empty_vao, prog_post_class, prog_post, false);
-    }
-  } else {
-    drawFullscreenTwoPass(empty_vao, prog_post_class, prog_post);
-  }
+  // The regions' triangles in the debug lines' buffer (drawn by now). Two passes over them, all
+  // at depth 0 (glDepthRange): the first writes no colour and discards the pixels without an
+  // edge, so that only the edges take depth 0; the second, the filter, runs under depth test
+  // EQUAL, which llvmpipe's early depth test limits to those pixels (llvmpipe runs both sides of
+  // a shader's branches, but skips blocks the early test rejects). Where regions overlap, a pixel
+  // is classified and filtered again from the same copy, with the same result. A pixel of the
+  // objects exactly at depth 0 (on the near plane) would be filtered too: the filter passes
+  // pixels without an edge through unchanged.
+  glBindVertexArray(lines_vao);
+  glBindBuffer(GL_ARRAY_BUFFER, lines_vbo);
+  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(post_tris.size() * sizeof(LineVertex)), post_tris.data(), GL_STREAM_DRAW);
+  const GLsizei n = GLsizei(post_tris.size());
+  glEnable(GL_DEPTH_TEST);
+  glDepthRange(0.0, 0.0);
+  glDepthMask(GL_TRUE);
+  glDepthFunc(GL_ALWAYS);
+  glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  glUseProgram(prog_post_class);
+  glDrawArrays(GL_TRIANGLES, 0, n);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glDepthMask(GL_FALSE);
+  glDepthFunc(GL_EQUAL);
+  glUseProgram(prog_post);
+  glDrawArrays(GL_TRIANGLES, 0, n);
+  glDepthMask(GL_TRUE);
+  glDepthFunc(GL_LESS);
+  glDepthRange(0.0, 1.0);
+  glBindVertexArray(0);
   glActiveTexture(GL_TEXTURE3);
   glBindTexture(GL_TEXTURE_2D, 0);  // the main pass renders into it next frame
   glActiveTexture(GL_TEXTURE0);
-  glEnable(GL_DEPTH_TEST);
-  glDisable(GL_SCISSOR_TEST);
 }
 
 }  // namespace ponyhop

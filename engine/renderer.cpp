@@ -110,7 +110,7 @@ bool Renderer::Impl::buildPrograms(std::string* err) {
       {&prog_lines, "lines", kLinesVS, kLinesFS},
       {&prog_mesh_depth, "mesh depth", kMeshVS, kDepthFS},
       {&prog_hull_depth, "hull depth", kCapsuleVS, kDepthFS},
-      {&prog_post, "post AA", kFullscreenVS, kPostAaFS},
+      {&prog_post, "post AA", kPostVS, kPostAaFS},
       {&prog_bg, "background", kFullscreenVS, kBackgroundFS},
       {&prog_hair, "hair", kHairVS, kHairFS},
       {&prog_hair_depth, "hair depth", kHairVS, kDepthFS},
@@ -131,7 +131,7 @@ bool Renderer::Impl::buildPrograms(std::string* err) {
       {&prog_ground_near_lit, "ground (near, lit)", kGroundVS, kGroundFS, kGroundNearLitDefine},
       {&prog_ground_lit, "ground (lit)", kGroundVS, kGroundFS, kGroundLitDefine},
       {&prog_ground_shadow_class, "ground shadow (classify)", kFullscreenVS, kGroundShadowFS, kShadowClassifyDefine},
-      {&prog_post_class, "post AA (edges)", kFullscreenVS, kPostAaFS, kPostEdgesDefine}};
+      {&prog_post_class, "post AA (edges)", kPostVS, kPostAaFS, kPostEdgesDefine}};
   for (const P& p : progs) {
     if (!(*p.out = buildProgram(p.name, p.vs, p.fs, err, p.defines))) return false;
     programs.push_back(*p.out);
@@ -276,6 +276,7 @@ void Renderer::drawMesh(MeshHandle h, const Eigen::Affine3d& model, const Materi
   d.normal = model.linear().inverse().transpose().cast<float>();
   d.material = m;
   d.hair = hair;
+  d.part = int(I.part_bounds.size());
   I.mesh_draws.push_back(d);
   I.part_bounds.push_back(transformedBounds(model, I.meshes[size_t(h.id)].bbox));
   I.draw_bounds.extend(I.part_bounds.back());

@@ -66,6 +66,7 @@ std::pair<size_t, GLsizei> shadowRange(const GpuMesh& g, const Eigen::Matrix4f& 
 
 struct MeshDraw {
   int mesh;
+  int part = -1;  // its index in Renderer::Impl::part_bounds
   Eigen::Matrix4f model;
   Eigen::Matrix3f normal;
   Material material;
@@ -176,8 +177,8 @@ struct Renderer::Impl {
   // texture (read by the post-process filter, or directly without anti-aliasing).
   GLuint msaa_fbo = 0, msaa_color = 0, msaa_depth = 0, main_color_tex = 0;
   GLuint resolve_fbo = 0, resolve_color = 0;
-  GLuint resolve_depth = 0;  // marks the pixels the post filter has an edge at
-  GLuint output_fbo = 0;     // where the finished frame is: resolve_fbo; msaa_fbo without AA or filtered in place
+  GLuint resolve_depth = 0;  // unused since the post filter works in place (session 28); kept with resolve_fbo
+  GLuint output_fbo = 0;     // where the finished frame is: resolve_fbo (MSAA); msaa_fbo without AA or post-filtered
   // The post filter over rectangles: a copy of them (and around them, as far as its taps reach)
   // that it reads while it writes the main target in place (antiAliasPass).
   GLuint post_src_fbo = 0, post_src_tex = 0;
@@ -257,8 +258,17 @@ struct Renderer::Impl {
       return {std::min(x0, o.x0), std::min(y0, o.y0), std::max(x1, o.x1), std::max(y1, o.y1)};
     }
   };
-  bool screenRects(const Eigen::Matrix4f& view_proj, int w, int h, std::vector<PixelRect>& rects) const;
-  std::vector<PixelRect> rects;  // scratch of the passes (kept: no allocation per frame)
+  // skip: parts (by part_bounds index) left out; none when there are too many parts to box alone.
+  bool screenRects(const Eigen::Matrix4f& view_proj, int w, int h, std::vector<PixelRect>& rects,
+                   const std::vector<char>* skip = nullptr) const;
+  // Where the post filter classifies and filters (antiAliasPass): triangles in normalized device
+  // coordinates (LineVertex, colour unused) covering each draw's screen rectangle, but for a box
+  // (drawBox) only bands along the lines where its picture can have an edge; the whole frame when
+  // !boxed. Pixels outside them are left as they are.
+  // shadow_reach: the farthest a shadow's penumbra reaches past its caster's, in light-space metres.
+  void postFilterRegions(const FramePlan& f, bool boxed, double shadow_reach, std::vector<LineVertex>& tris) const;
+  std::vector<LineVertex> post_tris;  // scratch of antiAliasPass
+  std::vector<PixelRect> rects;       // scratch of the passes (kept: no allocation per frame)
   // The texel boxes of a size x size texture over the light's square that hold everything drawn
   // into the shadow map, seen along the light, each grown by `margin_m` metres: one per caster
   // (a mesh draw, the hulls, the hair). Empty when nothing casts.

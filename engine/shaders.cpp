@@ -843,7 +843,8 @@ void main() {
 // corner lumas and the pixel is replaced by bilinear taps along that edge; a 4-tap average is
 // kept when it stays inside the local luma range, a 2-tap one otherwise (so thin features are
 // not washed out). Flat pixels pass through unchanged. With POST_EDGES: the first of two passes,
-// which copies the flat pixels and marks the others (depth 0) for the second, the filter.
+// which discards the flat pixels, so that only the others get the region's depth (a mark for the
+// second, the filter, under depth test EQUAL). Both read a copy of the frame and write it in place.
 const char* const kPostAaFS = R"GLSL(
 out vec4 o_color;
 uniform sampler2D u_frame;
@@ -863,10 +864,10 @@ void main() {
   float lMin = min(lM, min(min(lNW, lNE), min(lSW, lSE)));
   float lMax = max(lM, max(max(lNW, lNE), max(lSW, lSE)));
 #ifdef POST_EDGES
-  // First pass: the pixels without an edge are final; the others are marked for the filter.
-  bool edge = !(lMax - lMin < max(1.0 / 24.0, lMax * 0.125));
+  // First pass: the pixels without an edge are final (the same test as below); the others keep
+  // this fragment's depth, the mark.
+  if (lMax - lMin < max(1.0 / 24.0, lMax * 0.125)) discard;
   o_color = cM;
-  gl_FragDepth = edge ? 0.0 : 1.0;
   return;
 #endif
   if (lMax - lMin < max(1.0 / 24.0, lMax * 0.125)) {  // no edge here
@@ -891,6 +892,13 @@ void main() {
   vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
   gl_Position = vec4(p, 1.0, 1.0);
 }
+)GLSL";
+
+// The post filter's regions (Renderer::Impl::postFilterRegions): triangles already in normalized
+// device coordinates, at the far plane (glDepthRange places them).
+const char* const kPostVS = R"GLSL(
+layout(location = 0) in vec3 a_pos;
+void main() { gl_Position = vec4(a_pos.xy, 1.0, 1.0); }
 )GLSL";
 
 // ---------------------------------------------------------------------------------------------

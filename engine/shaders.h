@@ -10,6 +10,7 @@ extern const char* const kMeshVS;        // meshes and boxes: per-draw model mat
 extern const char* const kMeshMatVS;     // meshes with their own colours/texture coordinates
 extern const char* const kCapsuleVS;     // spheres / capsules / tapered capsules: one instanced draw
 extern const char* const kFullscreenVS;  // full-screen triangle from gl_VertexID (ground shadow pass)
+extern const char* const kPostVS;        // the post filter's regions: triangles given in NDC
 extern const char* const kGroundUpVS;    // the whole viewport as a strip of 4, with its texture coordinates
 extern const char* const kGridVS;        // the ground as a screen grid lit at its corners (gridGroundPass)
 extern const char* const kGroundVS;      // the ground square (a strip of 4 from gl_VertexID)
@@ -48,7 +49,7 @@ inline constexpr const char* kGroundLitDefine = "#define GROUND_LIT 1\n";
 inline constexpr const char* kGridShadowedDefine = "#define GRID_SHADOWED 1\n";
 // Compiled into kGroundShadowFS: the classifying first pass (shadowClass()).
 inline constexpr const char* kShadowClassifyDefine = "#define SHADOW_CLASSIFY 1\n";
-// Compiled into kPostAaFS: its first pass (flat pixels copied, edges marked).
+// Compiled into kPostAaFS: its first pass (flat pixels discarded, edges marked by their depth).
 inline constexpr const char* kPostEdgesDefine = "#define POST_EDGES 1\n";
 
 // Compiles and links "#version 330 core" + the given sources. Returns 0 and fills `err` (with the

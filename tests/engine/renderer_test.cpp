@@ -4,10 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <numeric>
 
@@ -982,4 +984,107 @@ TEST(Renderer, EachCastersShadowOnTheGridGroundKeepsItsSoftEdge) {
   std::printf("around the plate's shadow: %d pixels, %d over 6 levels, worst %.1f\n", n, far_off, worst);
   ASSERT_GT(n, 2000);
   EXPECT_LE(far_off, 3) << "the grid ground's shadow of the box is cut short of its soft edge";
+}
+
+// The post filter runs on a box only in bands along the lines where its picture can jump (its
+// edges, where it meets the ground, where it cuts into another box) and where another draw's
+// shadow can fall on it (postFilterRegions). Against the filter over the whole frame (a debug line
+// behind the eye leaves the frame unbounded): the same pixels around the boxes. Part 1, no key
+// light: a slab sunk into the ground at a slant and a box cutting into it at a skew; part 2, with
+// shadows: a sphere just above a slab, its shadow on the slab's top.
+TEST(Renderer, ThePostFilterFiltersEveryEdgeOfABox) {
+  REQUIRE_GL();
+  const Camera cam = cameraAt(Eigen::Vector3d(0.6, -1.1, 0.7), Eigen::Vector3d(0.0, 0.05, 0.0), 40.0);
+  const Eigen::Vector3d back = cam.eye + (cam.eye - cam.target).normalized();
+  const auto whole = [&](Renderer& r) { r.drawLine(back, back + Eigen::Vector3d(0.0, 0.0, 0.1), {1.0f, 0.0f, 0.0f}); };
+  Material dark = red(), yellow;
+  dark.color = Eigen::Vector3f(0.35f, 0.12f, 0.1f);
+  yellow.color = Eigen::Vector3f(0.95f, 0.85f, 0.3f);
+  const Eigen::Affine3d slab = Eigen::Translation3d(0.0, 0.0, 0.01) * Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(0.15, Eigen::Vector3d::UnitX());
+  const Eigen::Affine3d cutter = Eigen::Translation3d(0.05, 0.05, 0.06) *
+                                 Eigen::AngleAxisd(-0.4, Eigen::Vector3d::UnitZ()) *
+                                 Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitY());
+  const Eigen::Vector3d slab_half(0.25, 0.18, 0.05), cutter_half(0.05, 0.05, 0.09);
+  const auto boxes = [&](Renderer& r) {
+    r.drawBox(slab, slab_half, dark);
+    r.drawBox(cutter, cutter_half, yellow);
+  };
+  // The pixels (x right, y down) around the boxes: their corners' box, grown by 8 px.
+  const auto around = [&](const std::vector<Eigen::Affine3d>& poses, const std::vector<Eigen::Vector3d>& halves) {
+    Eigen::AlignedBox2d b;
+    for (size_t k = 0; k < poses.size(); ++k)
+      for (int i = 0; i < 8; ++i)
+        b.extend(project(cam, poses[k] * Eigen::Vector3d(i & 1 ? halves[k].x() : -halves[k].x(),
+                                                         i & 2 ? halves[k].y() : -halves[k].y(),
+                                                         i & 4 ? halves[k].z() : -halves[k].z())));
+    b.min().array() -= 8.0;
+    b.max().array() += 8.0;
+    return b;
+  };
+  // Pixels of `a` and `b` that differ inside `box` (and where `keep` says), and of `a` and `raw`.
+  const auto count = [](const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, const Eigen::AlignedBox2d& box,
+                        const std::function<bool(int, int)>& keep) {
+    int n = 0;
+    for (int y = std::max(0, int(box.min().y())); y < std::min(kH, int(box.max().y()) + 1); ++y)
+      for (int x = std::max(0, int(box.min().x())); x < std::min(kW, int(box.max().x()) + 1); ++x) {
+        const size_t i = (size_t(y) * kW + size_t(x)) * 4;
+        if (keep(x, y) && !std::equal(a.begin() + std::ptrdiff_t(i), a.begin() + std::ptrdiff_t(i + 4),
+                                      b.begin() + std::ptrdiff_t(i)))
+          ++n;
+      }
+    return n;
+  };
+  const auto all = [](int, int) { return true; };
+  {
+    LightParams unlit = testLight();
+    unlit.intensity = 0.0;
+    const auto banded = render(cam, testParams(), boxes, unlit);
+    const auto full = render(
+        cam, testParams(), [&](Renderer& r) { boxes(r), whole(r); }, unlit);
+    const auto raw = render(cam, testParams(1), boxes, unlit);
+    save("post_boxes.png", banded);
+    const Eigen::AlignedBox2d box = around({slab, cutter}, {slab_half, cutter_half});
+    const int filtered = count(full, raw, box, all), missed = count(banded, full, box, all);
+    std::printf("boxes: %d pixels filtered over the whole frame, %d of them missed\n", filtered, missed);
+    EXPECT_GT(filtered, 300);
+    EXPECT_EQ(missed, 0) << "an edge of a box left unfiltered";
+  }
+  {
+    const Eigen::Affine3d top = Eigen::Translation3d(0.0, 0.1, 0.04) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ());
+    const Eigen::Vector3d top_half(0.3, 0.22, 0.04), ball(0.1, 0.0, 0.3);
+    const auto scene = [&](Renderer& r) {
+      r.drawBox(top, top_half, Material{});
+      r.drawSphere(ball, 0.04, red());
+    };
+    const auto banded = render(cam, testParams(), scene);
+    const auto full = render(cam, testParams(), [&](Renderer& r) { scene(r), whole(r); });
+    const auto raw = render(cam, testParams(1), scene);
+    save("post_box_shadow.png", banded);
+    // The slab's top face 10 px inside its outline (none of its own edges, nor its shadow on the
+    // ground), away from the sphere's own rectangle (26 px from its centre).
+    std::array<Eigen::Vector2d, 4> c;
+    for (int i = 0; i < 4; ++i)
+      c[size_t(i)] = project(cam, top * Eigen::Vector3d((i == 1 || i == 2) ? top_half.x() : -top_half.x(),
+                                                        i >= 2 ? top_half.y() : -top_half.y(), top_half.z()));
+    const Eigen::Vector2d ball_px = project(cam, ball);
+    const auto inside = [&](int x, int y) {
+      const Eigen::Vector2d p(x, y);
+      if ((p - ball_px).norm() < 26.0) return false;
+      double sign = 0.0;
+      for (int i = 0; i < 4; ++i) {
+        const Eigen::Vector2d a = c[size_t(i)], b = c[size_t((i + 1) % 4)], e = (b - a).normalized();
+        const double d = e.x() * (p - a).y() - e.y() * (p - a).x();  // signed distance to the side
+        if (sign == 0.0) sign = d > 0 ? 1.0 : -1.0;
+        if (d * sign < 10.0) return false;
+      }
+      return true;
+    };
+    const Eigen::AlignedBox2d box = around({top}, {top_half});
+    const int filtered = count(full, raw, box, inside), missed = count(banded, full, box, inside);
+    std::printf("a sphere's shadow on a box: %d pixels filtered over the whole frame, %d of them missed\n", filtered,
+                missed);
+    EXPECT_GT(filtered, 20);
+    EXPECT_EQ(missed, 0) << "the edge of a shadow on a box left unfiltered";
+  }
 }
