@@ -48,33 +48,64 @@ Eigen::Matrix4d ortho(double l, double r, double b, double t, double n, double f
   return m;
 }
 
+// The light-space grid, in texels, that the frustum's centre keeps to when there are still
+// casters (fitLightFrustum), and its depth range's in parts of the extent.
+constexpr double kStillCentreTexels = 32.0;
+constexpr double kStillDepthParts = 8.0;
+
 // Fits the light's orthographic box to the casters and to their shadows on the ground: the points
 // are the bounds' corners and those corners pushed along the light onto the ground (z = ground_z).
 // The square extent
 // is rounded up to steps of 2^(1/4) and the centre snapped to whole texels, so that a moving scene
 // changes the shadow map's texel grid rarely and only by whole texels (no crawling edges).
+// With still casters (`still` not empty: drawn with Renderer::drawMesh's `still`), the box is
+// placed so that it holds still while the moving casters stay well inside it, and the shadow map's
+// still part can be kept between frames (render_passes.cpp): the same extent and texel lattice,
+// but the centre on a coarser grid of the lattice (kStillCentreTexels), the grid point nearest the
+// still casters' centre that keeps every caster at least the margin below inside (else the centre
+// as without), and the near and far planes snapped outward to a grid of extent / kStillDepthParts
+// (a coarser depth step: the range is at most a quarter of the extent longer).
 LightFrustum fitLightFrustum(const Eigen::Vector3d& dir, const Eigen::AlignedBox3d& casters, int size,
-                             double softness_texels, double ground_z) {
+                             double softness_texels, double ground_z,
+                             const Eigen::AlignedBox3d& still = Eigen::AlignedBox3d()) {
   LightFrustum lf;
   const Eigen::Matrix4d V = lookAlong(dir);
   const Eigen::Matrix3d R = V.block<3, 3>(0, 0);
-  Eigen::AlignedBox3d ls;  // light space
-  for (int i = 0; i < 8; ++i) {
-    const Eigen::Vector3d c = casters.corner(Eigen::AlignedBox3d::CornerType(i));
-    ls.extend(R * c);
-    const double above = c.z() - ground_z;
-    if (dir.z() < -1e-3 && above > 0.0) ls.extend(R * (c + dir * (above / -dir.z())));
-  }
+  const auto lightSpace = [&](const Eigen::AlignedBox3d& box) {
+    Eigen::AlignedBox3d ls;
+    for (int i = 0; i < 8; ++i) {
+      const Eigen::Vector3d c = box.corner(Eigen::AlignedBox3d::CornerType(i));
+      ls.extend(R * c);
+      const double above = c.z() - ground_z;
+      if (dir.z() < -1e-3 && above > 0.0) ls.extend(R * (c + dir * (above / -dir.z())));
+    }
+    return ls;
+  };
+  const Eigen::AlignedBox3d ls = lightSpace(casters);
   double extent = std::max(ls.sizes().x(), ls.sizes().y());
   extent = std::max(extent, 1e-3);
   // Margin for the PCF kernel and the normal offset (a few texels).
+  const double margin = extent * (2.0 + softness_texels) / double(size);  // a side
   extent *= 1.0 + (4.0 + 2.0 * softness_texels) / double(size);
   extent = std::pow(2.0, std::ceil(std::log2(extent) * 4.0) / 4.0);
   const double texel = extent / double(size);
   Eigen::Vector2d center = 0.5 * (ls.min().head<2>() + ls.max().head<2>());
   center = (center / texel).array().round().matrix() * texel;
   const double depth_margin = 0.05 * std::max(ls.sizes().z(), extent) + 1e-3;
-  const double n = -ls.max().z() - depth_margin, f = -ls.min().z() + depth_margin;
+  double n = -ls.max().z() - depth_margin, f = -ls.min().z() + depth_margin;
+  if (!still.isEmpty()) {
+    const Eigen::Vector2d anchor = lightSpace(still).center().head<2>();
+    const double g = kStillCentreTexels * texel;
+    for (int k = 0; k < 2; ++k) {
+      // The centres (grid points) that keep [ls.min, ls.max] at least `margin` inside.
+      const double lo = std::ceil((ls.max()(k) + margin - 0.5 * extent) / g);
+      const double hi = std::floor((ls.min()(k) - margin + 0.5 * extent) / g);
+      if (lo <= hi) center(k) = std::clamp(std::round(anchor(k) / g), lo, hi) * g;
+    }
+    const double gz = extent / kStillDepthParts;
+    n = std::floor(n / gz) * gz;
+    f = std::ceil(f / gz) * gz;
+  }
   const Eigen::Matrix4d P =
       ortho(center.x() - extent / 2, center.x() + extent / 2, center.y() - extent / 2, center.y() + extent / 2, n, f);
   lf.view_proj = P * V;
@@ -161,7 +192,8 @@ void Renderer::Impl::planShadows(FramePlan& f) const {
   // above 4096 matched down to 512 reaches it)
   f.softness_texels =
       std::min(std::clamp(light.shadow_softness, 0.0, 8.0) * double(unmatched) / double(f.shadow_size), 8.0);
-  f.frustum = fitLightFrustum(f.light_dir, f.casters, f.shadow_size, f.softness_texels, params.ground_height);
+  f.frustum = fitLightFrustum(f.light_dir, f.casters, f.shadow_size, f.softness_texels, params.ground_height,
+                              have_shadow_bounds ? Eigen::AlignedBox3d() : still_bounds);
 }
 
 // The ground's fade, the near and far planes, the camera's and the light's matrices.
@@ -564,7 +596,7 @@ void Renderer::Impl::mergeRects(std::vector<PixelRect>& rects, int64_t slack) {
 // (one box for all of them: a body's hulls touch), the hair by its vertices and ribbon half widths
 // (one box). A texel outside every box, grown by the farthest any tap reaches, sees no blocker.
 void Renderer::Impl::casterTexelBoxes(const Eigen::Matrix4d& light_vp, double margin_m, int size,
-                                      std::vector<PixelRect>& out) const {
+                                      std::vector<PixelRect>& out, bool moving_only) const {
   out.clear();
   // For the orthographic light, light-space x and y are affine in the point and metres map to
   // the same number of texels on both axes.
@@ -590,7 +622,7 @@ void Renderer::Impl::casterTexelBoxes(const Eigen::Matrix4d& light_vp, double ma
   };
   for (const MeshDraw& d : mesh_draws) {
     const Eigen::AlignedBox3d& b = meshes[size_t(d.mesh)].bbox;
-    if (b.isEmpty()) continue;
+    if (b.isEmpty() || (moving_only && d.still)) continue;
     const Eigen::Matrix4d M = d.model.cast<double>();
     for (int i = 0; i < 8; ++i) add((M * b.corner(Eigen::AlignedBox3d::CornerType(i)).homogeneous()).head<3>(), 0.0);
     emit();

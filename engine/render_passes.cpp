@@ -159,8 +159,8 @@ void Renderer::Impl::drawMaterialMeshes(GLuint p, bool hair, bool hair_only) {
   glCullFace(GL_BACK);
 }
 
-void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj,
-                                  bool depth_only) {
+void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj, bool depth_only,
+                                  int still) {
   if (!mesh_draws.empty()) {
     glUseProgram(mesh_prog);
     if (depth_only) setMat4(mesh_prog, "u_viewProj", view_proj);
@@ -170,6 +170,7 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
       const GpuMesh& g = meshes[size_t(d.mesh)];
       // Below, with their own program; the skin of a hair region's mesh (GpuMesh::skin_count) here.
       if (g.materials && !depth_only && g.skin_count == 0) continue;
+      if (still >= 0 && d.still != (still == 1)) continue;
       glUniformMatrix4fv(l_model, 1, GL_FALSE, d.model.data());
       glUniformMatrix3fv(l_normal, 1, GL_FALSE, d.normal.data());
       const Eigen::Vector3f c = srgbToLinear(d.material.color);
@@ -193,7 +194,7 @@ void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eige
     drawMaterialMeshes(split ? prog_mesh_hair_split : prog_mesh_hair, true, false);
     drawMaterialMeshes(split ? prog_hair_only_split : prog_hair_only, true, true);
   }
-  if (!hulls.empty()) {
+  if (!hulls.empty() && still != 1) {
     glUseProgram(hull_prog);
     if (depth_only) setMat4(hull_prog, "u_viewProj", view_proj);
     glBindVertexArray(depth_only ? hull_shadow_vao : hull_vao);
@@ -286,9 +287,35 @@ void Renderer::Impl::uploadFrameData() {
 // ---------------------------------------------------------------------------------------------
 // [SECTION] Shadow passes: the shadow map, the ground's shadow texture
 
-// Depth of the casters seen from the key light, into the map of the plan's size.
+// What the shadow map's and the ground shadow texture's kept texels depend on besides the moving
+// casters (Impl::shadow_tex_key): the light's frustum, the map's and the ground texture's sizes,
+// the filter's radius, draft, the ground's height and every still draw (its mesh and model
+// matrix). Empty without still draws: nothing is kept.
+std::vector<float> Renderer::Impl::shadowKey(const FramePlan& f, int ground_size) const {
+  std::vector<float> k;
+  for (const MeshDraw& d : mesh_draws) {
+    if (!d.still) continue;
+    k.push_back(float(d.mesh));
+    k.insert(k.end(), d.model.data(), d.model.data() + 16);
+  }
+  if (k.empty()) return k;
+  const Eigen::Matrix4f lvp = f.frustum.view_proj.cast<float>();
+  k.insert(k.end(), lvp.data(), lvp.data() + 16);
+  for (double v : {double(f.shadow_size), double(ground_size), f.softness_texels, double(f.draft),
+                   f.frustum.texel_world, f.frustum.depth_range, params.ground_height})
+    k.push_back(float(v));
+  return k;
+}
+
+// Depth of the casters seen from the key light, into the map of the plan's size. With still draws
+// whose key (shadowKey) is the last frame's, their depth is in the map already: only the texels
+// the last frame's moving casters were drawn into are cleared and the still draws drawn again
+// there (scissored), then the moving casters everywhere. The depth test keeps the nearest
+// fragment whatever the order, so the map is the one drawn anew, bit for bit.
 void Renderer::Impl::shadowMapPass(const FramePlan& f) {
+  const int old_size = shadow_size;
   ensureShadowMap(f.shadow_size);
+  if (shadow_size != old_size) shadow_tex_key.clear();  // a new texture
   softness_texels = f.softness_texels;
   frustum = f.frustum;
   glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
@@ -296,25 +323,53 @@ void Renderer::Impl::shadowMapPass(const FramePlan& f) {
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glDepthMask(GL_TRUE);
-  glClear(GL_DEPTH_BUFFER_BIT);
+  std::vector<float> key = shadowKey(f, std::max(64, shadow_size / kGroundShadowDivisor));
+  shadow_kept = !key.empty() && key == shadow_tex_key;
   glDisable(GL_CULL_FACE);  // open meshes cast from both sides (closed ones cull their back faces)
   // Slope-scaled bias in the depth pass (steep surfaces need more), plus the small normal offset
   // at lookup in the shader: together no acne, and the offset is too small to detach contact
   // shadows (no peter-panning).
   glEnable(GL_POLYGON_OFFSET_FILL);
   glPolygonOffset(1.5f, 2.0f);
-  drawGeometry(prog_mesh_depth, prog_hull_depth, f.light_vp, true);
+  if (!shadow_kept) {
+    glClear(GL_DEPTH_BUFFER_BIT);
+    drawGeometry(prog_mesh_depth, prog_hull_depth, f.light_vp, true, key.empty() ? -1 : 1);
+  } else if (!shadow_moving.empty()) {
+    glEnable(GL_SCISSOR_TEST);
+    for (const PixelRect& r : shadow_moving) {
+      glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+      glClear(GL_DEPTH_BUFFER_BIT);
+      drawGeometry(prog_mesh_depth, prog_hull_depth, f.light_vp, true, 1);
+    }
+    glDisable(GL_SCISSOR_TEST);
+  }
+  if (!key.empty()) drawGeometry(prog_mesh_depth, prog_hull_depth, f.light_vp, true, 0);
   drawHairs(f.light_vp, true, f.light_dir);
   glDisable(GL_POLYGON_OFFSET_FILL);
+  // What the next frame clears: the moving casters' texels (two texels more: the rasterized
+  // triangles lie inside their boxes), in as few rectangles as cost no more texels.
+  shadow_tex_key = std::move(key);
+  shadow_moving.clear();
+  if (!shadow_tex_key.empty()) {
+    casterTexelBoxes(f.frustum.view_proj, 2.0 * f.frustum.texel_world, shadow_size, shadow_moving, true);
+    mergeRects(shadow_moving, 0);
+  }
 }
 
 // The ground's shadow once per frame into a texture over the shadow map's square, instead of a
 // blocker search + PCF per screen pixel of ground: the ground receives nothing else, and a soft
 // shadow needs far fewer texels than the screen has ground pixels.
+//
+// Kept between frames with the shadow map's still part (shadowMapPass): a texel outside every
+// moving caster's box, this frame's and the last one's, grown by the taps' reach, sees only the
+// still casters' depth, the same as in the last frame, so it keeps its value; only the texels in
+// those boxes are cleared and shaded again.
 void Renderer::Impl::groundShadowPass(const FramePlan& f) {
   const LightFrustum& lf = frustum;
   const int gs = std::max(64, shadow_size / kGroundShadowDivisor);
+  const int old_size = ground_shadow_size;
   ensureGroundShadow(gs);
+  if (ground_shadow_size != old_size) ground_shadow_key.clear();  // a new texture
   glBindFramebuffer(GL_FRAMEBUFFER, ground_shadow_fbo);
   glViewport(0, 0, gs, gs);
   bindShadowTextures(false);  // the ground texture is the target here
@@ -327,13 +382,33 @@ void Renderer::Impl::groundShadowPass(const FramePlan& f) {
   // the box around them empty.
   glClearColor(1.0f, 0.0f, 0.0f, 1.0f);
   glDepthMask(GL_TRUE);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   const double ground_texel = lf.texel_world * double(shadow_size) / double(gs);
   const double reach = kMaxPenumbraMetres + 12.0 * lf.texel_world + 2.0 * ground_texel;
   casterTexelBoxes(lf.view_proj, reach, gs, ground_shadow_boxes);
   ground_shadow_light = f.light_dir;
   ground_shadow_reach = reach + ground_texel;  // and a texel of the bilinear lookup's footprint
   ground_shadow_boxed = !ground_shadow_boxes.empty();
+  // Kept: the texels to draw again are those in this frame's or the last frame's moving boxes.
+  const bool kept = shadow_kept && ground_shadow_key == shadow_tex_key;
+  std::vector<PixelRect> moving, redo, shade, outside;
+  if (!shadow_tex_key.empty()) casterTexelBoxes(lf.view_proj, reach, gs, moving, true);
+  PixelRect all{0, 0, gs, gs};
+  if (kept) {
+    redo = moving;
+    redo.insert(redo.end(), ground_shadow_moving.begin(), ground_shadow_moving.end());
+    partitionRects(redo, all, shade, outside);
+    redo.swap(shade);
+    glEnable(GL_SCISSOR_TEST);
+    for (const PixelRect& r : redo) {
+      glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+      glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    }
+    glDisable(GL_SCISSOR_TEST);
+  } else {
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  }
+  ground_shadow_key = shadow_tex_key;
+  ground_shadow_moving = std::move(moving);
   if (ground_shadow_boxed) {
     const Eigen::Matrix4f lvp = lf.view_proj.cast<float>();
     for (GLuint p : {prog_ground_shadow_class, prog_ground_shadow}) {
@@ -345,8 +420,14 @@ void Renderer::Impl::groundShadowPass(const FramePlan& f) {
     glEnable(GL_SCISSOR_TEST);
     // The blocker search writes the fully lit and umbra texels, the filter runs on the
     // others (draft has no search: one pass); over the boxes' union cut into disjoint pieces.
-    std::vector<PixelRect> outside;
-    partitionRects(ground_shadow_boxes, PixelRect{0, 0, gs, gs}, rects, outside);
+    partitionRects(ground_shadow_boxes, all, rects, outside);
+    if (kept) {  // only where they meet the pieces drawn again (both disjoint)
+      shade.clear();
+      for (const PixelRect& a : rects)
+        for (const PixelRect& b : redo)
+          if (!(a & b).empty()) shade.push_back(a & b);
+      rects.swap(shade);
+    }
     for (const PixelRect& b : rects) {
       glScissor(b.x0, b.y0, b.x1 - b.x0, b.y1 - b.y0);
       drawFullscreenTwoPass(empty_vao, f.draft ? 0 : prog_ground_shadow_class, prog_ground_shadow);

@@ -252,6 +252,7 @@ void Renderer::beginFrame(const Camera& camera, const LightParams& light, const 
   I.params = params;
   I.have_shadow_bounds = false;
   I.draw_bounds.setEmpty();
+  I.still_bounds.setEmpty();
   I.part_bounds.clear();
   I.mesh_draws.clear();
   I.hulls.clear();
@@ -267,7 +268,8 @@ void Renderer::setShadowBounds(const Eigen::AlignedBox3d& b) {
   impl_->shadow_bounds = b;
 }
 
-void Renderer::drawMesh(MeshHandle h, const Eigen::Affine3d& model, const Material& m, const ScalpHair& hair) {
+void Renderer::drawMesh(MeshHandle h, const Eigen::Affine3d& model, const Material& m, const ScalpHair& hair,
+                        bool still) {
   Impl& I = *impl_;
   if (h.id < 0 || h.id >= int(I.meshes.size()) || I.meshes[size_t(h.id)].vao == 0) return;
   MeshDraw d;
@@ -277,15 +279,17 @@ void Renderer::drawMesh(MeshHandle h, const Eigen::Affine3d& model, const Materi
   d.material = m;
   d.hair = hair;
   d.part = int(I.part_bounds.size());
+  d.still = still;
   I.mesh_draws.push_back(d);
   I.part_bounds.push_back(transformedBounds(model, I.meshes[size_t(h.id)].bbox));
   I.draw_bounds.extend(I.part_bounds.back());
+  if (still) I.still_bounds.extend(I.part_bounds.back());
 }
 
-void Renderer::drawBox(const Eigen::Affine3d& pose, const Eigen::Vector3d& half, const Material& m) {
+void Renderer::drawBox(const Eigen::Affine3d& pose, const Eigen::Vector3d& half, const Material& m, bool still) {
   Eigen::Affine3d T = pose;
   T.linear() = pose.linear() * half.asDiagonal();
-  drawMesh(MeshHandle{impl_->box_mesh}, T, m);
+  drawMesh(MeshHandle{impl_->box_mesh}, T, m, ScalpHair{}, still);
 }
 
 void Renderer::drawTaperedCapsule(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, double r0, double r1,
@@ -364,6 +368,7 @@ void Renderer::endFrame() {
     I.beginPass(Impl::kShadowPass);
     I.shadowMapPass(f);
     stats_.shadow_size = I.shadow_size;
+    stats_.shadow_kept = I.shadow_kept;
     if (I.params.ground) I.groundShadowPass(f);
     I.endPass(Impl::kShadowPass, stats_);
   }

@@ -69,6 +69,9 @@ struct RenderStats {
   bool post_aa = false;       // the post-process anti-aliasing filter ran
   bool draft = false;         // RenderQuality::Draft
   int shadow_size = 0;        // the shadow map's side this frame (texels; 0: no shadow pass)
+  // The still draws' depth in the shadow map, and the ground's shadow texture away from the
+  // moving casters, kept from the last frame (drawMesh's `still`; docs/RENDERING.md, Shadows).
+  bool shadow_kept = false;
 };
 
 // The shadow map's sides over several frames (RenderStats::shadow_size), for summaries.
@@ -104,10 +107,15 @@ class Renderer {
   // Optional: fit the shadow frustum to these bounds instead of the draw list's (a fixed box
   // keeps shadow texels still while things move; the draw list's bounds are the tightest).
   void setShadowBounds(const Eigen::AlignedBox3d& bounds);
-  // `hair`: how a mesh with a hair region draws it (a mesh without one ignores it).
-  void drawMesh(MeshHandle mesh, const Eigen::Affine3d& model, const Material& m, const ScalpHair& hair = {});
+  // `hair`: how a mesh with a hair region draws it (a mesh without one ignores it). `still`: the
+  // scene says this draw does not move (static geometry, e.g. terrain): the light's frustum is
+  // placed around the still draws, and their depth in the shadow map and their shadow on the
+  // ground are kept from frame to frame while the frustum and every still draw stay the same (a
+  // draw that changes is found and drawn anew: the flag only makes keeping likely).
+  void drawMesh(MeshHandle mesh, const Eigen::Affine3d& model, const Material& m, const ScalpHair& hair = {},
+                bool still = false);
   void drawSphere(const Eigen::Vector3d& center, double radius, const Material& m);
-  void drawBox(const Eigen::Affine3d& pose, const Eigen::Vector3d& half_extents, const Material& m);
+  void drawBox(const Eigen::Affine3d& pose, const Eigen::Vector3d& half_extents, const Material& m, bool still = false);
   void drawCapsule(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, double radius, const Material& m);
   // Convex hull of the spheres (p0, r0), (p1, r1): smooth rounded ends; consecutive segments that
   // share an end point and radius join without a gap or a crease.

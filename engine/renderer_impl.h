@@ -71,6 +71,7 @@ struct MeshDraw {
   Eigen::Matrix3f normal;
   Material material;
   ScalpHair hair;
+  bool still = false;  // Renderer::drawMesh's `still`
 };
 
 // Per-instance data of the hull (sphere/capsule) draw: matches the attributes of kCapsuleVS.
@@ -215,6 +216,7 @@ struct Renderer::Impl {
   bool have_shadow_bounds = false;
   Eigen::AlignedBox3d shadow_bounds;
   Eigen::AlignedBox3d draw_bounds;
+  Eigen::AlignedBox3d still_bounds;              // the still mesh draws' (Renderer::drawMesh)
   std::vector<Eigen::AlignedBox3d> part_bounds;  // one box per mesh, hull and hair draw (screenRects)
   std::vector<MeshDraw> mesh_draws;
   std::vector<HullInstance> hulls;
@@ -272,7 +274,9 @@ struct Renderer::Impl {
   // The texel boxes of a size x size texture over the light's square that hold everything drawn
   // into the shadow map, seen along the light, each grown by `margin_m` metres: one per caster
   // (a mesh draw, the hulls, the hair). Empty when nothing casts.
-  void casterTexelBoxes(const Eigen::Matrix4d& light_vp, double margin_m, int size, std::vector<PixelRect>& out) const;
+  // `moving_only`: the boxes of every caster but the still mesh draws.
+  void casterTexelBoxes(const Eigen::Matrix4d& light_vp, double margin_m, int size, std::vector<PixelRect>& out,
+                        bool moving_only = false) const;
   // Merges rectangles while the box around a pair adds no more pixels than the two overlap or
   // than `slack`.
   static void mergeRects(std::vector<PixelRect>& rects, int64_t slack);
@@ -294,6 +298,18 @@ struct Renderer::Impl {
   Eigen::Vector3d ground_shadow_light = Eigen::Vector3d(0, 0, -1);
   double ground_shadow_reach = 0.0;
   void casterCorners(std::vector<std::array<Eigen::Vector3d, 8>>& out) const;
+
+  // Kept between frames (shadowMapPass, groundShadowPass): while the still draws and everything
+  // the two textures depend on stay the same (shadowKey(): the frustum, the sizes, the still draws;
+  // empty without still draws), shadow_tex keeps their depth and the last frame's moving casters'
+  // depth lies in its texels shadow_moving (cleared and drawn anew there), and the ground's shadow
+  // texture is shaded again only over its texels near this frame's and the last frame's moving
+  // casters (ground_shadow_moving). shadow_tex_key / ground_shadow_key: the key each texture was
+  // drawn under (empty: nothing kept). shadow_kept: this frame kept them (RenderStats).
+  std::vector<float> shadowKey(const FramePlan& f, int ground_size) const;
+  std::vector<float> shadow_tex_key, ground_shadow_key;
+  std::vector<PixelRect> shadow_moving, ground_shadow_moving;
+  bool shadow_kept = false;
 
   // The ground kept between frames (halfGroundPass, upsampleGroundPass). Outside the pixel
   // rectangle its shadow texture shades (groundShadowRect), the ground and the background depend
@@ -342,7 +358,10 @@ struct Renderer::Impl {
   // clip: the pixels of the vw x vh viewport to draw (the ground kept outside them).
   void drawGroundParts(const FramePlan& f, int vw, int vh, const PixelRect& clip);
   void upsampleGround(const FramePlan& f, const PixelRect& clip, RenderStats& st);
-  void drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj, bool depth_only);
+  // still: depth only, which mesh draws (-1 every one, 0 the moving, 1 the still; the hulls with
+  // the moving).
+  void drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj, bool depth_only,
+                    int still = -1);
   // prog: the program for the main pass's camera-facing ribbons (0: prog_hair).
   void drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only, const Eigen::Vector3d& light_dir, GLuint prog = 0);
   void drawMaterialMeshes(GLuint prog, bool hair, bool hair_only);

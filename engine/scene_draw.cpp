@@ -96,7 +96,7 @@ void SceneDraw::draw(const Sim& sim, Renderer& renderer, const Scene& drawing, u
       Eigen::Affine3d pose = Eigen::Affine3d::Identity();
       pose.translate(box.offset);
       pose.rotate(box.rotation);
-      renderer.drawBox(pose, box.half_extents, stone);
+      renderer.drawBox(pose, box.half_extents, stone, /*still=*/true);  // the terrain never moves
     }
   }
   for (size_t i = 0; i < sim.hoppers().size() && !(hide & kHopper); ++i) {

@@ -1088,3 +1088,68 @@ TEST(Renderer, ThePostFilterFiltersEveryEdgeOfABox) {
     EXPECT_EQ(missed, 0) << "the edge of a shadow on a box left unfiltered";
   }
 }
+
+// The still draws' shadows kept between frames (Renderer::drawMesh's `still`; shadowMapPass,
+// groundShadowPass): a frame that keeps them must be the frame drawn anew, pixel for pixel. A
+// moving sphere moves over still boxes (its last depth and its last shadow on the ground must go);
+// then the key must see an edit of a still box (under fixed shadow bounds, so that the light's
+// frustum stays the same), a turned light and another map size: each of those frames is drawn
+// anew. "Anew": after a frame without still draws, which keeps nothing.
+TEST(Renderer, TheStillShadowsKeptBetweenFramesAreTheShadowsDrawnAnew) {
+  REQUIRE_GL();
+  Renderer& r = *gl().renderer;
+  const Camera cam = testCamera();
+  const RenderParams rp = testParams(1);
+  struct Frame {
+    Eigen::Vector3d sphere;
+    double post_x = 0.0;  // the still post moved along x
+    LightParams light;
+    bool bounds = false;  // fixed shadow bounds
+    bool kept = false;    // expected: the still shadows kept from the frame before
+  };
+  const auto scene = [](const Frame& f) {
+    return [f](Renderer& rr) {
+      if (f.bounds)
+        rr.setShadowBounds(Eigen::AlignedBox3d(Eigen::Vector3d(-0.6, -0.6, 0.0), Eigen::Vector3d(0.6, 0.6, 0.7)));
+      rr.drawBox(Eigen::Affine3d(Eigen::Translation3d(-0.2, 0.1, 0.02)), Eigen::Vector3d(0.25, 0.25, 0.02), red(),
+                 true);
+      rr.drawBox(Eigen::Affine3d(Eigen::Translation3d(0.5 + f.post_x, 0.3, 0.3)), Eigen::Vector3d(0.04, 0.04, 0.3),
+                 red(), true);
+      rr.drawSphere(f.sphere, 0.08, red());
+    };
+  };
+  LightParams base = testLight();
+  base.shadow_match = false;
+  LightParams smaller = base;
+  smaller.shadow_size = 512;
+  LightParams turned = smaller;
+  turned.direction = Eigen::Vector3d(-0.45, 0.6, -1.0);
+  // a over the slab, b and c beside it (their shadows on the ground).
+  const Eigen::Vector3d a(-0.15, 0.1, 0.2), b(0.2, -0.1, 0.2), c(0.25, -0.15, 0.22);
+  const std::vector<Frame> frames = {
+      {b, 0.0, base, false, false},   {c, 0.0, base, false, true},     {b, 0.0, base, false, true},
+      {b, 0.0, base, true, false},    {a, 0.0, base, true, true},      {a, 0.01, base, true, false},
+      {c, 0.01, base, true, true},    {c, 0.01, smaller, true, false}, {a, 0.01, smaller, true, true},
+      {a, 0.01, turned, true, false},
+  };
+  const auto onlySphere = [](Renderer& rr) { rr.drawSphere(Eigen::Vector3d(0.0, 0.0, 0.2), 0.08, red()); };
+  std::vector<std::vector<uint8_t>> kept;
+  std::vector<bool> was_kept;
+  render(cam, rp, onlySphere, base);
+  for (const Frame& f : frames) {
+    kept.push_back(render(cam, rp, scene(f), f.light));
+    was_kept.push_back(r.stats().shadow_kept);
+  }
+  for (size_t i = 0; i < frames.size(); ++i) {
+    render(cam, rp, onlySphere, frames[i].light);
+    const auto anew = render(cam, rp, scene(frames[i]), frames[i].light);
+    EXPECT_FALSE(r.stats().shadow_kept);
+    EXPECT_EQ(was_kept[i], frames[i].kept) << "frame " << i;
+    ASSERT_EQ(kept[i].size(), anew.size());
+    size_t differ = 0;
+    for (size_t k = 0; k < anew.size(); ++k) differ += kept[i][k] != anew[k];
+    EXPECT_EQ(differ, 0u) << "frame " << i << ": the kept shadows differ from the shadows drawn anew";
+  }
+  save("still_kept_c.png", kept[1]);
+  save("still_kept_a.png", kept[4]);
+}
