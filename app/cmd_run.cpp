@@ -17,6 +17,7 @@ void addRunCommand(CLI::App& app, int& exit_code) {
     WindowOptions window;
     std::string size;
     bool no_vsync = false;
+    std::string present = "rects";
   };
   auto args = std::make_shared<RunArgs>();
   auto* cmd = app.add_subcommand("run", "Play a scene in a window with the tuning panel");
@@ -31,11 +32,19 @@ void addRunCommand(CLI::App& app, int& exit_code) {
   cmd->add_option("--draft-scale", args->window.draft_scale,
                   "Resolution of the moving (draft) view per direction, upscaled (default 0.5; 1: full)")
       ->check(CLI::Range(0.25, 1.0));
+  cmd->add_option("--present", args->present,
+                  "How frames reach the screen: rects (only the rectangles that changed, by "
+                  "GLX_MESA_copy_sub_buffer where the GLX has it; else swap) or swap (the whole frame)")
+      ->check(CLI::IsMember({"rects", "swap"}));
+  cmd->add_option("--idle-wait", args->window.idle_wait,
+                  "Seconds a frame after one that changed nothing waits for an event (default 0.1; 0: poll)")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->callback([args, &exit_code] {
     exit_code = runCommand("run", [&] {
       const Scene scene = args->scene.load();
       WindowOptions o = args->window;
       o.vsync = !args->no_vsync;
+      o.copy_rects = args->present == "rects";
       if (!args->size.empty()) {
         char tail = 0;
         if (std::sscanf(args->size.c_str(), "%dx%d%c", &o.width, &o.height, &tail) != 2 || o.width < 320 ||

@@ -27,6 +27,13 @@ UiGl::~UiGl() {
 void UiGl::setPanelCache(bool on) {
   cache_on_ = on;
   panel_valid_ = false;
+  known_ = false;
+}
+
+void UiGl::setTargetKeeps(bool on) {
+  keeps_ = on;
+  panel_valid_ = false;
+  known_ = false;
 }
 
 void UiGl::newFrame() { ImGui_ImplOpenGL3_NewFrame(); }
@@ -65,7 +72,8 @@ struct PartialDrawData {
 
 }  // namespace
 
-bool UiGl::composeCached(const Renderer& renderer, unsigned fbo, int width, int height, int scene_width, Times* times) {
+bool UiGl::composeSaving(const Renderer& renderer, unsigned fbo, int width, int height, int scene_width, bool scene_new,
+                         Times* times) {
   ImDrawData* d = ImGui::GetDrawData();
   if (!d || !d->Valid || scene_width <= 0 || scene_width >= width || renderer.width() <= 0) return false;
   const float sx = d->FramebufferScale.x > 0.0f ? d->FramebufferScale.x : 1.0f;
@@ -77,12 +85,12 @@ bool UiGl::composeCached(const Renderer& renderer, unsigned fbo, int width, int 
     for (const ImDrawCmd& c : l->CmdBuffer)
       if (c.UserCallback) return false;
     if (l == background) {
-      // The overlay is drawn over the scene after the panel's copy: it must stay off the panel.
+      // The overlay is drawn over the scene apart from the panel: it must stay off the panel.
       for (const ImDrawVert& v : l->VtxBuffer)
         if (v.pos.x > panel_x0) return false;
       overlay.lists.push_back(l);
     } else {
-      // Drawn into the panel's texture, clipped to the panel's columns: nothing may reach left of them.
+      // Drawn into the panel's columns (or texture) alone: nothing may reach left of them.
       for (const ImDrawCmd& c : l->CmdBuffer) {
         // What a command can touch: its vertices' extent within its clip rectangle (a window's
         // frame is drawn under the whole display's clip rectangle, inside the window).
@@ -96,103 +104,150 @@ bool UiGl::composeCached(const Renderer& renderer, unsigned fbo, int width, int 
   }
   const ImVec4 bg = ImGui::GetStyle().Colors[ImGuiCol_WindowBg];
 
-  // What the panel's columns are drawn from, whole.
-  sig_.clear();
-  appendValue(sig_, width);
-  appendValue(sig_, scene_width);
-  appendValue(sig_, height);
-  appendValue(sig_, panel_x0);
-  appendValue(sig_, d->DisplaySize);
-  appendValue(sig_, d->FramebufferScale);
-  appendValue(sig_, bg);
-  for (const ImDrawList* l : panel.lists) {
-    appendValue(sig_, l->VtxBuffer.Size);
-    appendValue(sig_, l->IdxBuffer.Size);
-    appendValue(sig_, l->CmdBuffer.Size);
-    append(sig_, l->VtxBuffer.Data, size_t(l->VtxBuffer.Size));
-    append(sig_, l->IdxBuffer.Data, size_t(l->IdxBuffer.Size));
-    for (const ImDrawCmd& c : l->CmdBuffer) {  // field by field: the struct's padding is not data
-      appendValue(sig_, c.ClipRect);
-      appendValue(sig_, c.TextureId);
-      appendValue(sig_, c.VtxOffset);
-      appendValue(sig_, c.IdxOffset);
-      appendValue(sig_, c.ElemCount);
+  // What the panel's columns, and the view's overlay, are drawn from, whole.
+  const auto signature = [&](std::vector<uint8_t>& sig, const std::vector<ImDrawList*>& lists) {
+    sig.clear();
+    appendValue(sig, width);
+    appendValue(sig, scene_width);
+    appendValue(sig, height);
+    appendValue(sig, panel_x0);
+    appendValue(sig, d->DisplayPos);
+    appendValue(sig, d->DisplaySize);
+    appendValue(sig, d->FramebufferScale);
+    appendValue(sig, bg);
+    for (const ImDrawList* l : lists) {
+      appendValue(sig, l->VtxBuffer.Size);
+      appendValue(sig, l->IdxBuffer.Size);
+      appendValue(sig, l->CmdBuffer.Size);
+      append(sig, l->VtxBuffer.Data, size_t(l->VtxBuffer.Size));
+      append(sig, l->IdxBuffer.Data, size_t(l->IdxBuffer.Size));
+      for (const ImDrawCmd& c : l->CmdBuffer) {  // field by field: the struct's padding is not data
+        appendValue(sig, c.ClipRect);
+        appendValue(sig, c.TextureId);
+        appendValue(sig, c.VtxOffset);
+        appendValue(sig, c.IdxOffset);
+        appendValue(sig, c.ElemCount);
+      }
     }
-  }
+  };
+  signature(sig_, panel.lists);
+  signature(overlay_now_, overlay.lists);
+
+  // What changed since the last compose into this target.
+  const bool same_target =
+      known_ && known_fbo_ == fbo && known_w_ == width && known_h_ == height && known_scene_w_ == scene_width;
+  const bool panel_changed = !panel_valid_ || sig_ != panel_sig_;
+  Damage damage;
+  damage.view = !same_target || scene_new || overlay_now_ != overlay_sig_;
+  damage.panel = !same_target || panel_changed;
+  if (!keeps_ && damage.any()) damage.view = damage.panel = true;  // the target is not kept: a frame is drawn whole
 
   const auto t0 = Clock::now();
   glDisable(GL_SCISSOR_TEST);
   // The scene's one copy: it covers the view's columns, so no clear under it.
-  renderer.blitTo(fbo, scene_width, height);
+  if (damage.view) renderer.blitTo(fbo, scene_width, height);
   if (times) {
     glFinish();
     times->copy_ms = msSince(t0);
   }
   const auto t1 = Clock::now();
-  const bool redraw = !panel_valid_ || sig_ != panel_sig_;
-  if (redraw) {
-    // The texture is the whole frame's size and ImGui draws into it with the frame's own
-    // projection, so the panel's pixels are rasterized exactly as in the frame (a texture of the
-    // panel's columns alone, drawn with its origin moved, came out up to 1 in 255 off on a few
-    // hundred edge pixels). It is cleared whole (llvmpipe's fastest fill, and only when the panel
-    // changed) and only the panel's columns are copied.
-    if (panel_w_ != width || panel_h_ != height || !panel_tex_) {
-      if (!panel_tex_) glGenTextures(1, &panel_tex_);
-      if (!panel_fbo_) glGenFramebuffers(1, &panel_fbo_);
-      glBindTexture(GL_TEXTURE_2D, panel_tex_);
-      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, width, height, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
-      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-      glBindTexture(GL_TEXTURE_2D, 0);
-      glBindFramebuffer(GL_FRAMEBUFFER, panel_fbo_);
-      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, panel_tex_, 0);
-      if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
-        glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-        panel_valid_ = false;
-        return false;  // (nothing drawn into fbo but the scene, which the direct path draws again)
-      }
-      panel_w_ = width;
-      panel_h_ = height;
-    }
-    glBindFramebuffer(GL_FRAMEBUFFER, panel_fbo_);
+  bool drawn = false;
+  if (damage.panel && keeps_) {
+    // The panel straight into the target's columns, over its background: ImGui draws it with the
+    // frame's own projection, as in a frame drawn whole.
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
     glViewport(0, 0, width, height);
-    glClearColor(bg.x, bg.y, bg.z, 1.0f);  // the panel's background, as the direct path's clear
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(scene_width, 0, width - scene_width, height);
+    glClearColor(bg.x, bg.y, bg.z, 1.0f);
     glClear(GL_COLOR_BUFFER_BIT);
+    glDisable(GL_SCISSOR_TEST);
     panel.make(*d, d->DisplayPos.x, d->DisplaySize.x);
     ImGui_ImplOpenGL3_RenderDrawData(&panel.data);
+    glDisable(GL_SCISSOR_TEST);
     panel_sig_.swap(sig_);
     panel_valid_ = true;
+    drawn = true;
     if (times) {
       glFinish();
       times->panel_redraw_ms = msSince(t1);
     }
+  } else if (damage.panel) {
+    if (panel_changed) {
+      // The texture is the whole frame's size and ImGui draws into it with the frame's own
+      // projection, so the panel's pixels are rasterized exactly as in the frame (a texture of the
+      // panel's columns alone, drawn with its origin moved, came out up to 1 in 255 off on a few
+      // hundred edge pixels). It is cleared whole (llvmpipe's fastest fill, and only when the panel
+      // changed) and only the panel's columns are copied.
+      if (panel_w_ != width || panel_h_ != height || !panel_tex_) {
+        if (!panel_tex_) glGenTextures(1, &panel_tex_);
+        if (!panel_fbo_) glGenFramebuffers(1, &panel_fbo_);
+        glBindTexture(GL_TEXTURE_2D, panel_tex_);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, width, height, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glBindTexture(GL_TEXTURE_2D, 0);
+        glBindFramebuffer(GL_FRAMEBUFFER, panel_fbo_);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, panel_tex_, 0);
+        if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+          glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+          panel_valid_ = false;
+          return false;  // (nothing drawn into fbo but the scene, which the direct path draws again)
+        }
+        panel_w_ = width;
+        panel_h_ = height;
+      }
+      glBindFramebuffer(GL_FRAMEBUFFER, panel_fbo_);
+      glViewport(0, 0, width, height);
+      glClearColor(bg.x, bg.y, bg.z, 1.0f);  // the panel's background, as the direct path's clear
+      glClear(GL_COLOR_BUFFER_BIT);
+      panel.make(*d, d->DisplayPos.x, d->DisplaySize.x);
+      ImGui_ImplOpenGL3_RenderDrawData(&panel.data);
+      panel_sig_.swap(sig_);
+      panel_valid_ = true;
+      drawn = true;
+      if (times) {
+        glFinish();
+        times->panel_redraw_ms = msSince(t1);
+      }
+    }
+    glDisable(GL_SCISSOR_TEST);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, panel_fbo_);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo);
+    glBlitFramebuffer(scene_width, 0, width, height, scene_width, 0, width, height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
   }
-  last_panel_drawn_ = redraw;
-  glDisable(GL_SCISSOR_TEST);
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, panel_fbo_);
-  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo);
-  glBlitFramebuffer(scene_width, 0, width, height, scene_width, 0, width, height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
   glBindFramebuffer(GL_FRAMEBUFFER, fbo);
   glViewport(0, 0, width, height);
-  if (!overlay.lists.empty()) {
+  if (damage.view && !overlay.lists.empty()) {
     overlay.make(*d, d->DisplayPos.x, d->DisplaySize.x);
     ImGui_ImplOpenGL3_RenderDrawData(&overlay.data);
   }
   if (times) {
     glFinish();
     times->panel_ms = msSince(t1);
-    times->panel_drawn = redraw;
+    times->panel_drawn = drawn;
   }
+  overlay_sig_.swap(overlay_now_);
+  known_ = true;
+  known_fbo_ = fbo;
+  known_w_ = width;
+  known_h_ = height;
+  known_scene_w_ = scene_width;
+  last_panel_drawn_ = drawn;
+  last_damage_ = damage;
   return true;
 }
 
-void UiGl::compose(const Renderer& renderer, unsigned fbo, int width, int height, int scene_width, Times* times) {
+UiGl::Damage UiGl::compose(const Renderer& renderer, unsigned fbo, int width, int height, int scene_width, Times* times,
+                           bool scene_new) {
   if (cache_on_) {
-    if (composeCached(renderer, fbo, width, height, scene_width, times)) return;
+    if (composeSaving(renderer, fbo, width, height, scene_width, scene_new, times)) return last_damage_;
     panel_valid_ = false;
+    known_ = false;  // drawn whole below, without the records: the next frame is drawn whole too
   }
   if (times) times->panel_drawn = true;
   last_panel_drawn_ = true;
+  last_damage_ = Damage{};
   const auto t0 = Clock::now();
   glBindFramebuffer(GL_FRAMEBUFFER, fbo);
   glViewport(0, 0, width, height);
@@ -216,6 +271,7 @@ void UiGl::compose(const Renderer& renderer, unsigned fbo, int width, int height
     glFinish();
     times->panel_ms = msSince(t1);
   }
+  return last_damage_;
 }
 
 OffscreenTarget::OffscreenTarget(int width, int height) : width_(width), height_(height) {

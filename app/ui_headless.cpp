@@ -82,10 +82,11 @@ HeadlessUi::~HeadlessUi() {
   imgui_.reset();
 }
 
-void HeadlessUi::setWindowSavings(bool on) {
+void HeadlessUi::setWindowSavings(bool on, bool target_keeps) {
   savings_ = on;
   reuse_.forget();
   gl_->setPanelCache(on);
+  gl_->setTargetKeeps(on && target_keeps);
 }
 
 void HeadlessUi::frame(const UiInput& in_raw, std::vector<uint8_t>* rgba, std::optional<double> sim_time) {
@@ -110,7 +111,8 @@ void HeadlessUi::frame(const UiInput& in_raw, std::vector<uint8_t>* rgba, std::o
     renderSceneView(*renderer_, *sim_, panel_->camera(), layout_.sceneWidth(), layout_.height, quality);
     last_rendered_ = true;
   }
-  gl_->compose(*renderer_, target_->fbo(), layout_.width, layout_.height, layout_.sceneWidth());
+  gl_->compose(*renderer_, target_->fbo(), layout_.width, layout_.height, layout_.sceneWidth(), nullptr,
+               last_rendered_);
   if (rgba) target_->readPixels(*rgba);
   panel_->setRenderMs(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
 }

@@ -57,8 +57,16 @@ class HeadlessUi {
   // The window's two savings, off by default (`render --ui` and the snapshots draw every frame in
   // full): a still final view is re-presented instead of rendered again (ViewReuse), and the panel
   // is drawn into its own texture only when it changed (UiGl::setPanelCache). Tests turn them on
-  // to check that a frame made with them is the frame made without.
-  void setWindowSavings(bool on);
+  // to check that a frame made with them is the frame made without. `target_keeps`: the offscreen
+  // target is drawn as the window's back buffer is when it is presented by rectangle copies
+  // (UiGl::setTargetKeeps: only what changed is drawn into it), else as when it is swapped.
+  void setWindowSavings(bool on, bool target_keeps = false);
+  // What the last frame drew into the target (with the savings: possibly nothing).
+  UiGl::Damage lastDamage() const { return gl_->lastDamage(); }
+  // The target the frames are composed into, and telling the compositor that its pixels are not
+  // known any more (tests draw over it, as an expose or a resize would lose the window's).
+  unsigned targetFbo() const { return target_->fbo(); }
+  void forgetTarget() { gl_->forgetTarget(); }
   // Whether the last frame rendered the scene (false: the last final view, re-presented).
   bool lastViewRendered() const { return last_rendered_; }
   // Whether the last frame's panel was drawn by ImGui (false: the panel cache's texture, copied).

@@ -1,12 +1,16 @@
 // The window of `ponyhop run`: GLFW + the same Renderer as the headless path + the tuning panel.
 // GL is loaded through glfwGetProcAddress (never -lGL, see engine/gl_context.h). Each frame:
 // events -> panel (edits, playback: the physics steps at its own dt up to the new simulated
-// time, within a wall-time budget) -> scene render -> compose (scene blit + ImGui) -> swap. The run
-// prints each stage's mean per quality, the compose split into the scene's copy, the panel, the swap.
-// Two savings (docs/bench/render.md, session 27): a still final view whose inputs did not change
-// is re-presented, not rendered again (ViewReuse), and the panel is drawn into its own texture
-// only when its draw data changed, its running figures refreshed 4 times a second (UiGl's panel
-// cache, Panel::setReadoutRefresh); the panel's texture is copied to the screen every frame.
+// time, within a wall-time budget) -> scene render -> compose (scene blit + ImGui) -> present. The
+// run prints each stage's mean per quality, the compose split into the scene's copy, the panel,
+// the present. The savings (docs/bench/render.md, sessions 27 and 28): a still final view whose
+// inputs did not change is re-presented, not rendered again (ViewReuse); the panel's running
+// figures are refreshed 4 times a second (Panel::setReadoutRefresh); and where the GLX has
+// GLX_MESA_copy_sub_buffer (WindowPresenter) the back buffer keeps the frame, only what changed is
+// drawn into it (the view's columns, the panel's) and only those rectangles are pushed to the
+// screen, nothing at all when nothing changed, and the next frame waits for an event (idle_wait).
+// Without the extension the panel is drawn into its own texture only when it changed and copied,
+// the frame swapped whole when anything changed (UiGl's panel cache).
 #include <glad/gl.h>
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -23,6 +27,7 @@
 #include "app/ui_headless.h"
 #include "app/ui_sim.h"
 #include "app/ui_window.h"
+#include "app/window_present.h"
 #include "engine/frame_writer.h"
 #include "engine/gl_context.h"
 #include "engine/renderer.h"
@@ -62,6 +67,9 @@ struct KeyTrickle {
   }
 };
 KeyTrickle g_keys;
+bool g_exposed = false;  // the window asked to be drawn again (an expose): its pixels are lost
+
+void exposed(GLFWwindow*) { g_exposed = true; }
 
 void trickleKey(GLFWwindow* window, int key, int scancode, int action, int mods) {
   if (action == GLFW_RELEASE && std::find(g_keys.pressed.begin(), g_keys.pressed.end(), key) != g_keys.pressed.end()) {
@@ -97,12 +105,16 @@ struct StageSums {
   double physics = 0, panel = 0, render = 0, compose = 0;
   double copy = 0, panel_draw = 0, swap = 0;       // compose = copy + panel_draw + swap
   int rendered = 0, panel_drawn = 0;               // frames whose scene was rendered, whose panel ImGui drew
+  int unchanged = 0;                               // frames that drew and presented nothing
+  double unchanged_ms = 0;                         // their frame times
   double panel_drawn_ms = 0, panel_copied_ms = 0;  // the panel's time on those frames and on the others
   double panel_redraw = 0;                         // of panel_drawn_ms: ImGui into the panel's texture
   double rendered_ms = 0, reused_ms = 0;           // their frame times, and those of the re-presented ones
   void add(double frame, double physics_ms, double panel_ms, double render_ms, double compose_ms, const UiGl::Times& ct,
-           double swap_ms, bool scene_rendered) {
+           double swap_ms, bool scene_rendered, bool nothing_changed) {
     frame_ms.push_back(frame);
+    unchanged += nothing_changed;
+    if (nothing_changed) unchanged_ms += frame;
     rendered += scene_rendered;
     panel_drawn += ct.panel_drawn;
     (ct.panel_drawn ? panel_drawn_ms : panel_copied_ms) += ct.panel_ms;
@@ -131,6 +143,8 @@ struct FrameStats {
   int stops = 0, stops_final_at_once = 0;
   double first_still_ms = 0;
   std::vector<double> each_first_still_ms;
+  double waited_ms = 0;  // waiting for events after frames that changed nothing
+  int waits = 0;
 };
 
 }  // namespace
@@ -177,9 +191,15 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
     g_keys = KeyTrickle{};
     g_keys.window = window;
     glfwSetKeyCallback(window, trickleKey);  // in place of the backend's, which trickleKey calls
+    glfwSetWindowRefreshCallback(window, exposed);
+    g_exposed = false;
     {
+      const WindowPresenter presenter(window, o.copy_rects);
+      const double idle_wait = o.idle_wait;
+      std::fprintf(stderr, "run: frames are presented %s\n", presenter.how());
       UiGl gl;
       gl.setPanelCache(true);
+      gl.setTargetKeeps(presenter.copiesRects());
       ViewReuse reuse;
       Renderer renderer;
       if (!renderer.init(&err)) {
@@ -191,10 +211,22 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
       FrameStats stats;
       int frame = 0;
       bool last_draft = false;
+      bool last_unchanged = false;
       while (code == 0 && !glfwWindowShouldClose(window)) {
-        const auto t_frame = Clock::now();
+        auto t_frame = Clock::now();
+        const bool releases_waiting = !g_keys.deferred.empty();
         g_keys.nextFrame();
-        glfwPollEvents();
+        // Nothing changed on the last frame: ImGui has settled and nothing moves, so wait for the
+        // user instead of composing the same frame again (a release held back is shown at once).
+        // The wait is not the frame's time.
+        if (last_unchanged && idle_wait > 0.0 && !releases_waiting) {
+          glfwWaitEventsTimeout(idle_wait);
+          stats.waited_ms += msSince(t_frame);
+          ++stats.waits;
+          t_frame = Clock::now();
+        } else {
+          glfwPollEvents();
+        }
         int win_w = 0, win_h = 0, fb_w = 0, fb_h = 0;
         glfwGetWindowSize(window, &win_w, &win_h);
         glfwGetFramebufferSize(window, &fb_w, &fb_h);
@@ -231,19 +263,40 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
 
         t0 = Clock::now();
         UiGl::Times compose_times;
-        gl.compose(renderer, 0, fb_w, fb_h, scene_fb_w, &compose_times);
         const bool last = o.frames > 0 && frame + 1 >= o.frames;
+        // A swapped back buffer is not kept: the screenshot's frame is drawn whole.
+        if (g_exposed || (last && !o.screenshot.empty() && !presenter.copiesRects())) gl.forgetTarget();
+        g_exposed = false;
+        const UiGl::Damage damage = gl.compose(renderer, 0, fb_w, fb_h, scene_fb_w, &compose_times, rendered);
         if (last && !o.screenshot.empty() && !screenshot(o.screenshot, fb_w, fb_h)) code = 1;
         const auto t_swap = Clock::now();
-        glfwSwapBuffers(window);  // the back buffer to the X server (llvmpipe: a put-image)
+        // The back buffer to the X server (llvmpipe: a put-image): the rectangles that changed,
+        // or the whole frame by a swap; nothing when nothing changed.
+        const char* pushed = "none";
+        if (presenter.copiesRects()) {
+          if (damage.view && damage.panel) {
+            presenter.copyRect(0, 0, fb_w, fb_h);
+            pushed = "all";
+          } else if (damage.view) {
+            presenter.copyRect(0, 0, scene_fb_w, fb_h);
+            pushed = "view";
+          } else if (damage.panel) {
+            presenter.copyRect(scene_fb_w, 0, fb_w - scene_fb_w, fb_h);
+            pushed = "panel";
+          }
+        } else if (damage.any()) {
+          presenter.swap();
+          pushed = "all";
+        }
         const double swap_ms = msSince(t_swap);
         const double compose_ms = msSince(t0);
+        last_unchanged = !damage.any();
 
         const double frame_ms = msSince(t_frame);
         panel.setFrameMs(compose_ms, frame_ms);
         if (quality_log) {  // the scene rendered anew or re-presented; the panel drawn by ImGui or copied
-          std::fprintf(quality_log, " rendered=%d panel_drawn=%d\n", rendered ? 1 : 0,
-                       compose_times.panel_drawn ? 1 : 0);
+          std::fprintf(quality_log, " rendered=%d panel_drawn=%d pushed=%s\n", rendered ? 1 : 0,
+                       compose_times.panel_drawn ? 1 : 0, pushed);
           std::fflush(quality_log);
         }
         const bool draft = quality == RenderQuality::Draft;
@@ -258,8 +311,8 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
           // This frame's own physics time (the smoothed readout lags: the panel's share came out negative).
           const double physics_ms = sim.readouts().physics_frame_ms;
           for (StageSums* s : {&stats.all, draft ? &stats.draft : &stats.final})
-            s->add(frame_ms, physics_ms, build_ms - physics_ms, render_ms, compose_ms, compose_times, swap_ms,
-                   rendered);
+            s->add(frame_ms, physics_ms, build_ms - physics_ms, render_ms, compose_ms, compose_times, swap_ms, rendered,
+                   !damage.any());
         }
         ++frame;
         if (last) break;
@@ -286,18 +339,27 @@ int runWindow(const Scene& scene, const WindowOptions& o) {
                      s.frame_ms.size(), name, s.mean(), 1000.0 / s.mean(), s.render / n, s.compose / n, s.copy / n,
                      s.panel_draw / n, s.swap / n);
         const int reused = int(s.frame_ms.size()) - s.rendered;
-        std::fprintf(stderr,
-                     "run:   of which %d rendered (mean %.1f ms) and %d re-presented unchanged (mean %.1f ms); "
-                     "the panel drawn on %d (panel %.2f ms, of which ImGui into its texture %.2f), "
-                     "copied on %d (panel %.2f ms: its columns' copy and the view's overlay)\n",
-                     s.rendered, s.rendered ? s.rendered_ms / s.rendered : 0.0, reused,
-                     reused ? s.reused_ms / reused : 0.0, s.panel_drawn,
-                     s.panel_drawn ? s.panel_drawn_ms / s.panel_drawn : 0.0,
-                     s.panel_drawn ? s.panel_redraw / s.panel_drawn : 0.0, int(s.frame_ms.size()) - s.panel_drawn,
-                     s.frame_ms.size() > size_t(s.panel_drawn)
-                         ? s.panel_copied_ms / double(s.frame_ms.size() - size_t(s.panel_drawn))
-                         : 0.0);
+        std::fprintf(
+            stderr,
+            "run:   of which %d rendered (mean %.1f ms) and %d re-presented unchanged (mean %.1f ms); "
+            "the panel drawn on %d (panel %.2f ms, of which ImGui into %s %.2f), "
+            "%s on %d (panel %.2f ms: %s the view's overlay)\n",
+            s.rendered, s.rendered ? s.rendered_ms / s.rendered : 0.0, reused, reused ? s.reused_ms / reused : 0.0,
+            s.panel_drawn, s.panel_drawn ? s.panel_drawn_ms / s.panel_drawn : 0.0,
+            presenter.copiesRects() ? "the frame" : "its texture", s.panel_drawn ? s.panel_redraw / s.panel_drawn : 0.0,
+            presenter.copiesRects() ? "left as it was" : "copied", int(s.frame_ms.size()) - s.panel_drawn,
+            s.frame_ms.size() > size_t(s.panel_drawn)
+                ? s.panel_copied_ms / double(s.frame_ms.size() - size_t(s.panel_drawn))
+                : 0.0,
+            presenter.copiesRects() ? "when the view changed," : "its columns' copy and");
+        if (presenter.copiesRects() || s.unchanged > 0)
+          std::fprintf(stderr,
+                       "run:   %d frames changed nothing on the screen: nothing drawn or presented (mean %.1f ms)\n",
+                       s.unchanged, s.unchanged ? s.unchanged_ms / s.unchanged : 0.0);
       }
+      if (stats.waits > 0)
+        std::fprintf(stderr, "run: %d frames waited for an event after a frame that changed nothing: %.0f ms in all\n",
+                     stats.waits, stats.waited_ms);
       if (stats.stops > 0) {
         std::fprintf(stderr,
                      "run: the motion stopped %d times; the first still frame was a final picture rendered anew "

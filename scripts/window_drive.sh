@@ -9,7 +9,9 @@
 #
 # PLAY, STILL and DRAG (frames played before the pause, frames still before the drag, mouse moves
 # of the drag, one frame each) set the phases: defaults 6, 8, 6 (the window test); FRAMES (default
-# 90) must cover them. SHOT=FILE.png writes the last frame's screenshot. Needs xdotool.
+# 90) must cover them. SHOT=FILE.png writes the last frame's screenshot; IDLE_WAIT=SECONDS sets
+# `run --idle-wait` (how long a frame after one that changed nothing waits for an event; unset:
+# run's default, and no option passed, so older binaries take the same command). Needs xdotool.
 # tests/app/window_test.cpp runs it. The window prints the draft and final frame rates, how many
 # still frames were rendered or re-presented, and whether each first still frame was final.
 set -u
@@ -21,7 +23,8 @@ PLAY=${PLAY:-6}
 STILL=${STILL:-8}
 DRAG=${DRAG:-6}
 rm -f "$QLOG"
-"$EXE" run "$SCENE" --size 1280x720 --no-vsync --frames "$FRAMES" --quality-log "$QLOG" ${SHOT:+--screenshot "$SHOT"} &
+"$EXE" run "$SCENE" --size 1280x720 --no-vsync --frames "$FRAMES" --quality-log "$QLOG" ${SHOT:+--screenshot "$SHOT"} \
+  ${IDLE_WAIT:+--idle-wait "$IDLE_WAIT"} &
 pid=$!
 lines() { if [ -f "$QLOG" ]; then wc -l < "$QLOG"; else echo 0; fi; }
 # Waits until the window has shown $1 more frames (or gave up after 60 s, or exited).

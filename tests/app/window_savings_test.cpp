@@ -1,7 +1,9 @@
-// The window's two savings (issue 37 item 2), driven headless through HeadlessUi, which composes
+// The window's savings (issue 37 item 2), driven headless through HeadlessUi, which composes
 // with the window's own code (UiGl, ViewReuse): the panel drawn into its own texture only when it
-// changed, and a still final view re-presented instead of rendered again. Each must give the
-// frame the plain path gives, at once: an edit shows in the frame that made it.
+// changed, a still final view re-presented instead of rendered again, and a kept target (the
+// window's back buffer presented by rectangle copies) into which only what changed is drawn.
+// Each must give the frame the plain path gives, at once: an edit shows in the frame that made it.
+#include <glad/gl.h>
 #include <gtest/gtest.h>
 #include <imgui.h>
 
@@ -19,7 +21,9 @@ namespace {
 struct PanelScript {
   std::vector<std::vector<uint8_t>> frames;
   std::vector<bool> panel_drawn;
+  std::vector<UiGl::Damage> damage;
   std::vector<size_t> still, moved;  // frames after which nothing changed; frames that moved the slider
+  int playing = 2;                   // frames played before the pause
 
   void run(HeadlessUi& ui) {
     UiInput in;
@@ -27,6 +31,7 @@ struct PanelScript {
       frames.emplace_back();
       ui.frame(in, &frames.back());
       panel_drawn.push_back(ui.lastPanelDrawn());
+      damage.push_back(ui.lastDamage());
       in.wheel = 0.0f;
     };
     const auto moveTo = [&](const std::string& id, float dx = 0.0f) {
@@ -34,8 +39,8 @@ struct PanelScript {
       in.mouse_x = r.cx() + dx;
       in.mouse_y = r.cy();
     };
-    for (int i = 0; i < 2; ++i) frame();  // playing
-    moveTo("run");                        // pause with the button
+    for (int i = 0; i < playing; ++i) frame();
+    moveTo("run");  // pause with the button
     frame();
     in.mouse_down[0] = true;
     frame();
@@ -138,6 +143,79 @@ TEST(WindowSavings, AStillViewIsShownAgainUntilSomethingChanges) {
   ui.setWindowSavings(false);
   EXPECT_TRUE(frame(b));
   EXPECT_TRUE(sceneColumns(a) == sceneColumns(b)) << "the re-presented view is the view rendered anew";
+}
+
+// The kept target (the window's back buffer when GLX_MESA_copy_sub_buffer presents it): only the
+// view's columns or the panel's are drawn, and only when they changed; the frames are the plain
+// path's to the byte. A final-quality scene, so that a still view is re-presented.
+TEST(WindowSavings, AKeptTargetIsDrawnOnlyWhereTheFrameChanged) {
+  const Scene scene = smallChain();
+  PanelScript kept, plain;
+  kept.playing = plain.playing = 5;
+  {
+    HeadlessUi ui(scene, 640, 360);
+    ui.setWindowSavings(true, /*target_keeps=*/true);
+    ui.panel().setReadoutRefresh(0.25);  // as the window: the playing figures do not change every frame
+    kept.run(ui);
+  }
+  {
+    HeadlessUi ui(scene, 640, 360);
+    ui.panel().setReadoutRefresh(0.25);
+    plain.run(ui);
+  }
+  ASSERT_EQ(kept.frames.size(), plain.frames.size());
+  for (size_t i = 0; i < kept.frames.size(); ++i)
+    EXPECT_TRUE(kept.frames[i] == plain.frames[i]) << "frame " << i << " differs with the kept target";
+  int view_only = 0, panel_only = 0;
+  for (const UiGl::Damage& d : kept.damage) {
+    view_only += d.view && !d.panel;
+    panel_only += d.panel && !d.view;
+  }
+  EXPECT_GT(view_only, 0) << "the view changed under a still panel (playing between refreshes)";
+  EXPECT_GT(panel_only, 0) << "the panel changed over a still view (a hover, the pause)";
+  for (size_t i : kept.still) EXPECT_FALSE(kept.damage[i].any()) << "frame " << i << ": nothing changed, nothing drawn";
+  for (size_t i : kept.moved) EXPECT_TRUE(kept.damage[i].view && kept.damage[i].panel) << "frame " << i;
+}
+
+// A kept target's pixels are trusted until the compositor is told otherwise (an expose, a
+// resize): an unchanged frame draws nothing, even over what someone else drew there, and after
+// forgetTarget the frame is drawn whole again. The overlay is followed over a re-presented view.
+TEST(WindowSavings, AKeptTargetIsDrawnWholeWhenForgottenAndFollowsTheOverlay) {
+  HeadlessUi ui(smallChain(), 640, 360);
+  ui.setWindowSavings(true, /*target_keeps=*/true);
+  ui.sim().setRunning(false);
+  UiInput in;
+  std::vector<uint8_t> first, px;
+  for (int i = 0; i < 3; ++i) ui.frame(in, &first);  // settled: the last of them changed nothing
+  EXPECT_FALSE(ui.lastDamage().any());
+  const auto scribble = [&] {
+    glBindFramebuffer(GL_FRAMEBUFFER, ui.targetFbo());
+    glDisable(GL_SCISSOR_TEST);
+    glClearColor(1.0f, 0.0f, 1.0f, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT);
+  };
+  scribble();
+  ui.frame(in, &px);
+  EXPECT_FALSE(ui.lastDamage().any());
+  EXPECT_EQ(px[0], 255) << "nothing was drawn: the scribble stays";
+  EXPECT_EQ(px[1], 0);
+  ui.forgetTarget();
+  ui.frame(in, &px);
+  EXPECT_TRUE(ui.lastDamage().view && ui.lastDamage().panel);
+  EXPECT_TRUE(px == first) << "forgotten: the frame is drawn whole";
+
+  // The view's overlay changes over a still view (the playback speed, set while paused, shows in
+  // its text; no simulation change, so the view is re-presented): the view's columns are drawn
+  // again, as the frame drawn whole shows them.
+  ui.sim().setSpeedIndex(ui.sim().speedIndex() - 1);
+  ui.frame(in, &px);
+  EXPECT_FALSE(ui.lastViewRendered());
+  EXPECT_TRUE(ui.lastDamage().view);
+  std::vector<uint8_t> whole;
+  ui.forgetTarget();
+  ui.frame(in, &whole);
+  EXPECT_TRUE(px == whole) << "the overlay's new text shows over the re-presented view";
+  EXPECT_TRUE(px != first);
 }
 
 // The panel's running figures (simulated time, readouts) are refreshed a few times a second while

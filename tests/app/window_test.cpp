@@ -1,5 +1,7 @@
 // `ponyhop run` in a real window under Xvfb: a fixed number of frames, a screenshot, exit. The
-// screenshot must show both the scene and the panel.
+// screenshot must show both the scene and the panel. Here every frame is swapped whole
+// (`--present swap`, the path without GLX_MESA_copy_sub_buffer); the drive below takes the
+// rectangle copies and checks its screenshot too.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -54,12 +56,14 @@ TEST(WindowTest, RunUnderXvfbShowsTheSceneAndThePanel) {
   const std::string shot = dir + "/run.png";
   // The window needs an X server around the executable (runPonyhop runs it bare).
   const std::string cmd = "xvfb-run -a -s '-screen 0 1280x720x24' " + std::string(PONYHOP_EXE) +
-                          " run assets/scenes/ponytail.json --frames 20 --size 1280x720 --no-vsync --screenshot " +
+                          " run assets/scenes/ponytail.json --frames 20 --size 1280x720 --no-vsync --present swap "
+                          "--screenshot " +
                           shot + " > " + dir + "/run.log 2>&1";
   const int status = std::system(cmd.c_str());
   const std::string log = testing::readFile(dir + "/run.log");
   ASSERT_EQ(status, 0) << log;
   EXPECT_NE(log.find("frame time"), std::string::npos) << "the run reports its frame time\n" << log;
+  EXPECT_NE(log.find("presented by swapping the whole frame (rectangle copies turned off)"), std::string::npos) << log;
   std::string err;
   const auto img = readPng(shot, &err);
   ASSERT_TRUE(img.has_value()) << err << "\n" << log;
@@ -93,17 +97,21 @@ TEST(WindowTest, ViewIsDraftWhileMovingAndFinalWhenStill) {
   }
   const std::string dir = testing::scratch("window_quality");
   const std::string qlog = dir + "/quality.log";
-  // scripts/window_drive.sh: play, Space, still, drag, still (the default phases).
-  const std::string cmd = "xvfb-run -a -s '-screen 0 1280x720x24' sh scripts/window_drive.sh " +
-                          std::string(PONYHOP_EXE) + " assets/scenes/ponytail.json " + qlog + " 90 > " + dir +
-                          "/run.log 2>&1";
+  const std::string shot = dir + "/last.png";
+  // scripts/window_drive.sh: play, Space, still, drag, still (the default phases). A frame after
+  // one that changed nothing waits 10 ms for an event (run's default 0.1 s would make the still
+  // frames last seconds).
+  const std::string cmd =
+      "IDLE_WAIT=0.01 SHOT=" + shot + " xvfb-run -a -s '-screen 0 1280x720x24' sh scripts/window_drive.sh " +
+      std::string(PONYHOP_EXE) + " assets/scenes/ponytail.json " + qlog + " 90 > " + dir + "/run.log 2>&1";
   const int status = std::system(cmd.c_str());
   const std::string log = testing::readFile(dir + "/run.log");
   ASSERT_EQ(status, 0) << log;
   std::ifstream in(qlog);
   ASSERT_TRUE(in.good()) << "no quality log\n" << log;
   int playing_draft = 0, dragging_draft = 0, still_final = 0, lines = 0;
-  int stops = 0, still_reshown = 0, panel_copied = 0;
+  int stops = 0, still_reshown = 0, panel_copied = 0, unchanged = 0;
+  std::string last_push;
   bool last_final = false, last_moving = false;
   std::string line;
   while (std::getline(in, line)) {
@@ -125,17 +133,32 @@ TEST(WindowTest, ViewIsDraftWhileMovingAndFinalWhenStill) {
     EXPECT_EQ(rh, (vh + div - 1) / div) << line;
     // The window's savings (issue 37 item 2): a still view re-presented, the panel copied. The
     // first still frame after a motion is a final picture rendered anew, never the last one shown.
+    // What reached the screen (session 28): the rectangles that changed (all, view, panel) or none.
     int rendered = -1, panel_drawn = -1;
+    char pushed[8] = {};
     const size_t saving = line.find(" rendered=");
     ASSERT_NE(saving, std::string::npos) << line;
-    ASSERT_EQ(std::sscanf(line.c_str() + saving, " rendered=%d panel_drawn=%d", &rendered, &panel_drawn), 2) << line;
+    ASSERT_EQ(
+        std::sscanf(line.c_str() + saving, " rendered=%d panel_drawn=%d pushed=%7s", &rendered, &panel_drawn, pushed),
+        3)
+        << line;
+    const std::string push = pushed;
+    const bool view_pushed = push == "all" || push == "view";
     if (moving) {
       EXPECT_EQ(rendered, 1) << "a moving view is rendered: " << line;
+    }
+    if (rendered == 1) {
+      EXPECT_TRUE(view_pushed) << "a view rendered anew reaches the screen: " << line;
+    }
+    if (panel_drawn == 1) {
+      EXPECT_TRUE(push == "all" || push == "panel") << "a panel drawn anew reaches the screen: " << line;
     }
     if (last_moving && !moving) {
       ++stops;
       EXPECT_EQ(rendered, 1) << "the first still frame is rendered anew: " << line;
     }
+    unchanged += push == "none";
+    last_push = push;
     still_reshown += !moving && rendered == 0;
     panel_copied += panel_drawn == 0;
     last_moving = moving;
@@ -152,6 +175,22 @@ TEST(WindowTest, ViewIsDraftWhileMovingAndFinalWhenStill) {
   EXPECT_GE(stops, 2) << "the pause and the drag's end\n" << log;
   EXPECT_GT(still_reshown, 0) << "a still view whose inputs did not change is shown again, not rendered\n" << log;
   EXPECT_GT(panel_copied, 0) << "a still panel is copied, not drawn\n" << log;
+  // Under Xvfb (Mesa's drisw) frames go out by GLX_MESA_copy_sub_buffer: a frame that changed
+  // nothing presents nothing, and the next one waits for an event.
+  EXPECT_NE(log.find("presented by GLX_MESA_copy_sub_buffer"), std::string::npos) << log;
+  EXPECT_GT(unchanged, 0) << "a frame that changed nothing presents nothing\n" << log;
+  EXPECT_NE(log.find("frames waited for an event"), std::string::npos) << log;
+  // The last frame changed nothing, so nothing was drawn into the back buffer: it kept the frame
+  // whole, and the screenshot read from it shows it.
+  EXPECT_EQ(last_push, "none") << log;
+  std::string err;
+  const auto img = readPng(shot, &err);
+  ASSERT_TRUE(img.has_value()) << err << "\n" << log;
+  const int scene_w = 1280 - Panel::kDefaultWidth;
+  EXPECT_GT(lumaStddev(*img, 0, scene_w), 5.0) << "the scene view shows something";
+  EXPECT_GT(countColours(*img, 0, scene_w), 20) << "shaded head, hair and ground";
+  EXPECT_GT(lumaStddev(*img, scene_w, 1280), 5.0) << "the panel shows something";
+  EXPECT_GT(countColours(*img, scene_w, 1280), 12) << "text, sliders and headers";
   // ... and says so, with each motion's first still frame.
   const std::string stopped = "the first still frame was a final picture rendered anew " + std::to_string(stops) +
                               " of " + std::to_string(stops) + " times";
