@@ -69,6 +69,9 @@ struct RenderStats {
   bool post_aa = false;       // the post-process anti-aliasing filter ran
   bool draft = false;         // RenderQuality::Draft
   int shadow_size = 0;        // the shadow map's side this frame (texels; 0: no shadow pass)
+  // Single-sample with shadows: the objects pass finished the convex casters' pixels that no other
+  // caster can shadow, and the deferred shading ran only on the others (the shadow mark).
+  bool shadow_marked = false;
 };
 
 // The shadow map's sides over several frames (RenderStats::shadow_size), for summaries.
