@@ -104,6 +104,31 @@ constexpr size_t kShadowLevelMinTriangles = 8192;
 // first: doubling, so that a frame's texel finds one within a factor of two of what it allows.
 constexpr float kShadowLevelErrors[] = {1.0f / 2048, 1.0f / 1024, 1.0f / 512, 1.0f / 256, 1.0f / 128};
 
+// A convex surface: every face's plane has all the vertices on one side of it (within 1e-5
+// of the extent). Only small meshes are tested (a box, a block of terrain);
+// larger ones count as not convex.
+bool convexSurface(const MeshData& m) {
+  const size_t triangles = m.triangleCount();
+  if (triangles == 0 || triangles > 512 || m.positions.empty()) return false;
+  Eigen::AlignedBox3f box;
+  for (const Eigen::Vector3f& p : m.positions) box.extend(p);
+  const float tol = 1e-5f * std::max(box.diagonal().norm(), 1e-30f);
+  for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
+    const Eigen::Vector3f& a = m.positions[m.indices[t]];
+    Eigen::Vector3f n = (m.positions[m.indices[t + 1]] - a).cross(m.positions[m.indices[t + 2]] - a);
+    if (!(n.norm() > tol * tol)) continue;  // a sliver: no plane
+    n.normalize();
+    bool above = false, below = false;
+    for (const Eigen::Vector3f& p : m.positions) {
+      const float d = n.dot(p - a);
+      above = above || d > tol;
+      below = below || d < -tol;
+    }
+    if (above && below) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 // The shadow pass draws a large mesh once more than the main pass (44,544 triangles for the
@@ -154,6 +179,7 @@ MeshHandle Renderer::upload(const MeshData& m) {
   glBindVertexArray(0);
   g.index_count = GLsizei(m.indices.size());
   for (const auto& p : m.positions) g.bbox.extend(p.cast<double>());
+  g.convex = g.closed != 0 && !g.materials && !g.hair && convexSurface(m);
   I.meshes.push_back(g);
   return MeshHandle{int(I.meshes.size()) - 1};
 }

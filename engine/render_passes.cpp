@@ -160,17 +160,23 @@ void Renderer::Impl::drawMaterialMeshes(GLuint p, bool hair, bool hair_only) {
 }
 
 void Renderer::Impl::drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj, bool depth_only,
-                                  int still) {
+                                  int still, GLuint mesh_lit_prog) {
   if (!mesh_draws.empty()) {
-    glUseProgram(mesh_prog);
-    if (depth_only) setMat4(mesh_prog, "u_viewProj", view_proj);
-    const GLint l_model = loc(mesh_prog, "u_model"), l_normal = loc(mesh_prog, "u_normalMat"),
-                l_cs = loc(mesh_prog, "u_colorSpec"), l_sr = loc(mesh_prog, "u_shinRim");
+    GLuint p = 0;
+    GLint l_model = -1, l_normal = -1, l_cs = -1, l_sr = -1;
     for (const MeshDraw& d : mesh_draws) {
       const GpuMesh& g = meshes[size_t(d.mesh)];
       // Below, with their own program; the skin of a hair region's mesh (GpuMesh::skin_count) here.
       if (g.materials && !depth_only && g.skin_count == 0) continue;
       if (still >= 0 && d.still != (still == 1)) continue;
+      const GLuint want = mesh_lit_prog && g.convex ? mesh_lit_prog : mesh_prog;
+      if (want != p) {
+        p = want;
+        glUseProgram(p);
+        if (depth_only) setMat4(p, "u_viewProj", view_proj);
+        l_model = loc(p, "u_model"), l_normal = loc(p, "u_normalMat"), l_cs = loc(p, "u_colorSpec"),
+        l_sr = loc(p, "u_shinRim");
+      }
       glUniformMatrix4fv(l_model, 1, GL_FALSE, d.model.data());
       glUniformMatrix3fv(l_normal, 1, GL_FALSE, d.normal.data());
       const Eigen::Vector3f c = srgbToLinear(d.material.color);
@@ -793,28 +799,162 @@ void Renderer::Impl::groundAndBackgroundPass(const FramePlan& f, RenderStats& st
 // ---------------------------------------------------------------------------------------------
 // [SECTION] The objects and their deferred shadows
 
+// Where the deferred shading must look. A convex caster never shadows its own lit faces (a face
+// turned away from the light gets no key light at all), so a pixel of one can be shadowed only
+// by another caster, and only where that caster's texels are within the shadow lookups' reach of
+// the pixel's lookup point and nearer the light than it. Each caster's light-space box: its
+// bounds' corners (a hull: its two spheres) in shadow-map coordinates, grown by the blocker
+// search's and the filter's reach (u_maxPenumbraTexels, as setCommonUniforms sets it) and 3
+// texels more (the filter's bilinear footprint, the rasterized outline, the hair's least width),
+// from its nearest depth (less a texel's worth and two 16-bit steps) on. For a convex caster A
+// and each other caster B whose box reaches A's, the box of B cut at A's farthest depth, brought
+// back into the world (the light is orthographic: 8 corners) and projected, and A's own
+// rectangle: the pixels of A that B can shadow lie in both. A caster that is not convex (a
+// mesh, the hair) keeps its whole rectangle.
+bool Renderer::Impl::deferredRects(const FramePlan& f, std::vector<PixelRect>& out) const {
+  out.clear();
+  struct Caster {
+    Eigen::AlignedBox3d bounds;
+    bool convex = false;
+    double x0 = 1e30, y0 = 1e30, x1 = -1e30, y1 = -1e30, z0 = 1e30, z1 = -1e30;  // light space, not grown
+  };
+  std::vector<Caster> casters;
+  bool any_convex = !hulls.empty();
+  for (const MeshDraw& d : mesh_draws) any_convex = any_convex || meshes[size_t(d.mesh)].convex;
+  constexpr size_t kMaxCasters = 64;  // the pairs are tested on the CPU
+  if (!any_convex || mesh_draws.size() + hulls.size() + 1 > kMaxCasters) return false;
+  const Eigen::Matrix4d L = f.light_vp.cast<double>();
+  // Shadow-map coordinates are 0.5 ndc + 0.5.
+  const Eigen::Vector3d ax = 0.5 * L.block<1, 3>(0, 0).transpose(), ay = 0.5 * L.block<1, 3>(1, 0).transpose(),
+                        az = 0.5 * L.block<1, 3>(2, 0).transpose();
+  const auto add = [&](Caster& c, const Eigen::Vector3d& p, double r) {
+    const double x = ax.dot(p) + 0.5 * L(0, 3) + 0.5, y = ay.dot(p) + 0.5 * L(1, 3) + 0.5,
+                 z = az.dot(p) + 0.5 * L(2, 3) + 0.5;
+    const double rx = r * ax.norm(), ry = r * ay.norm(), rz = r * az.norm();
+    c.x0 = std::min(c.x0, x - rx), c.x1 = std::max(c.x1, x + rx);
+    c.y0 = std::min(c.y0, y - ry), c.y1 = std::max(c.y1, y + ry);
+    c.z0 = std::min(c.z0, z - rz), c.z1 = std::max(c.z1, z + rz);
+    c.bounds.extend(Eigen::AlignedBox3d(p - Eigen::Vector3d::Constant(r), p + Eigen::Vector3d::Constant(r)));
+  };
+  for (const MeshDraw& d : mesh_draws) {
+    Caster c;
+    const GpuMesh& g = meshes[size_t(d.mesh)];
+    c.convex = g.convex;
+    const Eigen::Matrix4d M = d.model.cast<double>();
+    if (!g.bbox.isEmpty())
+      for (int i = 0; i < 8; ++i)
+        add(c, (M * g.bbox.corner(Eigen::AlignedBox3d::CornerType(i)).homogeneous()).head<3>(), 0.0);
+    casters.push_back(c);
+  }
+  for (const HullInstance& h : hulls) {
+    Caster c;
+    c.convex = true;
+    add(c, Eigen::Vector3d(h.p0r0[0], h.p0r0[1], h.p0r0[2]), std::abs(double(h.p0r0[3])));
+    add(c, Eigen::Vector3d(h.p1r1[0], h.p1r1[1], h.p1r1[2]), std::abs(double(h.p1r1[3])));
+    casters.push_back(c);
+  }
+  if (!hair_draws.empty()) {
+    Caster c;
+    for (const HairVertex& v : hair_vertices)
+      add(c, Eigen::Vector3d(v.pos[0], v.pos[1], v.pos[2]), std::abs(double(v.half_width)));
+    casters.push_back(c);
+  }
+  const double size = double(std::max(f.shadow_size, 1));
+  const double texel_world = std::max(f.frustum.texel_world, 1e-9);
+  const double reach = (std::clamp(kMaxPenumbraMetres / texel_world, 2.0, 48.0) + 3.0) / size;
+  const double dz = 2.0 * texel_world / std::max(f.frustum.depth_range, 1e-9) + 2.0 / 65535.0;
+  const Eigen::Matrix4d to_screen = f.view_proj.cast<double>();
+  const Eigen::Matrix4d from_light = L.inverse();
+  const PixelRect all{0, 0, f.w, f.h};
+  constexpr int kMargin = 2;  // pixels: rounding, and a pixel centre's coverage
+  // The pixel rectangle of points, or the whole frame when one is behind the eye.
+  const auto rectOf = [&](const auto& points) {
+    double px0 = 1e30, py0 = 1e30, px1 = -1e30, py1 = -1e30;
+    for (const Eigen::Vector3d& p : points) {
+      const Eigen::Vector4d c = to_screen * p.homogeneous();
+      if (!(c.w() > 1e-6)) return all;
+      const double x = (0.5 * c.x() / c.w() + 0.5) * f.w, y = (0.5 * c.y() / c.w() + 0.5) * f.h;
+      px0 = std::min(px0, x), px1 = std::max(px1, x), py0 = std::min(py0, y), py1 = std::max(py1, y);
+    }
+    return PixelRect{int(std::floor(px0)) - kMargin, int(std::floor(py0)) - kMargin, int(std::ceil(px1)) + kMargin,
+                     int(std::ceil(py1)) + kMargin} &
+           all;
+  };
+  std::vector<Eigen::Vector3d> corners(8);
+  for (size_t a = 0; a < casters.size(); ++a) {
+    const Caster& A = casters[a];
+    if (A.bounds.isEmpty()) continue;
+    for (int i = 0; i < 8; ++i) corners[size_t(i)] = A.bounds.corner(Eigen::AlignedBox3d::CornerType(i));
+    const PixelRect own = rectOf(corners);
+    if (own.empty()) continue;
+    if (!A.convex) {
+      out.push_back(own);
+      continue;
+    }
+    for (size_t b = 0; b < casters.size(); ++b) {
+      const Caster& B = casters[b];
+      if (b == a || B.bounds.isEmpty()) continue;
+      const double bx0 = B.x0 - reach, bx1 = B.x1 + reach, by0 = B.y0 - reach, by1 = B.y1 + reach;
+      const double bz0 = B.z0 - dz, bz1 = A.z1;
+      if (bx1 < A.x0 || bx0 > A.x1 || by1 < A.y0 || by0 > A.y1 || bz0 >= bz1) continue;
+      for (int i = 0; i < 8; ++i) {
+        const Eigen::Vector4d n(2.0 * ((i & 1) ? bx1 : bx0) - 1.0, 2.0 * ((i & 2) ? by1 : by0) - 1.0,
+                                2.0 * ((i & 4) ? bz1 : bz0) - 1.0, 1.0);
+        const Eigen::Vector4d w = from_light * n;
+        corners[size_t(i)] = w.head<3>() / w.w();
+      }
+      const PixelRect r = rectOf(corners) & own;
+      if (!r.empty()) out.push_back(r);
+    }
+  }
+  mergeRects(out, 4 * 16 * 16);
+  // Worth it only when it spares a good part of the deferred shading's pixels (screenRects, where
+  // it runs otherwise): the lit colour costs the objects pass a tone curve per fragment.
+  std::vector<PixelRect> today;
+  int64_t before = int64_t(f.w) * f.h, after = 0;
+  if (screenRects(f.view_proj, f.w, f.h, today)) {
+    before = 0;
+    for (const PixelRect& r : today) before += r.area();
+  }
+  for (const PixelRect& r : out) after += r.area();
+  return 4 * after < 3 * before;
+}
+
 // Meshes, hulls and hair into the main target, lit and shadowed; deferred (FramePlan::deferred),
 // into the surface targets with their shadows left to deferredLightPass.
 void Renderer::Impl::objectsPass(const FramePlan& f, RenderStats& st) {
   glDepthMask(GL_TRUE);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
+  shadow_marked = f.deferred && deferredRects(f, mark_rects);
   const GLuint mesh_prog = f.deferred ? prog_mesh_split : prog_mesh;
   const GLuint mesh_mat_prog = f.deferred ? prog_mesh_mat_split : prog_mesh_mat;
   const GLuint mesh_hair_prog = f.deferred ? prog_mesh_hair_split : prog_mesh_hair;
   const GLuint hair_only_prog = f.deferred ? prog_hair_only_split : prog_hair_only;
-  const GLuint hull_prog = f.deferred ? prog_hull_split : prog_hull;
+  const GLuint hull_prog = shadow_marked ? prog_hull_lit : f.deferred ? prog_hull_split : prog_hull;
   const GLuint hair_prog = f.deferred ? prog_hair_split : prog_hair;
-  glBindFramebuffer(GL_FRAMEBUFFER, f.deferred ? surf_fbo : msaa_fbo);
+  const GLuint mesh_lit_prog = shadow_marked ? prog_mesh_lit : 0;
   glClearColor(0, 0, 0, params.transparent ? 0 : 1);
+  if (shadow_marked && f.clear_color) {  // the objects pass writes finished pixels into it
+    glBindFramebuffer(GL_FRAMEBUFFER, msaa_fbo);
+    glClear(GL_COLOR_BUFFER_BIT);
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, f.deferred ? surf_fbo : msaa_fbo);
+  if (f.deferred) {
+    // The main colour target is the surface targets' fourth: the convex casters' lit colour, the
+    // others' 0 (the deferred shading covers all their pixels).
+    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
+    glDrawBuffers(shadow_marked ? 4 : 3, bufs);
+  }
   glClear(!f.deferred && f.clear_color ? GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT : GL_DEPTH_BUFFER_BIT);
   bindShadowTextures(true);
-  for (GLuint p : {mesh_prog, mesh_mat_prog, mesh_hair_prog, hair_only_prog, hull_prog, hair_prog}) {
+  for (GLuint p : {mesh_prog, mesh_mat_prog, mesh_hair_prog, hair_only_prog, hull_prog, hair_prog, mesh_lit_prog}) {
+    if (!p) continue;
     setFrameUniforms(p, f);
     glUniform4f(loc(p, "u_clipPlane"), 0.0f, 0.0f, f.clip_side, -f.clip_side * float(params.ground_height));
   }
   if (f.half_ground) glEnable(GL_CLIP_DISTANCE0);
-  drawGeometry(mesh_prog, hull_prog, f.view_proj, false);
+  drawGeometry(mesh_prog, hull_prog, f.view_proj, false, -1, mesh_lit_prog);
   drawHairs(f.view_proj, false, f.light_dir, hair_prog);
   glDisable(GL_CLIP_DISTANCE0);
   st.draw_calls += int(hair_draws.size());
@@ -828,7 +968,7 @@ void Renderer::Impl::objectsPass(const FramePlan& f, RenderStats& st) {
 // surface targets into the main target.
 void Renderer::Impl::deferredLightPass(const FramePlan& f, RenderStats& st) {
   glBindFramebuffer(GL_FRAMEBUFFER, msaa_fbo);
-  if (f.clear_color) glClear(GL_COLOR_BUFFER_BIT);  // FramePlan::clear_color
+  if (f.clear_color && !shadow_marked) glClear(GL_COLOR_BUFFER_BIT);  // FramePlan::clear_color
   const GLuint targets[] = {surf_tex, key_tex, rest_tex};
   for (int i = 0; i < 3; ++i) {
     glActiveTexture(GLenum(GL_TEXTURE4 + i));
@@ -852,7 +992,10 @@ void Renderer::Impl::deferredLightPass(const FramePlan& f, RenderStats& st) {
   glDepthRange(0.0, 1.0 - std::ldexp(1.0, -19));
   glDepthFunc(GL_GREATER);
   glBindVertexArray(empty_vao);
-  const bool boxed = screenRects(f.view_proj, f.w, f.h, rects);
+  // Marked (objectsPass): only over the rectangles where another caster can shadow a pixel; the
+  // convex casters' pixels elsewhere hold their finished colour.
+  const bool boxed = shadow_marked || screenRects(f.view_proj, f.w, f.h, rects);
+  if (shadow_marked) rects = mark_rects;
   if (boxed) glEnable(GL_SCISSOR_TEST);
   for (GLuint p : {prog_deferred_class, prog_deferred}) {
     glUseProgram(p);

@@ -136,6 +136,12 @@ bool Renderer::Impl::buildPrograms(std::string* err) {
     if (!(*p.out = buildProgram(p.name, p.vs, p.fs, err, p.defines))) return false;
     programs.push_back(*p.out);
   }
+  if (!(prog_mesh_lit = buildProgram("mesh (deferred, lit colour)", kMeshVS, kLitFS, err, kSplitLitDefine)))
+    return false;
+  programs.push_back(prog_mesh_lit);
+  if (!(prog_hull_lit = buildProgram("hull (deferred, lit colour)", kCapsuleVS, kLitFS, err, kSplitLitDefine)))
+    return false;
+  programs.push_back(prog_hull_lit);
   return true;
 }
 
@@ -387,6 +393,7 @@ void Renderer::endFrame() {
     I.upsampleGroundPass(f, stats_);
   // The objects; deferred, their shadows and finished colour once per visible pixel after them.
   I.objectsPass(f, stats_);
+  stats_.shadow_marked = I.shadow_marked;
   if (f.deferred) I.deferredLightPass(f, stats_);
   // Otherwise the ground after the objects, and the background where nothing was drawn.
   if (!f.half_ground) I.groundAndBackgroundPass(f, stats_);

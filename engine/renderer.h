@@ -72,6 +72,9 @@ struct RenderStats {
   // The still draws' depth in the shadow map, and the ground's shadow texture away from the
   // moving casters, kept from the last frame (drawMesh's `still`; docs/RENDERING.md, Shadows).
   bool shadow_kept = false;
+  // Single-sample with shadows: the objects pass finished the convex casters' pixels that no other
+  // caster can shadow, and the deferred shading ran only on the others (the shadow mark).
+  bool shadow_marked = false;
 };
 
 // The shadow map's sides over several frames (RenderStats::shadow_size), for summaries.

@@ -43,6 +43,9 @@ struct GpuMesh {
   MeshPart hair_only;
   // closedOrientation(): +1/-1 closed (back faces culled in both passes), 0 open (both sides drawn).
   int closed = 0;
+  // Closed, without materials, and every face's plane has all its vertices on one side: it never
+  // shadows its own lit faces (deferredRects).
+  bool convex = false;
   std::vector<MeshPart> parts;
   std::vector<GLuint> textures;
   // Simplified copies of a large mesh for the shadow pass alone (shadowLevels, mesh_upload.cpp),
@@ -149,6 +152,10 @@ struct Renderer::Impl {
   // finishes each visible pixel once.
   GLuint prog_mesh_split = 0, prog_mesh_mat_split = 0, prog_hull_split = 0, prog_hair_split = 0;
   GLuint prog_deferred = 0, prog_deferred_class = 0;
+  // The convex casters' split programs that also write the finished, fully lit colour
+  // (kSplitLitDefine), for the frames whose deferred shading runs only where another caster can
+  // shadow a pixel (deferredRects).
+  GLuint prog_mesh_lit = 0, prog_hull_lit = 0;
   GLuint prog_ground_up = 0;            // the half-resolution ground, upsampled (kGroundUpFS)
   GLuint prog_grid = 0;                 // the grid ground (kGridVS, kGridFS)
   GLuint prog_grid_shadow = 0;          // ... per pixel where its shadow may be (kGroundFS, GRID_GROUND)
@@ -345,6 +352,15 @@ struct Renderer::Impl {
   void drawGridGround(const FramePlan& f, const PixelRect& clip, RenderStats& st);
   void backgroundRows(const FramePlan& f, const PixelRect& clip, int row, RenderStats& st);
   void objectsPass(const FramePlan& f, RenderStats& st);
+  // The pixel rectangles where a pixel of the objects may be shadowed by a caster other than
+  // itself (the whole draw of a caster that is not convex; of a convex one, only where another
+  // caster's light-space box reaches), into `out`; false when that saves too little of the
+  // deferred shading's rectangles to pay for the lit colour the objects pass then writes, or no
+  // caster is convex. shadow_marked: this frame's objects pass finished the convex casters'
+  // pixels, and the deferred shading runs only over mark_rects.
+  bool deferredRects(const FramePlan& f, std::vector<PixelRect>& out) const;
+  std::vector<PixelRect> mark_rects;
+  bool shadow_marked = false;
   void deferredLightPass(const FramePlan& f, RenderStats& st);
   void groundAndBackgroundPass(const FramePlan& f, RenderStats& st);
   void linesPass(const FramePlan& f, RenderStats& st);
@@ -359,9 +375,10 @@ struct Renderer::Impl {
   void drawGroundParts(const FramePlan& f, int vw, int vh, const PixelRect& clip);
   void upsampleGround(const FramePlan& f, const PixelRect& clip, RenderStats& st);
   // still: depth only, which mesh draws (-1 every one, 0 the moving, 1 the still; the hulls with
-  // the moving).
+  // the moving). mesh_lit_prog: the program for the convex meshes (GpuMesh::convex), 0: mesh_prog
+  // for all.
   void drawGeometry(GLuint mesh_prog, GLuint hull_prog, const Eigen::Matrix4f& view_proj, bool depth_only,
-                    int still = -1);
+                    int still = -1, GLuint mesh_lit_prog = 0);
   // prog: the program for the main pass's camera-facing ribbons (0: prog_hair).
   void drawHairs(const Eigen::Matrix4f& view_proj, bool depth_only, const Eigen::Vector3d& light_dir, GLuint prog = 0);
   void drawMaterialMeshes(GLuint prog, bool hair, bool hair_only);

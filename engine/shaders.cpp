@@ -260,6 +260,7 @@ void strandTerms(vec3 P, vec3 T, vec3 N, vec3 color, float occlusion, vec2 shadi
   "layout(location = 0) out vec4 o_surface;\n"                                       \
   "layout(location = 1) out vec4 o_key;\n"                                           \
   "layout(location = 2) out vec4 o_rest;\n"                                          \
+  "layout(location = 3) out vec4 o_lit;\n"                                           \
   "float packNormal(vec3 n) {\n"                                                     \
   "  n /= abs(n.x) + abs(n.y) + abs(n.z);\n"                                         \
   "  vec2 s = vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);\n"             \
@@ -271,6 +272,11 @@ void strandTerms(vec3 P, vec3 T, vec3 N, vec3 color, float occlusion, vec2 shadi
   "  o_surface = vec4(P, packNormal(N));\n"                                          \
   "  o_key = vec4(key, 1.0);\n"                                                      \
   "  o_rest = vec4(rest, 1.0);\n"                                                    \
+  "#ifdef LIT_COLOR\n"                                                               \
+  "  o_lit = vec4(linearToSrgb(toneMap(key + rest)), 1.0);\n"                        \
+  "#else\n"                                                                          \
+  "  o_lit = vec4(0.0);\n"                                                           \
+  "#endif\n"                                                                         \
   "}\n"                                                                              \
   "#else\n"                                                                          \
   "out vec4 o_color;\n"                                                              \

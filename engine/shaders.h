@@ -33,6 +33,10 @@ extern const char* const kDeferredFS;  // the shadow and the colour once per vis
 // Compiled into kLitFS / kMeshMatFS / kHairFS by `defines`: they write the visible surface and the
 // two parts of its radiance into three targets for kDeferredFS instead of a colour.
 inline constexpr const char* kSplitLightDefine = "#define SPLIT_LIGHT 1\n";
+// Compiled into kLitFS for the convex casters (hulls, convex meshes) when the deferred shading
+// runs only where another caster can shadow a pixel (objectsPass): SPLIT_LIGHT, and the fragment
+// also writes its finished, fully lit colour (location 3, the main colour target).
+inline constexpr const char* kSplitLitDefine = "#define SPLIT_LIGHT 1\n#define LIT_COLOR 1\n";
 // Compiled into kMeshMatFS: the colour's alpha is the hair weight of a head's hair region
 // (MeshData::hair), drawn as hair (u_hairColor, u_hairShading, u_hairAxis); HAIR_ONLY: triangles
 // whose three corners are all hair, shaded without the skin's terms.

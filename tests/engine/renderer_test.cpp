@@ -473,6 +473,69 @@ TEST(Renderer, DeferredShadowsOnObjectsMatchTheForwardOnes) {
   EXPECT_LT(worst, 3.0) << "the deferred shadow differs from the forward one by " << worst << " (0-255 luminance)";
 }
 
+// The shadow mark (deferredRects): a convex caster's pixels that no other caster's light-space box
+// reaches are finished by the objects pass, the others by the deferred shading. A ball's shadow
+// on a lying capsule (hull on hull) and another's on a box (hull on mesh), penumbra and all, must
+// come out as the forward shading (4x MSAA) computes it, and so must the lit points the objects
+// pass finishes.
+TEST(Renderer, ShadowMarkLeavesNoShadowedPixelLit) {
+  REQUIRE_GL();
+  const Camera cam = cameraAt(Eigen::Vector3d(-0.15, -1.5, 0.9), Eigen::Vector3d(-0.15, 0.0, 0.12), 28.0);
+  LightParams light = testLight();
+  light.direction = Eigen::Vector3d(0.6, 0.2, -1.0);
+  Material grey;
+  grey.color = Eigen::Vector3f(0.7f, 0.7f, 0.7f);
+  constexpr double kTop = 0.1, kAxisZ = 0.08, kCapR = 0.07, kBallR = 0.04;
+  // Each ball 0.3 m above its receiver, moved back along the light so that its shadow's centre
+  // lies on the receiver's top (a penumbra several pixels wide: the forward frame's four samples
+  // average a pixel the deferred shading takes at its centre).
+  const Eigen::Vector3d on_capsule(-0.45, -0.08, kAxisZ + kCapR + 0.3), on_box(-0.02, -0.06, kTop + 0.3);
+  const auto scene = [&](Renderer& r) {
+    r.drawBox(Eigen::Affine3d(Eigen::Translation3d(0.2, 0.0, kTop / 2)), Eigen::Vector3d(0.16, 0.2, kTop / 2), grey);
+    r.drawCapsule(Eigen::Vector3d(-0.6, 0.0, kAxisZ), Eigen::Vector3d(-0.1, 0.0, kAxisZ), kCapR, grey);
+    r.drawSphere(on_capsule, kBallR, red());
+    r.drawSphere(on_box, kBallR, red());
+  };
+  const auto marked = render(cam, testParams(1, true), scene, light);
+  ASSERT_TRUE(gl().renderer->stats().shadow_marked) << "the frame was not marked: nothing here tests the mark";
+  RenderParams msaa = testParams(4, true);
+  msaa.antialias = AntiAlias::Msaa;
+  const auto forward = render(cam, msaa, scene, light);
+  save("marked_shadows.png", marked);
+  save("marked_shadows_forward.png", forward);
+  // Points of the box's top and of the capsule's upper side, not near the balls on screen.
+  std::vector<Eigen::Vector2d> balls;
+  std::vector<double> radii;
+  for (const Eigen::Vector3d& b : {on_capsule, on_box}) {
+    balls.push_back(project(cam, b));
+    radii.push_back((project(cam, b + cam.view().block<1, 3>(1, 0).transpose() * kBallR) - balls.back()).norm());
+  }
+  std::vector<double> lum_f, diff;
+  const auto sample = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector2d s = project(cam, p);
+    for (size_t i = 0; i < balls.size(); ++i)
+      if ((s - balls[i]).norm() < radii[i] + 3.0) return;
+    const int px = int(s.x()), py = int(s.y());
+    if (px < 1 || py < 1 || px > kW - 2 || py > kH - 2) return;
+    lum_f.push_back(luminance(forward, px, py));
+    diff.push_back(std::abs(luminance(marked, px, py) - lum_f.back()));
+  };
+  for (double x = 0.06; x <= 0.33; x += 0.004)
+    for (double y = -0.18; y <= 0.18; y += 0.004) sample(Eigen::Vector3d(x, y, kTop));
+  for (double x = -0.59; x <= -0.11; x += 0.004)
+    for (double phi = -0.8; phi <= 0.05; phi += 0.03)
+      sample(Eigen::Vector3d(x, kCapR * std::sin(phi), kAxisZ + kCapR * std::cos(phi)));
+  ASSERT_GT(diff.size(), 2000u);
+  const double lit = *std::max_element(lum_f.begin(), lum_f.end());
+  const auto count = [&](double lo, double hi) {
+    return std::count_if(lum_f.begin(), lum_f.end(), [&](double l) { return l >= lo * lit && l < hi * lit; });
+  };
+  EXPECT_GT(count(0.0, 0.6), 100) << "points in the balls' shadows";
+  EXPECT_GT(count(0.6, 0.9), 10) << "points in their penumbrae";
+  const double worst = *std::max_element(diff.begin(), diff.end());
+  EXPECT_LT(worst, 3.0) << "the marked frame differs from the forward one by " << worst << " (0-255 luminance)";
+}
+
 TEST(Renderer, SameDrawListIsByteIdentical) {
   REQUIRE_GL();
   auto scene = [](Renderer& r) {
