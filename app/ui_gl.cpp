@@ -152,6 +152,18 @@ bool UiGl::composeSaving(const Renderer& renderer, unsigned fbo, int width, int 
   }
   const auto t1 = Clock::now();
   bool drawn = false;
+  // ImGui's panel into the bound framebuffer; the signature it was drawn from is kept.
+  auto drawPanel = [&] {
+    panel.make(*d, d->DisplayPos.x, d->DisplaySize.x);
+    ImGui_ImplOpenGL3_RenderDrawData(&panel.data);
+    panel_sig_.swap(sig_);
+    panel_valid_ = true;
+    drawn = true;
+    if (times) {
+      glFinish();
+      times->panel_redraw_ms = msSince(t1);
+    }
+  };
   if (damage.panel && keeps_) {
     // The panel straight into the target's columns, over its background: ImGui draws it with the
     // frame's own projection, as in a frame drawn whole.
@@ -162,16 +174,8 @@ bool UiGl::composeSaving(const Renderer& renderer, unsigned fbo, int width, int 
     glClearColor(bg.x, bg.y, bg.z, 1.0f);
     glClear(GL_COLOR_BUFFER_BIT);
     glDisable(GL_SCISSOR_TEST);
-    panel.make(*d, d->DisplayPos.x, d->DisplaySize.x);
-    ImGui_ImplOpenGL3_RenderDrawData(&panel.data);
+    drawPanel();
     glDisable(GL_SCISSOR_TEST);
-    panel_sig_.swap(sig_);
-    panel_valid_ = true;
-    drawn = true;
-    if (times) {
-      glFinish();
-      times->panel_redraw_ms = msSince(t1);
-    }
   } else if (damage.panel) {
     if (panel_changed) {
       // The texture is the whole frame's size and ImGui draws into it with the frame's own
@@ -201,15 +205,7 @@ bool UiGl::composeSaving(const Renderer& renderer, unsigned fbo, int width, int 
       glViewport(0, 0, width, height);
       glClearColor(bg.x, bg.y, bg.z, 1.0f);  // the panel's background, as the direct path's clear
       glClear(GL_COLOR_BUFFER_BIT);
-      panel.make(*d, d->DisplayPos.x, d->DisplaySize.x);
-      ImGui_ImplOpenGL3_RenderDrawData(&panel.data);
-      panel_sig_.swap(sig_);
-      panel_valid_ = true;
-      drawn = true;
-      if (times) {
-        glFinish();
-        times->panel_redraw_ms = msSince(t1);
-      }
+      drawPanel();
     }
     glDisable(GL_SCISSOR_TEST);
     glBindFramebuffer(GL_READ_FRAMEBUFFER, panel_fbo_);
