@@ -1,6 +1,7 @@
 // `ponyhop diff EXPECTED.png ACTUAL.png`: the snapshot comparator on the command line.
 // Exit codes: 0 pass, 1 differ beyond tolerance or different sizes, 2 a file could not be read
 // or the diff image could not be written. Bad option values are CLI11 usage errors.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <memory>
 #include <string>

@@ -3,6 +3,7 @@
 // ponytail link, the hopper's body, upper leg and foot), each carrying its own mesh in its body
 // frame and animated with the body's pose at every frame time (interpolated between physics
 // steps like `ponyhop sim --poses`), under a root node that turns the z-up world into glTF's y up.
+#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>

@@ -2,6 +2,7 @@
 // scene in a window with the tuning panel (docs/TUNING.md). Built with the window (PONYHOP_WINDOW).
 #ifdef PONYHOP_WINDOW
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 
 #include "app/commands.h"

@@ -1,5 +1,6 @@
 // `ponyhop scene-doc`: the reference of every scene field, generated from the reflect() lists so
 // that docs/SCENES.md can never disagree with the code.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 
 #include "app/commands.h"

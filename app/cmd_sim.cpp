@@ -6,6 +6,7 @@
 // asked for (--rate, --at), interpolated between the two steps around each (app/pose_sampling.h).
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>

@@ -1,6 +1,7 @@
 // `ponyhop snapshot SHOTS.txt`: snapshot tests of scenes (app/snapshot.h, docs/SNAPSHOTS.md).
 // Exit codes as `ponyhop diff`: 0 every shot passes, 1 a shot differs or misses its subject or
 // golden (under CI), 2 a bad shot list, scene or option, or a file that cannot be read or written.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <memory>
 

@@ -9,6 +9,7 @@
 // scene field, so `render` cannot replay them).
 // Exit code 0 when every goal is met, 1 when one is not (the scene is still written: the closest
 // control found), 2 for bad input.
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>

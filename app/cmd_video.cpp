@@ -1,5 +1,6 @@
 // `ponyhop video DIR --out F.mp4|.mov|.webm|.gif [--fps F]`: encodes DIR/frame_%05d.png (e.g. the
 // folder a render farm's chunks were merged into) into the container the file name says.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
 
