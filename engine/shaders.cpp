@@ -56,8 +56,10 @@ vec3 linearToSrgb(vec3 c) {
   c = clamp(c, 0.0, 1.0);
   return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
 }
-// linearToSrgb() (the ground's) from three square roots: a fit of 1.055 c^(1/2.4) - 0.055 on [0.0031308, 1] in
-// c, c^(1/2), c^(1/4), c^(1/8), within 0.012 of one 8-bit step everywhere.
+// linearToSrgb() (the ground's, and the deferred shading's: kDeferredFS and the LIT_COLOR output) from
+// three square roots: a fit of 1.055 c^(1/2.4) - 0.055 on [0.0031308, 1] in c, c^(1/2), c^(1/4),
+// c^(1/8), within 0.012 of one 8-bit step everywhere. llvmpipe computes pow() as a log and an exp
+// per channel: on the hopper at 1280x720 the deferred passes took about 0.3 ms less with this.
 vec3 linearToSrgbFast(vec3 c) {
   c = clamp(c, 0.0, 1.0);
   vec3 s1 = sqrt(c), s2 = sqrt(s1), s3 = sqrt(s2);
@@ -273,7 +275,7 @@ void strandTerms(vec3 P, vec3 T, vec3 N, vec3 color, float occlusion, vec2 shadi
   "  o_key = vec4(key, 1.0);\n"                                                      \
   "  o_rest = vec4(rest, 1.0);\n"                                                    \
   "#ifdef LIT_COLOR\n"                                                               \
-  "  o_lit = vec4(linearToSrgb(toneMap(key + rest)), 1.0);\n"                        \
+  "  o_lit = vec4(linearToSrgbFast(toneMap(key + rest)), 1.0);\n"                    \
   "#else\n"                                                                          \
   "  o_lit = vec4(0.0);\n"                                                           \
   "#endif\n"                                                                         \
@@ -782,9 +784,9 @@ void main() {
   // second pass, the whole shadowFactor() (deferredLightPass).
   float known = max(key.r, max(key.g, key.b)) > 0.0 ? shadowKnown(s.xyz, unpackNormal(s.w)) : 1.0;
   if (known == 0.5) discard;
-  o_color = vec4(linearToSrgb(toneMap(known == 0.0 ? rest : key + rest)), 1.0);
+  o_color = vec4(linearToSrgbFast(toneMap(known == 0.0 ? rest : key + rest)), 1.0);
 #else
-  o_color = vec4(linearToSrgb(toneMap(key * shadowFactor(s.xyz, unpackNormal(s.w)) + rest)), 1.0);
+  o_color = vec4(linearToSrgbFast(toneMap(key * shadowFactor(s.xyz, unpackNormal(s.w)) + rest)), 1.0);
 #endif
 }
 )GLSL";

@@ -473,6 +473,50 @@ TEST(Renderer, DeferredShadowsOnObjectsMatchTheForwardOnes) {
   EXPECT_LT(worst, 3.0) << "the deferred shadow differs from the forward one by " << worst << " (0-255 luminance)";
 }
 
+// The deferred shading (and the convex casters' lit colour) encodes its colour with
+// linearToSrgbFast(), three square roots instead of pow(); the forward shading keeps the exact
+// curve. On a matte sphere's inside, where every pixel's four MSAA samples see nearly the same
+// radiance, both frames must agree to a level in nearly every channel, over colours from the lit
+// side to the dark one. (The half-float key and rest and the self-shadow's terminator, where the
+// four samples differ, move a few channels by more: 70 of 7,680 here; with one of the fit's
+// coefficients off by 0.01, 5,338.)
+TEST(Renderer, TheDeferredShadingsColourCurveIsWithinALevelOfTheExactOne) {
+  REQUIRE_GL();
+  const Camera cam = testCamera();
+  Material matte;
+  matte.color = Eigen::Vector3f(0.9f, 0.55f, 0.25f);
+  matte.specular = 0.0f;
+  matte.rim = 0.0f;
+  const auto scene = [&](Renderer& r) { r.drawSphere(kSphereC, kSphereR, matte); };
+  const auto deferred = render(cam, testParams(1, false), scene);
+  RenderParams msaa = testParams(4, false);
+  msaa.antialias = AntiAlias::Msaa;
+  const auto forward = render(cam, msaa, scene);
+  save("curve_deferred.png", deferred);
+  save("curve_forward.png", forward);
+  const Eigen::Vector2d c = project(cam, kSphereC);
+  const double r_px = (project(cam, kSphereC + cam.view().block<1, 3>(1, 0).transpose() * kSphereR) - c).norm();
+  int n = 0, over1 = 0, worst = 0, lo = 255, hi = 0;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      if ((Eigen::Vector2d(x + 0.5, y + 0.5) - c).norm() > 0.85 * r_px) continue;
+      const size_t i = (size_t(y) * kW + size_t(x)) * 4;
+      for (int k = 0; k < 3; ++k) {
+        const int d = std::abs(int(deferred[i + size_t(k)]) - int(forward[i + size_t(k)]));
+        worst = std::max(worst, d);
+        over1 += d > 1;
+        lo = std::min(lo, int(forward[i + size_t(k)]));
+        hi = std::max(hi, int(forward[i + size_t(k)]));
+      }
+      ++n;
+    }
+  ASSERT_GT(n, 1000);
+  EXPECT_LT(lo, 60) << "the dark side is in the frame";
+  EXPECT_GT(hi, 200) << "the lit side is in the frame";
+  EXPECT_LT(over1, n / 10) << over1 << " channels of " << n << " pixels differ by more than a level (worst " << worst
+                           << ")";
+}
+
 // The shadow mark (deferredRects): a convex caster's pixels that no other caster's light-space box
 // reaches are finished by the objects pass, the others by the deferred shading. A ball's shadow
 // on a lying capsule (hull on hull) and another's on a box (hull on mesh), penumbra and all, must
