@@ -106,8 +106,8 @@ TEST(PhysicsExtremes, TipMassRatios) {
 }
 
 // dt = 1/30 s (8 and 32 links, fixed and shaking anchor, 2 s): joints below 1e-9 m, energy
-// within 1 % with the fixed anchor. Under the sanitizers the 8 links only (the 32 were 80 % of
-// the 32 s this took in the ASan run; chains of 32 and more run there in other tests).
+// within 1 % with the fixed anchor. Under the sanitizers the 8 links only (32 s of the ASan run's
+// time with both; chains of 32 links and more run there in other tests).
 TEST(PhysicsExtremes, CoarseStep) {
   for (SolverKind s : exactSolvers()) {
     for (int links : testing::fullOrSanitized(std::vector<int>{8, 32}, std::vector<int>{8})) {
