@@ -55,7 +55,9 @@ test: build
 
 # The same tests under AddressSanitizer + UndefinedBehaviorSanitizer, in their own build by clang
 # (which compiles instrumented code in about half GCC's time), with the libFuzzer targets of `make fuzz`
-# in the same tree: CI runs it after `make test`. A tree of this name configured by GCC before
+# in the same tree: CI runs it after `make test` (its tests about 4 min on 2 cores, session 29: the
+# sanitizer tree forces Eigen's small functions inline and long tests measure a shorter stretch
+# there, docs/DEVELOPING.md). A tree of this name configured by GCC before
 # (sessions before 17) is removed first: naming clang on the command line makes CMake drop the old
 # cache, but the re-run then stops at PONYHOP_FUZZ's compiler check.
 CLANG_TREE = @if [ -f $(1)/CMakeCache.txt ] && ! grep -q '^CMAKE_CXX_COMPILER:[A-Z]*=.*clang' $(1)/CMakeCache.txt; then \
