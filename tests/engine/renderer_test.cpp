@@ -108,6 +108,25 @@ Eigen::Vector2d project(const Camera& cam, const Eigen::Vector3d& p, int w = kW,
   return {(ndc.x() * 0.5 + 0.5) * w, (0.5 - ndc.y() * 0.5) * h};
 }
 
+// The shadow tests' comparison of a frame with the forward (4x MSAA) one at sampled pixels: the
+// forward frame's luminance there and how far the other frame's differs.
+struct LuminanceSamples {
+  std::vector<double> forward, diff;
+  // The pixel under screen point p, unless it is on the frame's border.
+  void add(const std::vector<uint8_t>& fwd, const std::vector<uint8_t>& other, const Eigen::Vector2d& p) {
+    const int px = int(p.x()), py = int(p.y());
+    if (px < 1 || py < 1 || px > kW - 2 || py > kH - 2) return;
+    forward.push_back(luminance(fwd, px, py));
+    diff.push_back(std::abs(luminance(other, px, py) - forward.back()));
+  }
+  // How many samples lie in [lo, hi) times the brightest one.
+  long between(double lo, double hi) const {
+    const double lit = *std::max_element(forward.begin(), forward.end());
+    return std::count_if(forward.begin(), forward.end(), [&](double l) { return l >= lo * lit && l < hi * lit; });
+  }
+  double worst() const { return *std::max_element(diff.begin(), diff.end()); }
+};
+
 void save(const std::string& name, const std::vector<uint8_t>& px, int w = kW, int h = kH) {
   std::string err;
   EXPECT_TRUE(writePngAtomic(outFolder("renderer") + "/" + name, w, h, px.data(), &err)) << err;
@@ -451,25 +470,17 @@ TEST(Renderer, DeferredShadowsOnObjectsMatchTheForwardOnes) {
   // Points of the box's top, inset from its edges, not behind or beside the ball on screen.
   const Eigen::Vector2d c = project(cam, ball);
   const double r_px = (project(cam, ball + cam.view().block<1, 3>(1, 0).transpose() * kBallR) - c).norm();
-  std::vector<double> lum_f, diff;
+  LuminanceSamples samples;
   for (double x = -0.17; x <= 0.37; x += 0.01)
     for (double y = -0.27; y <= 0.27; y += 0.01) {
       const Eigen::Vector2d p = project(cam, Eigen::Vector3d(x, y, kTop));
-      if ((p - c).norm() < r_px + 3.0) continue;
-      const int px = int(p.x()), py = int(p.y());
-      if (px < 1 || py < 1 || px > kW - 2 || py > kH - 2) continue;
-      lum_f.push_back(luminance(forward, px, py));
-      diff.push_back(std::abs(luminance(deferred, px, py) - lum_f.back()));
+      if ((p - c).norm() >= r_px + 3.0) samples.add(forward, deferred, p);
     }
-  ASSERT_GT(diff.size(), 500u);
-  const double lit = *std::max_element(lum_f.begin(), lum_f.end());
-  const auto count = [&](double lo, double hi) {
-    return std::count_if(lum_f.begin(), lum_f.end(), [&](double l) { return l >= lo * lit && l < hi * lit; });
-  };
-  EXPECT_GT(count(0.97, 1.01), 300) << "lit points on the box";
-  EXPECT_GT(count(0.0, 0.6), 20) << "points in the ball's shadow on the box";
-  EXPECT_GT(count(0.6, 0.95), 3) << "points in its penumbra";
-  const double worst = *std::max_element(diff.begin(), diff.end());
+  ASSERT_GT(samples.diff.size(), 500u);
+  EXPECT_GT(samples.between(0.97, 1.01), 300) << "lit points on the box";
+  EXPECT_GT(samples.between(0.0, 0.6), 20) << "points in the ball's shadow on the box";
+  EXPECT_GT(samples.between(0.6, 0.95), 3) << "points in its penumbra";
+  const double worst = samples.worst();
   EXPECT_LT(worst, 3.0) << "the deferred shadow differs from the forward one by " << worst << " (0-255 luminance)";
 }
 
@@ -554,29 +565,22 @@ TEST(Renderer, ShadowMarkLeavesNoShadowedPixelLit) {
     balls.push_back(project(cam, b));
     radii.push_back((project(cam, b + cam.view().block<1, 3>(1, 0).transpose() * kBallR) - balls.back()).norm());
   }
-  std::vector<double> lum_f, diff;
+  LuminanceSamples samples;
   const auto sample = [&](const Eigen::Vector3d& p) {
     const Eigen::Vector2d s = project(cam, p);
     for (size_t i = 0; i < balls.size(); ++i)
       if ((s - balls[i]).norm() < radii[i] + 3.0) return;
-    const int px = int(s.x()), py = int(s.y());
-    if (px < 1 || py < 1 || px > kW - 2 || py > kH - 2) return;
-    lum_f.push_back(luminance(forward, px, py));
-    diff.push_back(std::abs(luminance(marked, px, py) - lum_f.back()));
+    samples.add(forward, marked, s);
   };
   for (double x = 0.06; x <= 0.33; x += 0.004)
     for (double y = -0.18; y <= 0.18; y += 0.004) sample(Eigen::Vector3d(x, y, kTop));
   for (double x = -0.59; x <= -0.11; x += 0.004)
     for (double phi = -0.8; phi <= 0.05; phi += 0.03)
       sample(Eigen::Vector3d(x, kCapR * std::sin(phi), kAxisZ + kCapR * std::cos(phi)));
-  ASSERT_GT(diff.size(), 2000u);
-  const double lit = *std::max_element(lum_f.begin(), lum_f.end());
-  const auto count = [&](double lo, double hi) {
-    return std::count_if(lum_f.begin(), lum_f.end(), [&](double l) { return l >= lo * lit && l < hi * lit; });
-  };
-  EXPECT_GT(count(0.0, 0.6), 100) << "points in the balls' shadows";
-  EXPECT_GT(count(0.6, 0.9), 10) << "points in their penumbrae";
-  const double worst = *std::max_element(diff.begin(), diff.end());
+  ASSERT_GT(samples.diff.size(), 2000u);
+  EXPECT_GT(samples.between(0.0, 0.6), 100) << "points in the balls' shadows";
+  EXPECT_GT(samples.between(0.6, 0.9), 10) << "points in their penumbrae";
+  const double worst = samples.worst();
   EXPECT_LT(worst, 3.0) << "the marked frame differs from the forward one by " << worst << " (0-255 luminance)";
 }
 
