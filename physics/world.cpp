@@ -36,7 +36,16 @@ constexpr double kToleranceHorizon = 1.0;
 constexpr double kTeleportDistance = 1e-2;  // m
 constexpr double kTeleportAngle = 0.1;      // rad
 // tan(kTeleportAngle / 2)^2 (tan(0.05) = 0.05004170837553879...).
-constexpr double kTanHalfTeleportAngle2 = 0.05004170837553879 * 0.05004170837553879;
+constexpr double kTanHalfTeleportAngle = 0.05004170837553879;
+constexpr double kTanHalfTeleportAngle2 = kTanHalfTeleportAngle * kTanHalfTeleportAngle;
+// The constant follows the angle: tan's series to x^9 (std::tan is not constexpr).
+constexpr double tanSeries(double x) {
+  const double x2 = x * x;
+  return x * (1.0 + x2 * (1.0 / 3.0 + x2 * (2.0 / 15.0 + x2 * (17.0 / 315.0 + x2 * 62.0 / 2835.0))));
+}
+static_assert(tanSeries(kTeleportAngle / 2) - kTanHalfTeleportAngle < 1e-15 &&
+                  kTanHalfTeleportAngle - tanSeries(kTeleportAngle / 2) < 1e-15,
+              "kTanHalfTeleportAngle is tan(kTeleportAngle / 2)");
 
 // 0 when every entry of v is finite, else NaN (x - x is NaN for an inf or NaN x, +0 otherwise;
 // a sum with a NaN is NaN): the test of a body's 13 state entries as subtractions and additions
