@@ -4,6 +4,9 @@
 #include <cstdio>
 #include <exception>
 #include <string>
+#include <type_traits>
+#include <variant>
+#include <vector>
 
 #include "sim/data_dir.h"
 #include "sim/input_error.h"
@@ -19,7 +22,36 @@ int runCommand(const char* name, const std::function<int()>& body) {
   }
 }
 
-int runCommandLine(int argc, char** argv, const std::function<void(CLI::App&, int&)>& add_more) {
+namespace {
+
+// A CommandSpec's subcommand, as app/cmd_*.cpp add theirs.
+void addSpecCommand(CLI::App& app, const CommandSpec& spec, int& exit_code) {
+  auto* cmd = app.add_subcommand(spec.name, spec.help);
+  for (const CommandOption& o : spec.options) {
+    bool integer = false;
+    CLI::Option* option = std::visit(
+        [&](auto* target) -> CLI::Option* {
+          using T = std::remove_pointer_t<decltype(target)>;
+          integer = std::is_same_v<T, int> || std::is_same_v<T, std::vector<int>>;
+          if constexpr (std::is_same_v<T, bool>)
+            return cmd->add_flag(o.name, *target, o.help);
+          else
+            return cmd->add_option(o.name, *target, o.help);
+        },
+        o.target);
+    if (o.comma_list) option->delimiter(',');
+    if (o.range && integer)
+      option->check(CLI::Range(static_cast<int>(o.range->first), static_cast<int>(o.range->second)));
+    else if (o.range)
+      option->check(CLI::Range(o.range->first, o.range->second));
+    if (!o.members.empty()) option->check(CLI::IsMember(o.members));
+  }
+  cmd->callback([&spec, &exit_code] { exit_code = spec.run(); });
+}
+
+}  // namespace
+
+int runCommandLine(int argc, char** argv, const std::vector<CommandSpec>& more) {
   CLI::App app{"ponyhop: a ponytail and a Raibert hopper, simulated with Lagrange multipliers"};
   app.set_version_flag("--version", std::string("ponyhop ") + versionString());
   app.require_subcommand(1);
@@ -32,7 +64,7 @@ int runCommandLine(int argc, char** argv, const std::function<void(CLI::App&, in
   addExportCommand(app, exit_code);
   addVideoCommand(app, exit_code);
   addSolveCommand(app, exit_code);
-  if (add_more) add_more(app, exit_code);
+  for (const CommandSpec& spec : more) addSpecCommand(app, spec, exit_code);
 #ifdef PONYHOP_WINDOW
   addRunCommand(app, exit_code);
 #endif

@@ -2,6 +2,11 @@
 #pragma once
 
 #include <functional>
+#include <optional>
+#include <string>
+#include <utility>
+#include <variant>
+#include <vector>
 
 // Only references to CLI11's App here: a file that includes <CLI/CLI.hpp> compiles all of CLI11
 // (its namespace-scope validators and the virtual functions of App, Formatter and Config: about
@@ -29,9 +34,55 @@ void addRunCommand(CLI::App& app, int& exit_code);  // app/cmd_run.cpp: the wind
 // path) is printed as "ponyhop NAME: message" and gives exit code 2; otherwise the body's code.
 int runCommand(const char* name, const std::function<int()>& body);
 
-// The whole command line of `ponyhop`: app/'s subcommands, those `add_more` adds (app/main.cpp:
-// the bench's), parsed; the exit code (2 for a usage error, 0 for --help). Here rather than in
-// main.cpp so that CLI11 is compiled in app/'s one batch of command files, not once more there.
-int runCommandLine(int argc, char** argv, const std::function<void(CLI::App&, int&)>& add_more);
+// One option of a subcommand described without CLI11 (CommandSpec). A bool is a flag ("--quick"
+// sets it, "!--no-hopper" clears it); the other targets take a value.
+struct CommandOption {
+  using Target = std::variant<bool*, int*, double*, std::string*, std::vector<int>*, std::vector<double>*,
+                              std::vector<std::string>*>;
+  std::string name;
+  Target target;
+  std::string help;
+  bool comma_list = false;                         // a list given as A,B,C
+  std::optional<std::pair<double, double>> range;  // the values allowed (as integers for int targets)
+  std::vector<std::string> members;                // the values allowed; empty: any
+
+  CommandOption& list() {
+    comma_list = true;
+    return *this;
+  }
+  CommandOption& within(double lo, double hi) {
+    range = {lo, hi};
+    return *this;
+  }
+  CommandOption& oneOf(std::vector<std::string> values) {
+    members = std::move(values);
+    return *this;
+  }
+};
+
+// A subcommand described without CLI11, for bench/'s: runCommandLine adds it to the command line
+// with CLI11 in app/commands.cpp, so CLI11 (about 4.5 s of GCC's time in every translation unit that
+// includes it) is compiled in app/'s batch alone, not in bench/'s too.
+struct CommandSpec {
+  std::string name, help;
+  std::vector<CommandOption> options;  // in the order --help lists them
+  std::function<int()> run;            // the command, once its options are parsed: its exit code
+
+  CommandSpec(std::string command, std::string command_help)
+      : name(std::move(command)), help(std::move(command_help)) {}
+  template <class T>
+  CommandOption& add(std::string option, T& target, std::string option_help) {
+    CommandOption& o = options.emplace_back();
+    o.name = std::move(option);
+    o.target = &target;
+    o.help = std::move(option_help);
+    return o;
+  }
+};
+
+// The whole command line of `ponyhop`: app/'s subcommands, then `more` (app/main.cpp: the bench's),
+// parsed; the exit code (2 for a usage error, 0 for --help). Here rather than in main.cpp so that
+// CLI11 is compiled in app/'s batch of command files, not once more there.
+int runCommandLine(int argc, char** argv, const std::vector<CommandSpec>& more);
 
 }  // namespace ponyhop

@@ -10,8 +10,5 @@ int main(int argc, char** argv) {
   // instead of killing the process with SIGXFSZ halfway through a file.
   std::signal(SIGXFSZ, SIG_IGN);
   // The subcommands in the order `ponyhop --help` lists them: app/'s, the bench's, then `run`.
-  return ponyhop::runCommandLine(argc, argv, [](CLI::App& app, int& exit_code) {
-    ponyhop::addBenchCommand(app, exit_code);
-    ponyhop::addBenchRenderCommand(app, exit_code);
-  });
+  return ponyhop::runCommandLine(argc, argv, {ponyhop::benchCommand(), ponyhop::benchRenderCommand()});
 }

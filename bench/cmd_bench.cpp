@@ -13,7 +13,6 @@
 // beside them, with a table of ours / fastest peer per N. Writes CSV, Markdown and PNGs.
 #include <sys/utsname.h>
 
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -850,96 +849,90 @@ int runBench(BenchArgs& args) {
 
 }  // namespace
 
-void addBenchCommand(CLI::App& app, int& exit_code) {
+CommandSpec benchCommand() {
   auto args = std::make_shared<BenchArgs>();
-  auto* cmd = app.add_subcommand("bench", "Speed against accuracy of every solver, integrator, stabilization and dt");
-  cmd->add_option("--out", args->out, "Output folder (CSV, README.md, PNG plots)");
-  cmd->add_flag("--quick", args->quick, "Smoke run: N = 8, two dts, short horizons, short scaling sweep (< 1 min)");
-  cmd->add_option("--chain-scene", args->chain_scene, "The chain scene");
-  cmd->add_option("--hopper-scene", args->hopper_scene, "The hopper scene");
-  cmd->add_flag("!--no-hopper", args->hopper, "Leave out the hopper");
-  cmd->add_flag("!--no-peers", args->peers, "Leave out the peer engines (MuJoCo, Bullet, ODE, DART when found)");
-  cmd->add_option("--long-fixed", args->long_fixed, "Long run of the fixed-anchor chains, s (default 60; quick 0.5)")
-      ->check(CLI::Range(0.0, 3600.0));
-  cmd->add_option("--long-shake", args->long_shake, "Long run of the shaking-anchor chains, s (default 10; quick 0.5)")
-      ->check(CLI::Range(0.0, 3600.0));
-  cmd->add_option("--long-hopper", args->long_hopper, "Long run of the hopper, s (default 10; quick 0.5)")
-      ->check(CLI::Range(0.0, 3600.0));
-  cmd->add_option("--repeats", args->repeats,
-                  "Timed repeats per run, the median is kept (default 3; quick 1); the collision cost: interleaved "
-                  "on/off rounds")
-      ->check(CLI::Range(1, 100));
-  cmd->add_option("--links", args->links, "Chain lengths to run, e.g. 8,32 (default 8,32; quick 8)")
-      ->delimiter(',')
-      ->check(CLI::Range(1, 4096));
-  cmd->add_option("--anchors", args->anchors, "Anchor modes to run (default fixed,shake)")
-      ->delimiter(',')
-      ->check(CLI::IsMember({"fixed", "shake"}));
-  cmd->add_option("--methods", args->methods,
-                  "Only these methods and peers, as bench.csv names them, e.g. "
-                  "featherstone/rk4/none+auto10,ode/worldstep (default all)")
-      ->delimiter(',');
-  cmd->add_flag("--merge", args->merge,
-                "Put this run's rows into OUT/bench.csv in place of the same case, method and dt (the rest kept), "
-                "rebuild the headline of OUT/README.md from it and log the run in OUT/merges.md");
-  cmd->add_option("--dts", args->dts, "Steps as 1/dt, e.g. 240,960 (default 60,120,240,480,960,1920; quick 120,480)")
-      ->delimiter(',')
-      ->check(CLI::Range(1, 100000));
-  cmd->add_flag("!--no-scaling", args->scaling, "Leave out the cost-against-N sweep");
-  cmd->add_flag("--scaling-only", args->scaling_only, "Only the cost-against-N sweep (no chains, no hopper)");
-  cmd->add_flag("!--no-chains", args->chains, "Leave out the chain cases (the hopper and the sweeps stay)");
-  cmd->add_flag("!--no-collision", args->collision,
-                "Leave out the collision cost (the ponytail with its head collider on and off)");
-  cmd->add_option("--ponytail-scene", args->ponytail_scene, "The scene of the collision cost");
-  cmd->add_flag("--collision-only", args->collision_only,
-                "Only the collision cost: rewrites its section of OUT/README.md (the rest kept) and collision.csv");
-  cmd->add_option("--scaling-links", args->scaling_links,
-                  "Chain lengths of the sweep (default 2,4,...,1024; quick 2..32)")
-      ->delimiter(',')
-      ->check(CLI::Range(1, 65536));
-  cmd->add_option("--scaling-solvers", args->scaling_solvers,
-                  "Our solvers in the sweep, e.g. tree,featherstone (default all; for profiling one)")
-      ->delimiter(',');
-  cmd->add_option("--scaling-budget", args->scaling_budget,
-                  "CPU seconds a configuration's round of the sweep may take, else it is skipped at that N (default 3; "
-                  "quick 0.2)")
-      ->check(CLI::Range(0.0, 3600.0));
-  cmd->add_option("--scaling-rounds", args->scaling_rounds,
-                  "Interleaved rounds of the sweep, median and spread kept (default 5; quick 2)")
-      ->check(CLI::Range(1, 100));
-  cmd->add_option("--scaling-seconds", args->scaling_seconds,
-                  "Seconds of the swing timed per round of the sweep (default 0.25; quick 1/60)")
-      ->check(CLI::Range(1e-3, 60.0));
-  cmd->add_flag("--equal-accuracy-only", args->equal_accuracy_only,
-                "Only the headline, cost at equal accuracy, from OUT/bench.csv: rewrites its section of OUT/README.md");
-  cmd->add_flag("--adaptive-only", args->adaptive_only,
-                "Only adaptive dynamics against the full step on long chains: writes OUT/adaptive.md");
-  cmd->add_option("--adaptive-links", args->adaptive.links, "Chain lengths of --adaptive-only (default 64,256,1024)")
-      ->delimiter(',')
-      ->check(CLI::Range(2, 65536));
-  cmd->add_option("--adaptive-budgets", args->adaptive.budgets, "Budgets of --adaptive-only (default 4,8,16,32,64)")
-      ->delimiter(',')
-      ->check(CLI::Range(1, 65536));
-  cmd->add_option("--adaptive-seconds", args->adaptive.seconds, "Simulated seconds per run of --adaptive-only (2)")
-      ->check(CLI::Range(0.01, 600.0));
-  cmd->add_option("--adaptive-anchors", args->adaptive.anchors, "Anchors of --adaptive-only (default fixed,shake)")
-      ->delimiter(',')
-      ->check(CLI::IsMember({"fixed", "shake"}));
-  cmd->add_option("--adaptive-tolerances", args->adaptive.tolerances,
-                  "Thresholds (J) of --adaptive-only's error form (default 1e-9,1e-7,1e-5; 0 = none)")
-      ->delimiter(',')
-      ->check(CLI::Range(0.0, 1e6));
-  cmd->add_option("--adaptive-reference", args->adaptive.reference_rotation,
-                  "max_step_rotation (deg) of --adaptive-only's converged reference, not timed (0.5; 0 = none)")
-      ->check(CLI::Range(0.0, 10.0));
-  cmd->add_option("--adaptive-oracles", args->adaptive.oracles,
-                  "Diagnostic choices of --adaptive-only at each budget: acc, ref-speed, ref-fit, even, graded-P, "
-                  "chain (docs/bench/adaptive.md, \"Oracles\"; default none)")
-      ->delimiter(',');
-  cmd->add_flag("--loops-only", args->loops_only,
-                "Only closed loops (the four-bar, the hair loop): closure, energy, cost, agreement; writes "
-                "OUT/loops.md (--dts, --repeats, --quick apply)");
-  cmd->callback([args, &exit_code] {
+  CommandSpec cmd{"bench", "Speed against accuracy of every solver, integrator, stabilization and dt"};
+  cmd.add("--out", args->out, "Output folder (CSV, README.md, PNG plots)");
+  cmd.add("--quick", args->quick, "Smoke run: N = 8, two dts, short horizons, short scaling sweep (< 1 min)");
+  cmd.add("--chain-scene", args->chain_scene, "The chain scene");
+  cmd.add("--hopper-scene", args->hopper_scene, "The hopper scene");
+  cmd.add("!--no-hopper", args->hopper, "Leave out the hopper");
+  cmd.add("!--no-peers", args->peers, "Leave out the peer engines (MuJoCo, Bullet, ODE, DART when found)");
+  cmd.add("--long-fixed", args->long_fixed, "Long run of the fixed-anchor chains, s (default 60; quick 0.5)")
+      .within(0.0, 3600.0);
+  cmd.add("--long-shake", args->long_shake, "Long run of the shaking-anchor chains, s (default 10; quick 0.5)")
+      .within(0.0, 3600.0);
+  cmd.add("--long-hopper", args->long_hopper, "Long run of the hopper, s (default 10; quick 0.5)").within(0.0, 3600.0);
+  cmd.add("--repeats", args->repeats,
+          "Timed repeats per run, the median is kept (default 3; quick 1); the collision cost: interleaved "
+          "on/off rounds")
+      .within(1, 100);
+  cmd.add("--links", args->links, "Chain lengths to run, e.g. 8,32 (default 8,32; quick 8)").list().within(1, 4096);
+  cmd.add("--anchors", args->anchors, "Anchor modes to run (default fixed,shake)").list().oneOf({"fixed", "shake"});
+  cmd.add("--methods", args->methods,
+          "Only these methods and peers, as bench.csv names them, e.g. "
+          "featherstone/rk4/none+auto10,ode/worldstep (default all)")
+      .list();
+  cmd.add("--merge", args->merge,
+          "Put this run's rows into OUT/bench.csv in place of the same case, method and dt (the rest kept), "
+          "rebuild the headline of OUT/README.md from it and log the run in OUT/merges.md");
+  cmd.add("--dts", args->dts, "Steps as 1/dt, e.g. 240,960 (default 60,120,240,480,960,1920; quick 120,480)")
+      .list()
+      .within(1, 100000);
+  cmd.add("!--no-scaling", args->scaling, "Leave out the cost-against-N sweep");
+  cmd.add("--scaling-only", args->scaling_only, "Only the cost-against-N sweep (no chains, no hopper)");
+  cmd.add("!--no-chains", args->chains, "Leave out the chain cases (the hopper and the sweeps stay)");
+  cmd.add("!--no-collision", args->collision,
+          "Leave out the collision cost (the ponytail with its head collider on and off)");
+  cmd.add("--ponytail-scene", args->ponytail_scene, "The scene of the collision cost");
+  cmd.add("--collision-only", args->collision_only,
+          "Only the collision cost: rewrites its section of OUT/README.md (the rest kept) and collision.csv");
+  cmd.add("--scaling-links", args->scaling_links, "Chain lengths of the sweep (default 2,4,...,1024; quick 2..32)")
+      .list()
+      .within(1, 65536);
+  cmd.add("--scaling-solvers", args->scaling_solvers,
+          "Our solvers in the sweep, e.g. tree,featherstone (default all; for profiling one)")
+      .list();
+  cmd.add("--scaling-budget", args->scaling_budget,
+          "CPU seconds a configuration's round of the sweep may take, else it is skipped at that N (default 3; "
+          "quick 0.2)")
+      .within(0.0, 3600.0);
+  cmd.add("--scaling-rounds", args->scaling_rounds,
+          "Interleaved rounds of the sweep, median and spread kept (default 5; quick 2)")
+      .within(1, 100);
+  cmd.add("--scaling-seconds", args->scaling_seconds,
+          "Seconds of the swing timed per round of the sweep (default 0.25; quick 1/60)")
+      .within(1e-3, 60.0);
+  cmd.add("--equal-accuracy-only", args->equal_accuracy_only,
+          "Only the headline, cost at equal accuracy, from OUT/bench.csv: rewrites its section of OUT/README.md");
+  cmd.add("--adaptive-only", args->adaptive_only,
+          "Only adaptive dynamics against the full step on long chains: writes OUT/adaptive.md");
+  cmd.add("--adaptive-links", args->adaptive.links, "Chain lengths of --adaptive-only (default 64,256,1024)")
+      .list()
+      .within(2, 65536);
+  cmd.add("--adaptive-budgets", args->adaptive.budgets, "Budgets of --adaptive-only (default 4,8,16,32,64)")
+      .list()
+      .within(1, 65536);
+  cmd.add("--adaptive-seconds", args->adaptive.seconds, "Simulated seconds per run of --adaptive-only (2)")
+      .within(0.01, 600.0);
+  cmd.add("--adaptive-anchors", args->adaptive.anchors, "Anchors of --adaptive-only (default fixed,shake)")
+      .list()
+      .oneOf({"fixed", "shake"});
+  cmd.add("--adaptive-tolerances", args->adaptive.tolerances,
+          "Thresholds (J) of --adaptive-only's error form (default 1e-9,1e-7,1e-5; 0 = none)")
+      .list()
+      .within(0.0, 1e6);
+  cmd.add("--adaptive-reference", args->adaptive.reference_rotation,
+          "max_step_rotation (deg) of --adaptive-only's converged reference, not timed (0.5; 0 = none)")
+      .within(0.0, 10.0);
+  cmd.add("--adaptive-oracles", args->adaptive.oracles,
+          "Diagnostic choices of --adaptive-only at each budget: acc, ref-speed, ref-fit, even, graded-P, "
+          "chain (docs/bench/adaptive.md, \"Oracles\"; default none)")
+      .list();
+  cmd.add("--loops-only", args->loops_only,
+          "Only closed loops (the four-bar, the hair loop): closure, energy, cost, agreement; writes "
+          "OUT/loops.md (--dts, --repeats, --quick apply)");
+  cmd.run = [args] {
     const auto list = [](const auto& v) {
       std::string s;
       for (const auto& x : v) {
@@ -990,8 +983,7 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
                          " --adaptive-reference " + fmt(a.reference_rotation, "%g");
         if (!a.oracles.empty()) a.command_line += " --adaptive-oracles " + list(a.oracles);
         std::erase_if(a.tolerances, [](double t) { return t <= 0.0; });
-        exit_code = runAdaptiveBench(a);
-        return;
+        return runAdaptiveBench(a);
       }
       if (args->loops_only) {
         LoopBenchOptions l;
@@ -1006,15 +998,15 @@ void addBenchCommand(CLI::App& app, int& exit_code) {
         if (!args->dts.empty()) l.dts = args->dts;
         if (args->repeats > 0) l.repeats = args->repeats;
         l.command_line = args->command_line + " --loops-only";
-        exit_code = runLoopBench(l);
-        return;
+        return runLoopBench(l);
       }
-      exit_code = runBench(*args);
+      return runBench(*args);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "ponyhop bench: %s\n", e.what());
-      exit_code = 2;
+      return 2;
     }
-  });
+  };
+  return cmd;
 }
 
 }  // namespace ponyhop

@@ -15,7 +15,6 @@
 // another scene's look).
 #include <sys/utsname.h>
 
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -225,18 +224,16 @@ int runBenchRender(const BenchRenderArgs& args) {
 
 }  // namespace
 
-void addBenchRenderCommand(CLI::App& app, int& exit_code) {
+CommandSpec benchRenderCommand() {
   auto args = std::make_shared<BenchRenderArgs>();
-  auto* cmd =
-      app.add_subcommand("bench-render", "Render time per pass of the demo scenes in each quality configuration");
-  cmd->add_option("--scenes", args->scenes, "Scenes to render (default: the scenes of make demo, and ponytail_hopper)")
-      ->delimiter(',');
-  cmd->add_option("--sizes", args->sizes, "Frame sizes, e.g. 1280x720,1920x1080")->delimiter(',');
-  cmd->add_option("--frames", args->frames, "Timed frames per configuration (default 20)")->check(CLI::Range(1, 10000));
-  cmd->add_option("--set", args->sets, "key=value overrides applied to every configuration (as render --set)");
-  cmd->add_option("--out", args->out,
-                  "Markdown table to write (default docs/bench/render_table.md; empty: print only)");
-  cmd->callback([args, &exit_code] { exit_code = runCommand("bench-render", [&] { return runBenchRender(*args); }); });
+  CommandSpec cmd{"bench-render", "Render time per pass of the demo scenes in each quality configuration"};
+  cmd.add("--scenes", args->scenes, "Scenes to render (default: the scenes of make demo, and ponytail_hopper)").list();
+  cmd.add("--sizes", args->sizes, "Frame sizes, e.g. 1280x720,1920x1080").list();
+  cmd.add("--frames", args->frames, "Timed frames per configuration (default 20)").within(1, 10000);
+  cmd.add("--set", args->sets, "key=value overrides applied to every configuration (as render --set)");
+  cmd.add("--out", args->out, "Markdown table to write (default docs/bench/render_table.md; empty: print only)");
+  cmd.run = [args] { return runCommand("bench-render", [&] { return runBenchRender(*args); }); };
+  return cmd;
 }
 
 }  // namespace ponyhop

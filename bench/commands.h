@@ -4,17 +4,14 @@
 #include <string>
 #include <vector>
 
-// Only references to CLI11's App here, as in app/commands.h: the tests that include this header
-// do not compile CLI11.
-namespace CLI {
-class App;
-}  // namespace CLI
+#include "app/commands.h"  // CommandSpec: the bench's options, added to the command line by app/ (no CLI11 here)
 
 namespace ponyhop {
 
-// As app/commands.h: each adds its subcommand to `app`; the callback runs it and sets `exit_code`.
-void addBenchCommand(CLI::App& app, int& exit_code);        // bench/cmd_bench.cpp: speed against accuracy
-void addBenchRenderCommand(CLI::App& app, int& exit_code);  // bench/cmd_bench_render.cpp: render time per pass
+// Each describes its subcommand: its options and what it runs (app/main.cpp hands them to
+// runCommandLine). Described, not added with CLI11: a file that includes CLI11 compiles all of it.
+CommandSpec benchCommand();        // bench/cmd_bench.cpp: speed against accuracy
+CommandSpec benchRenderCommand();  // bench/cmd_bench_render.cpp: render time per pass
 
 // `ponyhop bench-render`'s default scenes: those `make demo` renders (the Makefile's DEMO_SCENES,
 // read when the build is configured), in its order, then ponytail_hopper (the hopper with a chain
