@@ -49,7 +49,7 @@ demo: build
 	done
 	@echo "demo: the executable is $(PONYHOP) (make install PREFIX=... puts it in PREFIX/bin)"
 
-# Every test, with the normal build (about 6 min from a fresh clone on 2 cores, 1.1 min of it tests).
+# Every test, with the normal build (4.4-6 min from a fresh clone on 2 cores by the hour, under a minute of it tests).
 test: build
 	@cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
 
