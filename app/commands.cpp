@@ -28,23 +28,23 @@ namespace {
 void addSpecCommand(CLI::App& app, const CommandSpec& spec, int& exit_code) {
   auto* cmd = app.add_subcommand(spec.name, spec.help);
   for (const CommandOption& o : spec.options) {
-    bool integer = false;
-    CLI::Option* option = std::visit(
-        [&](auto* target) -> CLI::Option* {
+    std::visit(
+        [&](auto* target) {
           using T = std::remove_pointer_t<decltype(target)>;
-          integer = std::is_same_v<T, int> || std::is_same_v<T, std::vector<int>>;
-          if constexpr (std::is_same_v<T, bool>)
-            return cmd->add_flag(o.name, *target, o.help);
-          else
-            return cmd->add_option(o.name, *target, o.help);
+          if constexpr (std::is_same_v<T, bool>) {
+            cmd->add_flag(o.name, *target, o.help);
+          } else {
+            CLI::Option* option = cmd->add_option(o.name, *target, o.help);
+            if (o.comma_list) option->delimiter(',');
+            if constexpr (std::is_same_v<T, int> || std::is_same_v<T, std::vector<int>>) {
+              if (o.range) option->check(CLI::Range(int(o.range->first), int(o.range->second)));
+            } else if (o.range) {
+              option->check(CLI::Range(o.range->first, o.range->second));
+            }
+            if (!o.members.empty()) option->check(CLI::IsMember(o.members));
+          }
         },
         o.target);
-    if (o.comma_list) option->delimiter(',');
-    if (o.range && integer)
-      option->check(CLI::Range(static_cast<int>(o.range->first), static_cast<int>(o.range->second)));
-    else if (o.range)
-      option->check(CLI::Range(o.range->first, o.range->second));
-    if (!o.members.empty()) option->check(CLI::IsMember(o.members));
   }
   cmd->callback([&spec, &exit_code] { exit_code = spec.run(); });
 }
